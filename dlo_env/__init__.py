@@ -1,0 +1,40 @@
+"""dlo_env: a pymunk cord on a table, as goal-conditioned Gymnasium environments.
+
+Importing the package registers ``dlo_env/DLOEndpoint-v0`` and ``dlo_env/DLODualEndpoint-v0``
+(Gymnasium 1.x ignores entry-point plugins, so registration happens here).
+"""
+
+from __future__ import annotations
+
+from gymnasium.envs.registration import register, registry
+
+from dlo_env.cord import Cord, CordParams
+from dlo_env.shapes import (
+    COSINE_THRESHOLD,
+    TABLE_HALF,
+    error,
+    is_cord_like,
+    max_error,
+    random_cord_shape,
+    validate_shape,
+)
+
+__all__ = [
+    "COSINE_THRESHOLD",
+    "TABLE_HALF",
+    "Cord",
+    "CordParams",
+    "error",
+    "is_cord_like",
+    "max_error",
+    "random_cord_shape",
+    "validate_shape",
+]
+
+_ENVS = {
+    "dlo_env/DLOEndpoint-v0": "dlo_env.envs.endpoint:DLOEndpointEnv",
+    "dlo_env/DLODualEndpoint-v0": "dlo_env.envs.dual_endpoint:DLODualEndpointEnv",
+}
+for _id, _entry in _ENVS.items():
+    if _id not in registry:
+        register(id=_id, entry_point=_entry, max_episode_steps=100)

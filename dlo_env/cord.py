@@ -1,0 +1,368 @@
+"""The cord simulator: a planar chain on a table seen from above (pymunk).
+
+The cord is ``n - 1`` rigid segments joined end to end by pivot joints (inextensible links).
+Bending stiffness is a damped rotary spring at every joint. Table friction uses pymunk's
+top-down idiom: every segment is tied to the static body by a pivot joint and a gear joint
+with ``max_bias = 0`` and a ``max_force`` equal to the Coulomb friction force (torque), so a
+segment sticks until the net force exceeds friction and slides against a bounded force
+otherwise. Grippers are kinematic bodies pinned to the head and/or the tail; they move at a
+bounded speed and are kept on the table. The table has a rim (static walls) so no point ever
+leaves it. The cord may cross over itself: self-contact is not modelled.
+
+Time advances in control periods of ``dt`` seconds, each split into ``substeps`` equal
+physics steps; the solver is single-threaded, so the same inputs give the same numbers.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Literal
+
+import numpy as np
+import pymunk
+import pymunk.batch
+
+from dlo_env.shapes import TABLE_HALF, validate_shape
+
+Grasp = Literal["head", "tail", "both", "none"]
+_GRASPS = ("head", "tail", "both", "none")
+
+
+@dataclass(frozen=True)
+class CordParams:
+    """Physical and numerical parameters of the cord; defaults are the documented cord.
+
+    Attributes:
+        n_points: Points of the chain (``n_points - 1`` segments).
+        length: Rest length, metres.
+        mass: Total mass, kg.
+        friction: Coulomb friction coefficient between cord and table.
+        bending_stiffness: Flexural rigidity EI, N m^2 (a spring of EI / segment at each joint).
+        bending_damping: Damping of each joint spring, N m s / rad.
+        gravity: m / s^2, only used for the friction force.
+        inertia_scale: Factor on each segment's moment of inertia. The motion is quasi-static
+            (friction dominated), so inflating rotational inertia changes the shapes little and
+            keeps the explicit joint springs stable at this ``dt / substeps``.
+        dt: Control period, seconds (one environment step).
+        substeps: Equal physics steps per control period.
+        iterations: Constraint solver iterations per physics step.
+        max_speed: Largest gripper speed, m/s.
+        rim_margin: Grippers stay this far inside the table edge, metres.
+        max_span: With both ends grasped, the grippers stay at most ``max_span * length`` apart.
+    """
+
+    n_points: int = 20
+    length: float = 1.0
+    mass: float = 0.1
+    friction: float = 0.4
+    bending_stiffness: float = 0.01
+    bending_damping: float = 0.002
+    gravity: float = 9.81
+    inertia_scale: float = 10.0
+    velocity_retention: float = 1.0
+    joint_error_bias: float = 1e-6
+    dt: float = 0.1
+    substeps: int = 20
+    iterations: int = 30
+    max_speed: float = 0.2
+    rim_margin: float = 0.02
+    max_span: float = 0.9
+
+    def __post_init__(self) -> None:
+        positive = ("length", "mass", "gravity", "inertia_scale", "dt", "max_speed")
+        for name in positive:
+            if not getattr(self, name) > 0:
+                raise ValueError(f"CordParams.{name} must be > 0, got {getattr(self, name)!r}")
+        for name in ("friction", "bending_stiffness", "bending_damping", "rim_margin"):
+            if not getattr(self, name) >= 0:
+                raise ValueError(f"CordParams.{name} must be >= 0, got {getattr(self, name)!r}")
+        if self.n_points < 3:
+            raise ValueError(f"CordParams.n_points must be >= 3, got {self.n_points!r}")
+        if self.substeps < 1 or self.iterations < 1:
+            raise ValueError("CordParams.substeps and CordParams.iterations must be >= 1")
+        if not 0 < self.max_span <= 1:
+            raise ValueError(f"CordParams.max_span must be in (0, 1], got {self.max_span!r}")
+
+    @property
+    def segment(self) -> float:
+        """Rest length of one segment, metres."""
+        return self.length / (self.n_points - 1)
+
+
+class Cord:
+    """A simulated cord; read its shape, move its grasped ends.
+
+    Args:
+        params: The cord's parameters.
+        grasp: Which ends grippers hold: ``"head"``, ``"tail"``, ``"both"`` or ``"none"``.
+
+    Example:
+        >>> cord = Cord()
+        >>> cord.reset(straight_shape)
+        >>> cord.move(head=(0.1, 0.0))
+        >>> cord.shape  # (20, 2) float32, metres
+    """
+
+    def __init__(self, params: CordParams | None = None, grasp: Grasp = "head") -> None:
+        self.params = params if params is not None else CordParams()
+        self._check_grasp(grasp)
+        self._grasp: Grasp = grasp
+        self.space: pymunk.Space | None = None
+        self.segments: list[pymunk.Body] = []
+        self.grippers: dict[str, pymunk.Body] = {}
+        self._grip_joints: dict[str, pymunk.PivotJoint] = {}
+
+    # ----------------------------------------------------------------- state
+    def reset(self, shape: np.ndarray) -> None:
+        """Build a fresh simulation with the cord at rest in ``shape``.
+
+        The space is rebuilt from scratch (no cached solver impulses survive), so a reset
+        followed by the same moves always gives bitwise the same shapes.
+
+        Args:
+            shape: ``(n, 2)`` metres; segments are re-projected to exact rest length along
+                their directions starting from the head.
+        """
+        p = self.params
+        arr = validate_shape(shape, n_points=p.n_points, length=p.length, name="shape")
+        seg_vec = np.diff(arr.astype(np.float64), axis=0)
+        headings = np.unwrap(np.arctan2(seg_vec[:, 1], seg_vec[:, 0]))
+        start = arr[0].astype(np.float64)
+        half = 0.5 * p.segment
+        m = p.mass / (p.n_points - 1)
+        moment = p.inertia_scale * m * p.segment**2 / 12.0
+        space = pymunk.Space()
+        space.iterations = p.iterations
+        space.damping = p.velocity_retention
+        static = space.static_body
+        shape_filter = pymunk.ShapeFilter(group=1)
+        bodies = []
+        for heading in headings:
+            body = pymunk.Body(m, moment)
+            direction = np.array([math.cos(heading), math.sin(heading)])
+            centre = start + half * direction
+            body.position = (float(centre[0]), float(centre[1]))
+            body.angle = float(heading)
+            start = centre + half * direction
+            link = pymunk.Segment(body, (-half, 0.0), (half, 0.0), 0.005)
+            link.filter = shape_filter
+            space.add(body, link)
+            slide = pymunk.PivotJoint(static, body, (0.0, 0.0), (0.0, 0.0))
+            slide.max_bias = 0.0
+            slide.max_force = p.friction * m * p.gravity
+            spin = pymunk.GearJoint(static, body, 0.0, 1.0)
+            spin.max_bias = 0.0
+            spin.max_force = p.friction * m * p.gravity * p.segment / 4.0
+            space.add(slide, spin)
+            bodies.append(body)
+        k = p.bending_stiffness / p.segment
+        for a, b in zip(bodies[:-1], bodies[1:]):
+            link = pymunk.PivotJoint(a, b, (half, 0.0), (-half, 0.0))
+            link.error_bias = p.joint_error_bias
+            space.add(link, pymunk.DampedRotarySpring(a, b, 0.0, k, p.bending_damping))
+        h = TABLE_HALF
+        corners = [(-h, -h), (h, -h), (h, h), (-h, h)]
+        for c0, c1 in zip(corners, corners[1:] + corners[:1]):
+            space.add(pymunk.Segment(static, c0, c1, 0.0))
+        self.space = space
+        self.segments = bodies
+        self._buffer = pymunk.batch.Buffer()
+        self._buffer.clear()
+        pymunk.batch.get_space_bodies(space, pymunk.batch.BodyFields.BODY_ID, self._buffer)
+        ids = np.frombuffer(self._buffer.int_buf(), dtype=np.uintp)[: len(bodies)]
+        if ids.tolist() != [b.id for b in bodies]:  # pragma: no cover - pymunk internals changed
+            raise RuntimeError("pymunk.batch returned bodies in an unexpected order")
+        self.grippers = {}
+        self._grip_joints = {}
+        self._attach(self._grasp)
+
+    def _attach(self, grasp: Grasp) -> None:
+        assert self.space is not None
+        half = 0.5 * self.params.segment
+        ends = {"head": (self.segments[0], (-half, 0.0)), "tail": (self.segments[-1], (half, 0.0))}
+        wanted = {"head": ("head",), "tail": ("tail",), "both": ("head", "tail"), "none": ()}[grasp]
+        for name in list(self._grip_joints):
+            if name not in wanted:
+                self.space.remove(self._grip_joints.pop(name), self.grippers.pop(name))
+        for name in wanted:
+            if name in self._grip_joints:
+                continue
+            body, anchor = ends[name]
+            gripper = pymunk.Body(body_type=pymunk.Body.KINEMATIC)
+            gripper.position = body.local_to_world(anchor)
+            joint = pymunk.PivotJoint(gripper, body, (0.0, 0.0), anchor)
+            joint.error_bias = self.params.joint_error_bias
+            self.space.add(gripper, joint)
+            self.grippers[name] = gripper
+            self._grip_joints[name] = joint
+        self._grasp = grasp
+
+    @staticmethod
+    def _check_grasp(grasp: str) -> None:
+        if grasp not in _GRASPS:
+            raise ValueError(f"grasp must be one of {_GRASPS}, got {grasp!r}")
+
+    @property
+    def grasp(self) -> Grasp:
+        """Which ends are held."""
+        return self._grasp
+
+    def set_grasp(self, grasp: Grasp) -> None:
+        """Change which ends are held; a new gripper takes the end where it lies."""
+        self._check_grasp(grasp)
+        self._require_reset()
+        self._attach(grasp)
+
+    def _require_reset(self) -> None:
+        if self.space is None:
+            raise RuntimeError("Cord.reset(shape) must be called before using the cord")
+
+    _POSE = pymunk.batch.BodyFields.POSITION | pymunk.batch.BodyFields.ANGLE
+    _MOTION = (
+        _POSE | pymunk.batch.BodyFields.VELOCITY | pymunk.batch.BodyFields.ANGULAR_VELOCITY
+    )
+
+    def _read(self, fields: pymunk.batch.BodyFields, width: int) -> np.ndarray:
+        # One C call for all bodies; pymunk lists dynamic bodies first, in insertion order,
+        # so the first n-1 rows are the segments (checked when the space is built).
+        self._buffer.clear()
+        pymunk.batch.get_space_bodies(self.space, fields, self._buffer)
+        rows = np.frombuffer(self._buffer.float_buf(), dtype=np.float64).reshape(-1, width)
+        return rows[: len(self.segments)]
+
+    def _body_state(self) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        rows = self._read(self._MOTION, 6)
+        return rows[:, 0:2], rows[:, 2], rows[:, 3:5], rows[:, 5]
+
+    @property
+    def shape(self) -> np.ndarray:
+        """Current shape, float32 ``(n, 2)``; inner points average the two joined ends."""
+        self._require_reset()
+        rows = self._read(self._POSE, 3)
+        return self._points(rows[:, 0:2], rows[:, 2]).astype(np.float32)
+
+    def _points(self, pos: np.ndarray, ang: np.ndarray) -> np.ndarray:
+        offset = 0.5 * self.params.segment * np.stack([np.cos(ang), np.sin(ang)], axis=1)
+        starts, ends = pos - offset, pos + offset
+        points = np.empty((len(pos) + 1, 2))
+        points[0] = starts[0]
+        points[-1] = ends[-1]
+        points[1:-1] = 0.5 * (ends[:-1] + starts[1:])
+        return points
+
+    def point_velocities(self) -> np.ndarray:
+        """Velocity of every point, ``(n, 2)`` m/s (inner points average the two ends)."""
+        self._require_reset()
+        pos, ang, vel, omega = self._body_state()
+        r = 0.5 * self.params.segment * np.stack([np.cos(ang), np.sin(ang)], axis=1)
+        spin = omega[:, None] * np.stack([-r[:, 1], r[:, 0]], axis=1)
+        v_start, v_end = vel - spin, vel + spin
+        out = np.empty((len(pos) + 1, 2))
+        out[0] = v_start[0]
+        out[-1] = v_end[-1]
+        out[1:-1] = 0.5 * (v_end[:-1] + v_start[1:])
+        return out
+
+    def gripper_positions(self) -> dict[str, np.ndarray]:
+        """Positions of the grippers that are attached, by end name."""
+        return {k: np.array(g.position) for k, g in self.grippers.items()}
+
+    # ----------------------------------------------------------------- motion
+    def _targets(self, head: np.ndarray | None, tail: np.ndarray | None) -> dict[str, np.ndarray]:
+        p = self.params
+        lim = TABLE_HALF - p.rim_margin
+        targets = {}
+        for name, d in (("head", head), ("tail", tail)):
+            if name not in self.grippers:
+                continue
+            d = np.zeros(2) if d is None else np.asarray(d, dtype=np.float64).reshape(2)
+            if not np.isfinite(d).all():
+                raise ValueError(f"{name} displacement must be finite, got {d.tolist()}")
+            targets[name] = np.clip(np.array(self.grippers[name].position) + d, -lim, lim)
+        if len(targets) == 2:
+            gap = targets["tail"] - targets["head"]
+            dist = float(np.linalg.norm(gap))
+            span = p.max_span * p.length
+            if dist > span:
+                mid = 0.5 * (targets["head"] + targets["tail"])
+                targets["head"] = mid - 0.5 * span * gap / dist
+                targets["tail"] = mid + 0.5 * span * gap / dist
+        return targets
+
+    def move(
+        self,
+        head: np.ndarray | None = None,
+        tail: np.ndarray | None = None,
+        record_every: int = 0,
+    ) -> np.ndarray:
+        """Move the grasped ends by displacements along straight lines at bounded speed.
+
+        The targets are clipped to the table (less ``rim_margin``) and, with both ends held,
+        to ``max_span``. The move lasts the smallest whole number (at least one) of control
+        periods that keeps every gripper at or below ``max_speed``. Displacements for ends
+        that are not held are ignored.
+
+        Args:
+            head: ``(2,)`` displacement of the head gripper, metres.
+            tail: ``(2,)`` displacement of the tail gripper, metres.
+            record_every: If > 0, record the shape after every ``record_every`` physics steps.
+
+        Returns:
+            The recorded shapes, float32 ``(m, n, 2)`` (``m = 0`` when not recording).
+        """
+        self._require_reset()
+        p = self.params
+        targets = self._targets(head, tail)
+        longest = max((np.linalg.norm(t - self.grippers[k].position) for k, t in targets.items()),
+                      default=0.0)
+        periods = max(1, math.ceil(longest / (p.max_speed * p.dt) - 1e-9))
+        duration = periods * p.dt
+        for name, target in targets.items():
+            g = self.grippers[name]
+            v = (target - np.array(g.position)) / duration
+            g.velocity = (float(v[0]), float(v[1]))
+        recorded = self._run(periods * p.substeps, record_every)
+        for name, target in targets.items():
+            g = self.grippers[name]
+            g.velocity = (0.0, 0.0)
+            g.position = (float(target[0]), float(target[1]))
+        return recorded
+
+    def wait(self, periods: int = 1, record_every: int = 0) -> np.ndarray:
+        """Let time pass with the grippers still, for ``periods`` control periods."""
+        self._require_reset()
+        return self._run(periods * self.params.substeps, record_every)
+
+    def settle(self, tolerance: float = 1e-3, max_time: float = 2.0) -> float:
+        """Wait with the grippers still until every point is slower than ``tolerance`` m/s.
+
+        Returns:
+            The simulated time it took, seconds (``max_time`` if not at rest by then).
+        """
+        self._require_reset()
+        p = self.params
+        h = p.dt / p.substeps
+        steps = 0
+        while steps * h < max_time:
+            if np.linalg.norm(self.point_velocities(), axis=1).max() < tolerance:
+                break
+            self.space.step(h)
+            steps += 1
+        return steps * h
+
+    def _run(self, steps: int, record_every: int) -> np.ndarray:
+        p = self.params
+        h = p.dt / p.substeps
+        space = self.space
+        assert space is not None
+        if record_every <= 0:
+            for _ in range(steps):
+                space.step(h)
+            return np.empty((0, p.n_points, 2), dtype=np.float32)
+        out = []
+        for i in range(1, steps + 1):
+            space.step(h)
+            if i % record_every == 0:
+                out.append(self.shape)
+        return np.array(out, dtype=np.float32).reshape(-1, p.n_points, 2)

@@ -1,0 +1,203 @@
+"""Cord shapes: distances, the cord-like filter, validation and random drawing.
+
+A shape is a float32 array ``(n, 2)`` of point positions in world metres; a batch is
+``(B, n, 2)``. Point 0 is the head, point n-1 the tail. This module is the one place
+where shape distance, the paper's cosine filter and segment spacing are implemented;
+everything else in the project imports them from here.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+#: Half the side of the square table, metres: the table is ``[-TABLE_HALF, TABLE_HALF]^2``.
+TABLE_HALF = 1.0
+#: The paper's cord-like threshold on the cosine of consecutive segment directions.
+COSINE_THRESHOLD = 0.25
+#: Relative tolerance on every segment length when a shape is validated as a cord.
+SEGMENT_TOLERANCE = 0.05
+
+
+def error(a: np.ndarray, b: np.ndarray) -> np.ndarray | float:
+    """Mean over points of the Euclidean distance between corresponding points.
+
+    Args:
+        a: Shape ``(..., n, 2)``.
+        b: Shape ``(..., n, 2)``, broadcastable against ``a``.
+
+    Returns:
+        The distance in metres, of shape ``a.shape[:-2]`` (a float for single shapes).
+    """
+    d = np.linalg.norm(np.asarray(a, dtype=np.float64) - np.asarray(b, dtype=np.float64), axis=-1)
+    out = d.mean(axis=-1)
+    return float(out) if out.ndim == 0 else out
+
+
+def max_error(a: np.ndarray, b: np.ndarray) -> np.ndarray | float:
+    """Largest per-point Euclidean distance between two shapes (or batches), metres."""
+    d = np.linalg.norm(np.asarray(a, dtype=np.float64) - np.asarray(b, dtype=np.float64), axis=-1)
+    out = d.max(axis=-1)
+    return float(out) if out.ndim == 0 else out
+
+
+def segment_vectors(shapes: np.ndarray) -> np.ndarray:
+    """Difference vectors between consecutive points, ``(..., n-1, 2)``."""
+    shapes = np.asarray(shapes)
+    return shapes[..., 1:, :] - shapes[..., :-1, :]
+
+
+def segment_lengths(shapes: np.ndarray) -> np.ndarray:
+    """Distances between consecutive points, ``(..., n-1)``."""
+    return np.linalg.norm(segment_vectors(shapes), axis=-1)
+
+
+def turning_cosines(shapes: np.ndarray) -> np.ndarray:
+    """Cosine similarity of consecutive segment vectors, ``(..., n-2)``.
+
+    A zero-length segment gives cosine 0 (it has no direction).
+    """
+    v = segment_vectors(np.asarray(shapes, dtype=np.float64))
+    norm = np.linalg.norm(v, axis=-1)
+    dot = (v[..., 1:, :] * v[..., :-1, :]).sum(axis=-1)
+    denom = norm[..., 1:] * norm[..., :-1]
+    return np.divide(dot, denom, out=np.zeros_like(dot), where=denom > 0)
+
+
+def is_cord_like(shapes: np.ndarray, threshold: float = COSINE_THRESHOLD) -> np.ndarray | bool:
+    """The paper's filter: every pair of consecutive segments has cosine >= ``threshold``.
+
+    Args:
+        shapes: ``(n, 2)`` or ``(B, n, 2)``.
+        threshold: Minimum cosine similarity, in ``[-1, 1]``.
+
+    Returns:
+        A bool for one shape, a bool array ``(B,)`` for a batch.
+    """
+    if not -1.0 <= threshold <= 1.0:
+        raise ValueError(f"threshold must be in [-1, 1], got {threshold!r}")
+    ok = (turning_cosines(shapes) >= threshold).all(axis=-1)
+    return bool(ok) if np.ndim(ok) == 0 else ok
+
+
+def spacing_cv(shapes: np.ndarray) -> np.ndarray | float:
+    """Coefficient of variation of the segment lengths of each shape (0 for even spacing)."""
+    lengths = segment_lengths(np.asarray(shapes, dtype=np.float64))
+    cv = lengths.std(axis=-1) / np.maximum(lengths.mean(axis=-1), 1e-12)
+    return float(cv) if np.ndim(cv) == 0 else cv
+
+
+def cord_length(shapes: np.ndarray) -> np.ndarray | float:
+    """Polyline length of each shape, metres."""
+    out = segment_lengths(np.asarray(shapes, dtype=np.float64)).sum(axis=-1)
+    return float(out) if np.ndim(out) == 0 else out
+
+
+def on_table(shapes: np.ndarray, half: float = TABLE_HALF) -> np.ndarray | bool:
+    """Whether every point of each shape lies on the table square ``[-half, half]^2``."""
+    ok = (np.abs(np.asarray(shapes)) <= half).all(axis=(-1, -2))
+    return bool(ok) if np.ndim(ok) == 0 else ok
+
+
+def validate_shape(
+    shape: object,
+    *,
+    n_points: int,
+    length: float,
+    name: str = "shape",
+    tolerance: float = SEGMENT_TOLERANCE,
+) -> np.ndarray:
+    """Check that ``shape`` is one cord configuration and return it as float32 ``(n, 2)``.
+
+    Args:
+        shape: Array-like, ``(n_points, 2)`` or flat ``(2 * n_points,)``.
+        n_points: Number of points of the cord.
+        length: Length of the cord, metres.
+        name: The argument's name, used in error messages.
+        tolerance: Allowed relative deviation of every segment from ``length / (n_points - 1)``.
+
+    Raises:
+        ValueError: Naming ``name`` when the shape is of the wrong size, not finite, off the
+            table, or its segments are not of the cord's rest length.
+    """
+    arr = np.asarray(shape, dtype=np.float64)
+    if arr.shape == (2 * n_points,):
+        arr = arr.reshape(n_points, 2)
+    if arr.shape != (n_points, 2):
+        raise ValueError(
+            f"{name} must have shape ({n_points}, 2) or ({2 * n_points},), got {arr.shape}"
+        )
+    if not np.isfinite(arr).all():
+        raise ValueError(f"{name} must be finite, got NaN or infinite coordinates")
+    if not on_table(arr):
+        raise ValueError(
+            f"{name} must lie on the table [-{TABLE_HALF}, {TABLE_HALF}]^2 m, "
+            f"got coordinates up to {np.abs(arr).max():.3f} m"
+        )
+    rest = length / (n_points - 1)
+    seg = segment_lengths(arr)
+    worst = float(np.abs(seg / rest - 1.0).max())
+    if worst > tolerance:
+        raise ValueError(
+            f"{name} must be a cord of length {length} m: every segment within "
+            f"{tolerance:.0%} of {rest:.4f} m, got segments from {seg.min():.4f} to "
+            f"{seg.max():.4f} m"
+        )
+    return arr.astype(np.float32)
+
+
+def shape_from_headings(headings: np.ndarray, segment: float, origin: np.ndarray) -> np.ndarray:
+    """Points of a chain with given segment headings (radians), ``(..., n-1) -> (..., n, 2)``."""
+    steps = segment * np.stack([np.cos(headings), np.sin(headings)], axis=-1)
+    zeros = np.zeros(steps.shape[:-2] + (1, 2))
+    return np.asarray(origin)[..., None, :] + np.concatenate(
+        [zeros, np.cumsum(steps, axis=-2)], axis=-2
+    )
+
+
+def random_cord_shape(
+    rng: np.random.Generator,
+    *,
+    n_points: int = 20,
+    length: float = 1.0,
+    margin: float = 0.1,
+    max_curvature: float = 9.0,
+    threshold: float = COSINE_THRESHOLD,
+) -> np.ndarray:
+    """Draw a smooth, cord-like shape of exact segment length, anywhere on the table.
+
+    The curvature along the cord is a random low-frequency Fourier series (straight lines,
+    arcs, S-curves and hooks all occur), clipped to ``max_curvature`` (1/m); the shape is
+    then rotated uniformly and placed uniformly where it fits inside the table with
+    ``margin``.
+
+    Args:
+        rng: Source of randomness.
+        n_points: Number of points.
+        length: Cord length, metres.
+        margin: Distance every point keeps from the table edge, metres.
+        max_curvature: Largest curvature, 1/m.
+        threshold: The cord-like filter the shape must pass.
+
+    Returns:
+        float32 ``(n_points, 2)``.
+    """
+    segment = length / (n_points - 1)
+    s = (np.arange(n_points - 2) + 0.5) / (n_points - 2)
+    half = TABLE_HALF - margin
+    for _ in range(1000):
+        scale = rng.choice([0.5, 2.0, 5.0])
+        modes = np.arange(4)
+        coef = rng.normal(0.0, scale / (1.0 + modes), size=4)
+        phase = rng.uniform(0.0, 2.0 * np.pi, size=4)
+        kappa = (coef * np.cos(np.pi * modes * s[:, None] + phase)).sum(axis=1)
+        turns = np.clip(kappa, -max_curvature, max_curvature) * segment
+        headings = rng.uniform(-np.pi, np.pi) + np.concatenate([[0.0], np.cumsum(turns)])
+        shape = shape_from_headings(headings, segment, np.zeros(2))
+        shape -= shape.mean(axis=0)
+        lo, hi = shape.min(axis=0), shape.max(axis=0)
+        room_lo, room_hi = -half - lo, half - hi
+        if (room_lo > room_hi).any() or not is_cord_like(shape, threshold):
+            continue
+        shape += rng.uniform(room_lo, room_hi)
+        return shape.astype(np.float32)
+    raise RuntimeError("could not draw a cord shape that fits on the table; lower margin")
