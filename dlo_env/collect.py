@@ -1,0 +1,512 @@
+"""Shape dataset collection: drive the cord with random straight moves and record shapes.
+
+One *episode* starts from a random cord-like shape anywhere on the table
+(:func:`dlo_env.shapes.random_cord_shape`) and applies ``moves_per_start`` straight moves to the
+same cord, so no simulation is spent on settling or rebuilding. Each move picks which end(s)
+to drive (head, tail or both; both only while the ends are closer than the span limit, since a
+taut cord dragged sideways stretches), a random direction and length for each driven end, and
+records the shape every ``record_every`` physics substeps *along* the move. A recorded shape is
+kept when it passes the paper's cord-like filter (:func:`dlo_env.shapes.is_cord_like`) and no
+segment is stretched more than ``max_stretch``. Every move is also stored as a transition
+(shape before, ends, gripper displacement, shape after).
+
+Work is cut into chunks of ``chunk_size`` shapes. Chunk ``i`` draws its randomness from
+``SeedSequence(seed, spawn_key=(i,))`` (the ``i``-th child of ``SeedSequence(seed)``), so its
+content does not depend on timing or on the number of worker processes. Chunks are written
+atomically to ``OUT.parts/`` as they finish; an interrupted run keeps them and ``resume=True``
+generates only the missing ones. The final file is assembled in chunk order and the folder is
+removed.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import multiprocessing
+import os
+import shutil
+import signal
+import time
+from collections.abc import Callable
+from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
+from dataclasses import asdict, dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from dlo_env.cord import Cord, CordParams
+from dlo_env.data import (
+    FORMAT_VERSION,
+    GRASP_NAMES,
+    ShapeDataset,
+    load_shapes,
+    save_shapes,
+)
+from dlo_env.shapes import (
+    COSINE_THRESHOLD,
+    TABLE_HALF,
+    is_cord_like,
+    random_cord_shape,
+    segment_lengths,
+)
+
+#: ``progress(accepted, rejected)`` receives increments of accepted and rejected shapes.
+Progress = Callable[[int, int], None]
+
+
+@dataclass(frozen=True)
+class CollectConfig:
+    """What to collect; the defaults produce the documented datasets.
+
+    Attributes:
+        seed: Root seed; chunk ``i`` uses the ``i``-th child of ``SeedSequence(seed)``.
+        cosine_threshold: The paper's cord-like filter threshold.
+        record_every: Record a shape every this many physics substeps (10 substeps at the
+            default 0.2 m/s is about 1 cm of gripper travel).
+        max_stretch: Reject shapes with a segment longer or shorter than rest by more than this
+            fraction.
+        min_move: Shortest random displacement of a driven end, metres.
+        max_move: Longest random displacement of a driven end, metres.
+        moves_per_start: Moves applied to one cord before starting again from a new shape.
+        grasp_weights: Probabilities of driving the head, the tail, or both ends.
+        both_span: Both ends are driven only while they are closer than
+            ``both_span * max_span * length``.
+        start_margin: Distance start shapes keep from the table edge, metres.
+        chunk_size: Shapes per chunk (the unit of parallel work, saving and resuming).
+        cord: The cord simulated.
+    """
+
+    seed: int = 0
+    cosine_threshold: float = COSINE_THRESHOLD
+    record_every: int = 10
+    max_stretch: float = 0.02
+    min_move: float = 0.05
+    max_move: float = 0.4
+    moves_per_start: int = 8
+    grasp_weights: tuple[float, float, float] = (0.3, 0.3, 0.4)
+    push_fraction: float = 0.3
+    both_span: float = 0.95
+    start_margin: float = 0.1
+    chunk_size: int = 2000
+    cord: CordParams = field(default_factory=CordParams)
+
+    def __post_init__(self) -> None:
+        if not isinstance(self.seed, (int, np.integer)) or self.seed < 0:
+            raise ValueError(f"seed must be an integer >= 0, got {self.seed!r}")
+        if not -1.0 <= self.cosine_threshold <= 1.0:
+            raise ValueError(f"cosine_threshold must be in [-1, 1], got {self.cosine_threshold!r}")
+        for name in ("record_every", "moves_per_start", "chunk_size"):
+            value = getattr(self, name)
+            if not isinstance(value, (int, np.integer)) or value < 1:
+                raise ValueError(f"{name} must be an integer >= 1, got {value!r}")
+        if not 0.0 < self.max_stretch < 1.0:
+            raise ValueError(f"max_stretch must be in (0, 1), got {self.max_stretch!r}")
+        if not 0.0 < self.min_move <= self.max_move:
+            raise ValueError(
+                f"min_move and max_move must satisfy 0 < min_move <= max_move, "
+                f"got {self.min_move!r} and {self.max_move!r}"
+            )
+        weights = np.asarray(self.grasp_weights, dtype=np.float64)
+        if weights.shape != (3,) or (weights < 0).any() or weights[:2].sum() <= 0:
+            raise ValueError(
+                "grasp_weights must be 3 non-negative weights (head, tail, both) with head or "
+                f"tail > 0, got {self.grasp_weights!r}"
+            )
+        if not 0.0 < self.both_span <= 1.0:
+            raise ValueError(f"both_span must be in (0, 1], got {self.both_span!r}")
+        if not 0.0 <= self.start_margin < 0.5 * TABLE_HALF:
+            raise ValueError(f"start_margin must be in [0, {0.5 * TABLE_HALF}), "
+                             f"got {self.start_margin!r}")
+
+    def to_json(self) -> dict[str, Any]:
+        """The configuration as JSON-compatible values (tuples become lists)."""
+        return json.loads(json.dumps(asdict(self)))
+
+
+def chunk_plan(num_shapes: int, chunk_size: int) -> list[tuple[int, int]]:
+    """``(chunk index, shapes in it)`` for every chunk of a dataset of ``num_shapes``."""
+    return [(i, min(chunk_size, num_shapes - i * chunk_size))
+            for i in range(math.ceil(num_shapes / chunk_size))]
+
+
+def chunk_rng(seed: int, index: int) -> np.random.Generator:
+    """The generator of chunk ``index``: child ``index`` of ``SeedSequence(seed)``."""
+    return np.random.default_rng(np.random.SeedSequence(seed, spawn_key=(index,)))
+
+
+def _draw_displacements(
+    rng: np.random.Generator, cord: Cord, config: CollectConfig
+) -> dict[str, np.ndarray]:
+    """Random displacement of every held end that is not mostly swallowed by the table rim."""
+    p = cord.params
+    lim = TABLE_HALF - p.rim_margin
+    span = config.both_span * p.max_span * p.length
+    grippers = cord.gripper_positions()
+    shape = cord.shape
+    centre = shape.mean(axis=0)
+    moves: dict[str, np.ndarray] = {}
+    for _ in range(50):
+        moves = {}
+        targets = {}
+        reach = 0.0
+        for end, pos in grippers.items():
+            length = rng.uniform(config.min_move, config.max_move)
+            if rng.uniform() < config.push_fraction:
+                # Pushing an end towards the cord's middle buckles it: bends a pull never makes.
+                towards = centre - pos
+                angle = math.atan2(towards[1], towards[0]) + rng.uniform(-1.0, 1.0) * np.pi / 3
+            else:
+                angle = rng.uniform(-np.pi, np.pi)
+            d = length * np.array([np.cos(angle), np.sin(angle)])
+            moves[end] = d
+            targets[end] = np.clip(pos + d, -lim, lim)
+            reach = max(reach, float(np.linalg.norm(targets[end] - pos)))
+        # A gripper at the rim pushing outwards barely moves and records near duplicates.
+        if reach < 0.5 * config.min_move:
+            continue
+        # Both ends: end closer than the span limit; the gap along straight paths is convex
+        # in time, so it never exceeds its value at the start or at the end.
+        if len(targets) == 2 and np.linalg.norm(targets["tail"] - targets["head"]) > span:
+            continue
+        break
+    return moves
+
+
+def _acceptable(shapes: np.ndarray, config: CollectConfig) -> tuple[np.ndarray, np.ndarray]:
+    """Masks ``(cord_like, not_stretched)`` of a batch ``(B, n, 2)``."""
+    cord_like = np.asarray(is_cord_like(shapes, config.cosine_threshold), dtype=bool)
+    rest = config.cord.segment
+    stretch = np.abs(segment_lengths(shapes) / rest - 1.0).max(axis=-1, initial=0.0)
+    return cord_like, stretch <= config.max_stretch
+
+
+def collect_chunk(
+    config: CollectConfig, index: int, num_shapes: int, progress: Progress | None = None
+) -> ShapeDataset:
+    """Generate chunk ``index``: exactly ``num_shapes`` accepted shapes and their moves.
+
+    The chunk depends only on ``config`` and ``index``; a smaller ``num_shapes`` gives a prefix
+    of a larger one.
+    """
+    if num_shapes < 1:
+        raise ValueError(f"num_shapes must be >= 1, got {num_shapes!r}")
+    rng = chunk_rng(config.seed, index)
+    p = config.cord
+    weights = np.asarray(config.grasp_weights, dtype=np.float64)
+    weights = weights / weights.sum()
+    cord = Cord(p, grasp="head")
+    shapes: list[np.ndarray] = []
+    shape_transition: list[np.ndarray] = []
+    before_list: list[np.ndarray] = []
+    after_list: list[np.ndarray] = []
+    grasps: list[int] = []
+    displacements: list[np.ndarray] = []
+    episodes: list[int] = []
+    cord_like: list[bool] = []
+    accepted = rejected_cosine = rejected_stretch = 0
+    episode = -1
+    moves_left = 0
+    before = np.empty(0)
+    before_ok = False
+    started = time.perf_counter()
+    while accepted < num_shapes:
+        if moves_left == 0:
+            start = random_cord_shape(rng, n_points=p.n_points, length=p.length,
+                                      margin=config.start_margin,
+                                      threshold=config.cosine_threshold)
+            cord.reset(start)
+            before = cord.shape
+            before_ok = True
+            episode += 1
+            moves_left = config.moves_per_start
+        grasp = int(rng.choice(3, p=weights))
+        cord.set_grasp(GRASP_NAMES[grasp])
+        moves = _draw_displacements(rng, cord, config)
+        start_grip = cord.gripper_positions()
+        recorded = cord.move(head=moves.get("head"), tail=moves.get("tail"),
+                             record_every=config.record_every)
+        end_grip = cord.gripper_positions()
+        after = cord.shape
+        disp = np.zeros((2, 2), dtype=np.float32)
+        for row, end in enumerate(("head", "tail")):
+            if end in start_grip:
+                disp[row] = end_grip[end] - start_grip[end]
+        ok_cos, ok_len = _acceptable(recorded, config)
+        keep = ok_cos & ok_len
+        n_rej_cos = int((~ok_cos).sum())
+        n_rej_len = int((ok_cos & ~ok_len).sum())
+        rejected_cosine += n_rej_cos
+        rejected_stretch += n_rej_len
+        kept = recorded[keep][: num_shapes - accepted]
+        t = len(grasps)
+        shapes.append(kept)
+        shape_transition.append(np.full(len(kept), t, dtype=np.int64))
+        after_cos, after_len = _acceptable(after[None], config)
+        after_ok = bool(after_cos[0] and after_len[0])
+        before_list.append(before)
+        after_list.append(after)
+        grasps.append(grasp)
+        displacements.append(disp)
+        episodes.append(episode)
+        cord_like.append(before_ok and after_ok)
+        accepted += len(kept)
+        before, before_ok = after, after_ok
+        moves_left -= 1
+        if progress is not None:
+            progress(len(kept), n_rej_cos + n_rej_len)
+    n = p.n_points
+    meta = {
+        "chunk": index,
+        "num_shapes": accepted,
+        "rejected": {"cosine": rejected_cosine, "stretch": rejected_stretch},
+        "moves": len(grasps),
+        "episodes": episode + 1,
+        "compute_time_s": time.perf_counter() - started,
+        "collect": config.to_json(),
+    }
+    return ShapeDataset(
+        shapes=np.concatenate(shapes).astype(np.float32).reshape(-1, n, 2),
+        shape_transition=np.concatenate(shape_transition),
+        transition_before=np.asarray(before_list, dtype=np.float32).reshape(-1, n, 2),
+        transition_after=np.asarray(after_list, dtype=np.float32).reshape(-1, n, 2),
+        transition_grasp=np.asarray(grasps, dtype=np.int8),
+        transition_displacement=np.asarray(displacements, dtype=np.float32).reshape(-1, 2, 2),
+        transition_episode=np.asarray(episodes, dtype=np.int64),
+        transition_cord_like=np.asarray(cord_like, dtype=bool),
+        metadata=meta,
+    )
+
+
+# ---------------------------------------------------------------- chunk files and workers
+def parts_dir(out: str | os.PathLike[str]) -> Path:
+    """Folder holding the finished chunks of an unfinished ``out`` file."""
+    out = Path(out)
+    return out.with_name(out.name + ".parts")
+
+
+def _chunk_path(parts: Path, index: int) -> Path:
+    return parts / f"chunk-{index:06d}.npz"
+
+
+def _chunk_ready(parts: Path, index: int, num_shapes: int) -> bool:
+    path = _chunk_path(parts, index)
+    if not path.is_file():
+        return False
+    try:
+        return load_shapes(path).num_shapes >= num_shapes
+    except ValueError:  # unreadable: generate it again
+        return False
+
+
+def _write_chunk(config: CollectConfig, index: int, num_shapes: int, parts: Path,
+                 progress: Progress | None) -> None:
+    save_shapes(_chunk_path(parts, index), collect_chunk(config, index, num_shapes, progress))
+
+
+_worker_queue: Any = None
+
+
+def _init_worker(queue: Any) -> None:
+    global _worker_queue
+    _worker_queue = queue
+    # Ctrl-C reaches the whole process group: let the parent decide, so running chunks finish
+    # and are saved instead of being lost half-way.
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+
+
+def _worker_chunk(config: CollectConfig, index: int, num_shapes: int, parts: str) -> int:
+    pending = [0, 0]
+    last = [time.monotonic()]
+
+    def report(accepted: int, rejected: int) -> None:
+        pending[0] += accepted
+        pending[1] += rejected
+        now = time.monotonic()
+        if now - last[0] > 0.2:
+            _worker_queue.put((pending[0], pending[1]))
+            pending[0] = pending[1] = 0
+            last[0] = now
+
+    _write_chunk(config, index, num_shapes, Path(parts), report)
+    _worker_queue.put((pending[0], pending[1]))
+    return index
+
+
+def _drain(queue: Any, progress: Progress | None) -> None:
+    while True:
+        try:
+            accepted, rejected = queue.get_nowait()
+        except Exception:  # queue.Empty, raised under another name by multiprocessing
+            return
+        if progress is not None:
+            progress(accepted, rejected)
+
+
+def _run_pool(config: CollectConfig, todo: list[tuple[int, int]], parts: Path, workers: int,
+              progress: Progress | None) -> None:
+    # spawn: the parent may run threads (progress bar), which fork does not copy safely.
+    ctx = multiprocessing.get_context("spawn")
+    queue = ctx.Queue()
+    executor = ProcessPoolExecutor(max_workers=workers, mp_context=ctx,
+                                   initializer=_init_worker, initargs=(queue,))
+    try:
+        pending = {executor.submit(_worker_chunk, config, i, n, str(parts)) for i, n in todo}
+        while pending:
+            done, pending = wait(pending, timeout=0.2, return_when=FIRST_COMPLETED)
+            _drain(queue, progress)
+            for future in done:
+                future.result()
+        _drain(queue, progress)
+    finally:
+        # On an interrupt or error, chunks already running finish and are kept.
+        executor.shutdown(wait=True, cancel_futures=True)
+        queue.close()
+
+
+# ---------------------------------------------------------------- the collection job
+def _check_resumable(parts: Path, config: CollectConfig) -> None:
+    manifest = parts / "manifest.json"
+    if not manifest.is_file():
+        return
+    saved = json.loads(manifest.read_text())
+    if saved.get("format_version") != FORMAT_VERSION:
+        raise ValueError(f"resume: {parts} was written by another format version "
+                         f"({saved.get('format_version')!r}); delete it to start again")
+    old, new = saved.get("collect", {}), config.to_json()
+    differ = sorted(k for k in set(old) | set(new) if old.get(k) != new.get(k))
+    if differ:
+        detail = ", ".join(f"{k}: {old.get(k)!r} -> {new.get(k)!r}" for k in differ)
+        raise ValueError(f"resume: the settings differ from the interrupted run in {parts} "
+                         f"({detail}); use the same settings or delete the folder")
+
+
+def _write_manifest(parts: Path, config: CollectConfig) -> None:
+    manifest = parts / "manifest.json"
+    tmp = parts / f".manifest.json.tmp-{os.getpid()}"
+    tmp.write_text(json.dumps({"format_version": FORMAT_VERSION, "collect": config.to_json()},
+                              indent=1, sort_keys=True))
+    os.replace(tmp, manifest)
+
+
+def assemble(parts: Path, plan: list[tuple[int, int]]) -> tuple[ShapeDataset, dict[str, Any]]:
+    """Concatenate the chunk files of ``plan`` in order into one dataset.
+
+    Returns:
+        The dataset (metadata empty) and the summed counts of the chunks.
+    """
+    pieces = []
+    t_offset = e_offset = 0
+    totals = {"rejected_cosine": 0, "rejected_stretch": 0, "compute_time_s": 0.0}
+    for index, n in plan:
+        chunk = load_shapes(_chunk_path(parts, index))
+        if chunk.num_shapes > n:  # made for a larger run; its prefix is this run's chunk
+            last = int(chunk.shape_transition[n - 1])
+            transitions = np.arange(chunk.num_transitions) <= last
+            chunk = chunk.subset(np.arange(chunk.num_shapes) < n, transitions)
+        m = chunk.metadata
+        totals["rejected_cosine"] += int(m["rejected"]["cosine"])
+        totals["rejected_stretch"] += int(m["rejected"]["stretch"])
+        totals["compute_time_s"] += float(m["compute_time_s"])
+        pieces.append((chunk, t_offset, e_offset))
+        t_offset += chunk.num_transitions
+        e_offset += int(chunk.transition_episode.max()) + 1
+    arrays: dict[str, np.ndarray] = {}
+    for name in ShapeDataset.__dataclass_fields__:
+        if name == "metadata":
+            continue
+        parts_list = []
+        for chunk, t_off, e_off in pieces:
+            arr = getattr(chunk, name)
+            if name == "shape_transition":
+                arr = arr + t_off
+            elif name == "transition_episode":
+                arr = arr + e_off
+            parts_list.append(arr)
+        arrays[name] = np.concatenate(parts_list)
+    return ShapeDataset(**arrays), totals
+
+
+def collect(
+    out: str | os.PathLike[str],
+    num_shapes: int,
+    config: CollectConfig | None = None,
+    *,
+    workers: int = 1,
+    resume: bool = False,
+    progress: Progress | None = None,
+) -> ShapeDataset:
+    """Collect ``num_shapes`` cord-like shapes into the ``.npz`` file ``out``.
+
+    Args:
+        out: The dataset file to write (``.npz``); its folder is created if needed.
+        num_shapes: Shapes to collect.
+        config: What to collect (defaults: the documented settings).
+        workers: Worker processes (1 runs in this process). The arrays written do not depend
+            on it; only the metadata records it.
+        resume: Continue an interrupted run from the chunks in ``OUT.parts/``.
+        progress: Called as ``progress(accepted, rejected)`` with increments.
+
+    Returns:
+        The dataset as written.
+
+    Raises:
+        ValueError: Bad arguments, an existing ``out``, or leftovers of another run (the
+            message says what to do).
+        KeyboardInterrupt: Re-raised after the running chunks were saved.
+    """
+    config = config if config is not None else CollectConfig()
+    if not isinstance(num_shapes, (int, np.integer)) or num_shapes < 1:
+        raise ValueError(f"num_shapes must be an integer >= 1, got {num_shapes!r}")
+    if not isinstance(workers, (int, np.integer)) or workers < 1:
+        raise ValueError(f"workers must be an integer >= 1, got {workers!r}")
+    out = Path(out)
+    if out.suffix != ".npz":
+        raise ValueError(f"out must be a .npz file name, got {str(out)!r}")
+    if out.exists():
+        raise ValueError(f"out {str(out)!r} already exists; delete it or choose another file")
+    parts = parts_dir(out)
+    if parts.exists():
+        if not resume:
+            raise ValueError(f"an interrupted run left {str(parts)!r}; pass resume=True "
+                             "(--resume) to continue it, or delete the folder")
+        _check_resumable(parts, config)
+    started = time.perf_counter()
+    parts.mkdir(parents=True, exist_ok=True)
+    _write_manifest(parts, config)
+    plan = chunk_plan(int(num_shapes), config.chunk_size)
+    todo = [(i, n) for i, n in plan if not _chunk_ready(parts, i, n)]
+    reused = len(plan) - len(todo)
+    if progress is not None and reused:
+        progress(sum(n for i, n in plan if (i, n) not in todo), 0)
+    if workers == 1 or len(todo) <= 1:
+        for i, n in todo:
+            _write_chunk(config, i, n, parts, progress)
+    else:
+        _run_pool(config, todo, parts, min(workers, len(todo)), progress)
+    dataset, totals = assemble(parts, plan)
+    rejected = totals["rejected_cosine"] + totals["rejected_stretch"]
+    metadata = {
+        "num_shapes": dataset.num_shapes,
+        "n_points": config.cord.n_points,
+        "cord": asdict(config.cord),
+        "collect": config.to_json(),
+        "seed": config.seed,
+        "workers": int(workers),
+        "cosine_threshold": config.cosine_threshold,
+        "record_every": config.record_every,
+        "accepted": dataset.num_shapes,
+        "rejected": {"cosine": totals["rejected_cosine"], "stretch": totals["rejected_stretch"],
+                     "total": rejected},
+        "moves": dataset.num_transitions,
+        "episodes": int(dataset.transition_episode.max()) + 1,
+        "chunks": len(plan),
+        "chunks_resumed": reused,
+        "grasp_names": list(GRASP_NAMES),
+        "compute_time_s": round(totals["compute_time_s"], 3),
+        "wall_time_s": round(time.perf_counter() - started, 3),
+    }
+    dataset = ShapeDataset(**dataset.arrays(), metadata=metadata)
+    save_shapes(out, dataset)
+    shutil.rmtree(parts)
+    return dataset
