@@ -477,8 +477,9 @@ def collect(
     plan = chunk_plan(int(num_shapes), config.chunk_size)
     todo = [(i, n) for i, n in plan if not _chunk_ready(parts, i, n)]
     reused = len(plan) - len(todo)
+    reused_shapes = sum(n for i, n in plan if (i, n) not in todo)
     if progress is not None and reused:
-        progress(sum(n for i, n in plan if (i, n) not in todo), 0)
+        progress(reused_shapes, 0)
     if workers == 1 or len(todo) <= 1:
         for i, n in todo:
             _write_chunk(config, i, n, parts, progress)
@@ -502,6 +503,7 @@ def collect(
         "episodes": int(dataset.transition_episode.max()) + 1,
         "chunks": len(plan),
         "chunks_resumed": reused,
+        "shapes_resumed": reused_shapes,
         "grasp_names": list(GRASP_NAMES),
         "compute_time_s": round(totals["compute_time_s"], 3),
         "wall_time_s": round(time.perf_counter() - started, 3),

@@ -1,0 +1,123 @@
+"""``dlo collect``: collect a dataset of cord shapes from the simulator.
+
+Example:
+    dlo collect --num-shapes 200000 --seed 0 --workers 2 --out data/train.npz
+"""
+
+from __future__ import annotations
+
+import argparse
+
+
+def _positive_int(text: str) -> int:
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a positive integer, got {text!r}") from None
+    if value < 1:
+        raise argparse.ArgumentTypeError(f"expected a positive integer, got {text!r}")
+    return value
+
+
+def _seed(text: str) -> int:
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected an integer >= 0, got {text!r}") from None
+    if value < 0:
+        raise argparse.ArgumentTypeError(f"expected an integer >= 0, got {text!r}")
+    return value
+
+
+def _cosine(text: str) -> float:
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a number in [-1, 1], got {text!r}") from None
+    if not -1.0 <= value <= 1.0:
+        raise argparse.ArgumentTypeError(f"expected a number in [-1, 1], got {text!r}")
+    return value
+
+
+def _npz_path(text: str) -> str:
+    if not text.endswith(".npz"):
+        raise argparse.ArgumentTypeError(f"expected a file name ending in .npz, got {text!r}")
+    return text
+
+
+def add_arguments(parser: argparse.ArgumentParser) -> None:
+    """Flags of ``dlo collect``."""
+    parser.add_argument("--num-shapes", type=_positive_int, required=True,
+                        help="cord-like shapes to collect")
+    parser.add_argument("--out", type=_npz_path, required=True, help="dataset file (.npz)")
+    parser.add_argument("--seed", type=_seed, default=0, help="root seed (default 0)")
+    parser.add_argument("--workers", type=_positive_int, default=1,
+                        help="worker processes (default 1); the arrays do not depend on it")
+    parser.add_argument("--cosine-threshold", type=_cosine, default=0.25,
+                        help="cord-like filter: least cosine of consecutive segments (0.25)")
+    parser.add_argument("--record-every", type=_positive_int, default=10,
+                        help="record a shape every K physics substeps (10: about 1 cm)")
+    parser.add_argument("--resume", action="store_true",
+                        help="continue an interrupted run from OUT.parts/")
+
+
+def run(args: argparse.Namespace) -> int:
+    """Collect the dataset with a progress bar, then print a summary."""
+    import os
+    import sys
+    import time
+
+    from tqdm import tqdm
+
+    from dlo_env.collect import CollectConfig, collect, parts_dir
+    from dlo_env.diversity import diversity_report
+
+    config = CollectConfig(seed=args.seed, cosine_threshold=args.cosine_threshold,
+                           record_every=args.record_every)
+    counts = {"accepted": 0, "rejected": 0}
+    bars: list[tqdm] = []  # opened on the first report, so argument errors print no bar
+
+    def progress(accepted: int, rejected: int) -> None:
+        if not bars:
+            bars.append(tqdm(total=args.num_shapes, unit="shape", desc="collect",
+                             dynamic_ncols=True))
+        bar = bars[0]
+        counts["accepted"] += accepted
+        counts["rejected"] += rejected
+        seen = counts["accepted"] + counts["rejected"]
+        bar.set_postfix_str(f"rejected {counts['rejected'] / max(seen, 1):.1%}", refresh=False)
+        bar.update(accepted)
+
+    started = time.perf_counter()
+    try:
+        data = collect(args.out, args.num_shapes, config, workers=args.workers,
+                       resume=args.resume, progress=progress)
+    except ValueError as exc:
+        print(f"dlo collect: error: {exc}", file=sys.stderr)
+        return 2
+    except KeyboardInterrupt:
+        print(f"\ninterrupted: finished chunks are kept in {parts_dir(args.out)}; run the same "
+              "command with --resume to continue", file=sys.stderr)
+        return 130
+    finally:
+        for bar in bars:
+            bar.close()
+    elapsed = time.perf_counter() - started
+    meta = data.metadata
+    rejected = meta["rejected"]
+    seen = meta["accepted"] + rejected["total"]
+    print(f"wrote {args.out} ({os.path.getsize(args.out) / 1e6:.1f} MB) in {elapsed:.1f} s")
+    if meta["chunks_resumed"]:
+        print(f"  resumed {meta['chunks_resumed']} of {meta['chunks']} chunks")
+    made = meta["accepted"] - meta["shapes_resumed"]
+    print(f"  shapes: {meta['accepted']} accepted; {made} made in this run, "
+          f"{made / elapsed:.0f}/s with {args.workers} worker(s)")
+    print(f"  rejected: {rejected['total']} ({rejected['total'] / max(seen, 1):.2%}): "
+          f"{rejected['cosine']} not cord-like (cosine < {config.cosine_threshold}), "
+          f"{rejected['stretch']} stretched > {config.max_stretch:.0%}")
+    print(f"  moves (transitions): {meta['moves']}, of which "
+          f"{int(data.transition_cord_like.sum())} cord-like at both ends; "
+          f"start shapes: {meta['episodes']}")
+    for line in diversity_report(data.shapes).lines():
+        print(f"  {line}")
+    return 0

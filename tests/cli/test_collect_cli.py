@@ -1,0 +1,102 @@
+"""Specification of the ``dlo collect`` command."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+import dlo_env.collect
+from dlo_cli.main import main
+from dlo_env.data import load_shapes
+from dlo_env.shapes import is_cord_like
+
+
+def test_collect_writes_the_dataset_and_prints_a_summary_with_diversity(tmp_path, capsys):
+    out = tmp_path / "d.npz"
+    assert main(["collect", "--num-shapes", "120", "--out", str(out), "--seed", "2"]) == 0
+    data = load_shapes(out)
+    assert data.shapes.shape == (120, 20, 2)
+    assert data.metadata["seed"] == 2 and data.metadata["record_every"] == 10
+    assert is_cord_like(data.shapes).all()
+    text = capsys.readouterr().out
+    assert f"wrote {out}" in text
+    assert "120 accepted" in text and "rejected:" in text
+    assert "grid coverage (10x10 over the table)" in text
+    assert "distinct at 1 cm" in text and "turning angles" in text
+
+
+def test_collect_flags_reach_the_configuration(tmp_path):
+    out = tmp_path / "d.npz"
+    args = ["collect", "--num-shapes", "40", "--out", str(out), "--cosine-threshold", "0.9",
+            "--record-every", "5"]
+    assert main(args) == 0
+    meta = load_shapes(out).metadata
+    assert meta["cosine_threshold"] == 0.9 and meta["record_every"] == 5
+    assert is_cord_like(load_shapes(out).shapes, 0.9).all()
+
+
+@pytest.mark.parametrize(
+    ("flags", "message"),
+    [
+        (["--num-shapes", "0"], "argument --num-shapes: expected a positive integer, got '0'"),
+        (["--num-shapes", "ten"], "argument --num-shapes: expected a positive integer"),
+        (["--workers", "0"], "argument --workers: expected a positive integer, got '0'"),
+        (["--seed", "-3"], "argument --seed: expected an integer >= 0, got '-3'"),
+        (["--cosine-threshold", "2"], "argument --cosine-threshold: expected a number in [-1, 1]"),
+        (["--record-every", "0"], "argument --record-every: expected a positive integer"),
+        (["--out", "d.csv"], "argument --out: expected a file name ending in .npz, got 'd.csv'"),
+    ],
+)
+def test_bad_arguments_are_rejected_with_clear_messages(tmp_path, capsys, flags, message):
+    args = {"--num-shapes": "10", "--out": str(tmp_path / "d.npz")}
+    args.update(dict(zip(flags[::2], flags[1::2])))
+    with pytest.raises(SystemExit) as exc:
+        main(["collect", *[x for pair in args.items() for x in pair]])
+    assert exc.value.code == 2
+    assert message in capsys.readouterr().err
+    assert not any(tmp_path.iterdir())
+
+
+def test_missing_required_flags_are_named(capsys):
+    with pytest.raises(SystemExit):
+        main(["collect", "--num-shapes", "10"])
+    assert "--out" in capsys.readouterr().err
+
+
+def test_an_existing_output_is_an_error_not_an_overwrite(tmp_path, capsys):
+    out = tmp_path / "d.npz"
+    out.write_bytes(b"keep me")
+    assert main(["collect", "--num-shapes", "10", "--out", str(out)]) == 2
+    assert "already exists" in capsys.readouterr().err
+    assert out.read_bytes() == b"keep me"
+
+
+def test_interrupt_says_how_to_resume_and_resume_finishes(tmp_path, capsys, monkeypatch):
+    out = tmp_path / "d.npz"
+    real = dlo_env.collect.collect
+
+    def interrupted(*args, **kwargs):
+        def stop(accepted: int, rejected: int) -> None:
+            raise KeyboardInterrupt
+
+        return real(*args, **{**kwargs, "progress": stop})
+
+    monkeypatch.setattr(dlo_env.collect, "collect", interrupted)
+    assert main(["collect", "--num-shapes", "30", "--out", str(out)]) == 130
+    assert "--resume" in capsys.readouterr().err
+    assert not out.exists()
+    monkeypatch.setattr(dlo_env.collect, "collect", real)
+    assert main(["collect", "--num-shapes", "30", "--out", str(out), "--resume"]) == 0
+    assert load_shapes(out).num_shapes == 30
+    fresh = tmp_path / "fresh.npz"
+    assert main(["collect", "--num-shapes", "30", "--out", str(fresh)]) == 0
+    np.testing.assert_array_equal(load_shapes(out).shapes, load_shapes(fresh).shapes)
+
+
+def test_help_lists_every_flag(capsys):
+    with pytest.raises(SystemExit):
+        main(["collect", "--help"])
+    text = capsys.readouterr().out
+    for flag in ("--num-shapes", "--out", "--seed", "--workers", "--cosine-threshold",
+                 "--record-every", "--resume"):
+        assert flag in text
