@@ -1,0 +1,499 @@
+"""The latent-tree planner: the paper's constrained transition search, batched.
+
+A rapidly-exploring random tree grows in the model's latent space from the inverted start
+towards the inverted goal. Every candidate edge Q -> R is decoded into shapes and accepted
+only if (paper) consecutive shapes are similar and the manipulated end moves along a straight
+line, and (this project, physical sense checked on the decoded shapes) no point of the cord
+moves much farther than the end that drags it, and every shape is a cord. Candidates are
+evaluated in batches, one decoder call for many edges. After every batch the new nodes nearest
+the goal try to connect straight to it; the start tries first, so a transition that one
+straight end move can make needs a single decoder call. The path found is shortened by
+shortcuts checked with the same constraints, because every corner of the end's path is a place
+where the real cord's friction can make it part ways with the surrogate.
+
+All tolerances are in metres, measured on decoded shapes, so they mean the same thing whatever
+the latent parametrisation; only ``step_length`` and ``sample_margin`` are latent units.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import dataclass, field, fields, replace
+from typing import Any
+
+import numpy as np
+
+from dlo_env.shapes import error, is_cord_like, segment_lengths
+from planners.observation import as_shape
+from planners.surrogate import Surrogate
+
+ENDS = {"head": 0, "tail": -1}
+
+
+@dataclass(frozen=True)
+class TreeConfig:
+    """Parameters of the latent-tree planner; the defaults are the documented ones.
+
+    Attributes:
+        step_length: The paper's ``l``: latent distance from the nearest node Q to a candidate R.
+        edge_points: Shapes decoded along a tree edge (after Q); longer edges (goal connections,
+            shortcuts) are decoded at the same latent spacing ``step_length / edge_points``.
+        similarity: Largest ``error`` between consecutive decoded shapes on an edge, metres.
+        straightness: Largest distance of the manipulated end from the straight line between
+            its positions at the two nodes of an edge (and largest backward motion along it),
+            metres.
+        follow_ratio: No point may move more than ``follow_ratio`` times the manipulated end's
+            displacement (plus ``follow_slack``) over an edge: a cord on a table moves only
+            where it is dragged. ``None`` disables the check (the paper does not have it).
+        follow_slack: Metres added to the allowed displacement (decoder noise).
+        max_stretch: Largest relative deviation of a decoded segment from the start shape's mean
+            segment length; ``None`` disables it. Keeps the path among cord-like shapes.
+        cord_like: Reject edges through shapes that fail the paper's cosine filter.
+        goal_threshold: A node whose decoded shape is within this ``error`` of the decoded goal
+            has reached the goal, metres.
+        goal_bias: Probability that a sample is the goal latent itself.
+        connect_attempts: New nodes (nearest the goal) that try a direct goal connection
+            after every batch.
+        batch_size: Candidates decoded per model call.
+        max_nodes: Node budget of the tree.
+        max_seconds: Time budget of one ``plan`` call, seconds (inversion included).
+        sample_margin: Samples are drawn in the box around the start and goal latents widened
+            by ``max(sample_margin, |z_goal - z_start|)`` (latent units) on every axis.
+        max_edge_points: Cap on the shapes decoded along one long edge.
+        shortcut: Shorten the path found with straight connections that pass the checks.
+        end: The manipulated end: ``"head"`` (point 0) or ``"tail"`` (point n-1).
+    """
+
+    step_length: float = 0.15
+    edge_points: int = 4
+    similarity: float = 0.03
+    straightness: float = 0.01
+    follow_ratio: float | None = 1.5
+    follow_slack: float = 0.01
+    max_stretch: float | None = 0.25
+    cord_like: bool = True
+    goal_threshold: float = 0.01
+    goal_bias: float = 0.1
+    connect_attempts: int = 8
+    batch_size: int = 64
+    max_nodes: int = 2000
+    max_seconds: float = 0.5
+    sample_margin: float = 0.3
+    max_edge_points: int = 64
+    shortcut: bool = True
+    end: str = "head"
+
+    def __post_init__(self) -> None:
+        positive = ("step_length", "similarity", "straightness", "goal_threshold", "max_seconds",
+                    "sample_margin")
+        for name in positive:
+            value = getattr(self, name)
+            if not (isinstance(value, (int, float)) and value > 0):
+                raise ValueError(f"TreeConfig.{name} must be a number > 0, got {value!r}")
+        for name in ("edge_points", "connect_attempts", "batch_size", "max_nodes",
+                     "max_edge_points"):
+            value = getattr(self, name)
+            if not (isinstance(value, int) and value >= 1):
+                raise ValueError(f"TreeConfig.{name} must be an int >= 1, got {value!r}")
+        if self.max_edge_points < self.edge_points:
+            raise ValueError(
+                f"TreeConfig.max_edge_points must be >= edge_points ({self.edge_points}), "
+                f"got {self.max_edge_points}"
+            )
+        if not 0.0 <= self.goal_bias <= 1.0:
+            raise ValueError(f"TreeConfig.goal_bias must be in [0, 1], got {self.goal_bias!r}")
+        if self.follow_ratio is not None and not self.follow_ratio > 0:
+            raise ValueError(
+                f"TreeConfig.follow_ratio must be > 0 or None, got {self.follow_ratio!r}"
+            )
+        if not self.follow_slack >= 0:
+            raise ValueError(f"TreeConfig.follow_slack must be >= 0, got {self.follow_slack!r}")
+        if self.max_stretch is not None and not self.max_stretch > 0:
+            raise ValueError(
+                f"TreeConfig.max_stretch must be > 0 or None, got {self.max_stretch!r}"
+            )
+        if self.end not in ENDS:
+            raise ValueError(f"TreeConfig.end must be one of {tuple(ENDS)}, got {self.end!r}")
+
+
+@dataclass(frozen=True)
+class Plan:
+    """A planned shape transition: the decoded path and the end's straight moves.
+
+    The manipulated end moves in straight lines between the positions it has at the path's
+    nodes; every planned shape has the end position (waypoint) at which it is predicted.
+
+    Attributes:
+        shapes: ``(T, n, 2)`` decoded shapes along the path, metres (``shapes[0]`` decodes the
+            inverted start).
+        latents: ``(T, d)`` their latents.
+        waypoints: ``(T, 2)`` position of the manipulated end for each shape, metres; on the
+            straight line of its edge, anchored at the real start (and, on success, real goal)
+            end position.
+        nodes: ``(K,)`` indices into ``shapes`` of the path's nodes (first 0, last T-1): the
+            corners of the end's path.
+        success: Whether the path reaches the goal (within ``goal_threshold``).
+        stats: What the search did: ``nodes``, ``decoder_calls``, ``seconds``, ``iterations``,
+            inversion errors, rejection counts per check, ``direct`` (one straight move).
+        end: The manipulated end, ``"head"`` or ``"tail"``.
+    """
+
+    shapes: np.ndarray
+    latents: np.ndarray
+    waypoints: np.ndarray
+    nodes: np.ndarray
+    success: bool
+    stats: dict[str, Any] = field(default_factory=dict)
+    end: str = "head"
+
+    @property
+    def corners(self) -> np.ndarray:
+        """``(K, 2)`` end positions at the nodes: the end moves straight from one to the next."""
+        return self.waypoints[self.nodes]
+
+    @property
+    def moves(self) -> np.ndarray:
+        """``(K - 1, 2)`` straight displacements of the end, metres."""
+        return np.diff(self.corners, axis=0)
+
+    @property
+    def path_length(self) -> float:
+        """Total distance the end travels, metres."""
+        return float(np.linalg.norm(self.moves, axis=1).sum())
+
+
+class _Tree:
+    """Growing arrays of nodes: latent, decoded shape, parent, end path length, edge points."""
+
+    def __init__(self, capacity: int, latent_dim: int, n_points: int) -> None:
+        self.latents = np.zeros((capacity, latent_dim), dtype=np.float32)
+        self.shapes = np.zeros((capacity, n_points, 2), dtype=np.float32)
+        self.parent = np.full(capacity, -1, dtype=np.int64)
+        self.cost = np.zeros(capacity)
+        self.edge_points = np.zeros(capacity, dtype=np.int64)
+        self.size = 0
+
+    def add(
+        self, latents: np.ndarray, shapes: np.ndarray, parents: np.ndarray, cost: np.ndarray,
+        edge_points: np.ndarray,
+    ) -> np.ndarray:
+        count = min(len(latents), len(self.latents) - self.size)
+        idx = np.arange(self.size, self.size + count)
+        self.latents[idx] = latents[:count]
+        self.shapes[idx] = shapes[:count]
+        self.parent[idx] = parents[:count]
+        self.cost[idx] = cost[:count]
+        self.edge_points[idx] = edge_points[:count]
+        self.size += count
+        return idx
+
+    def path(self, node: int) -> list[int]:
+        out = [node]
+        while self.parent[out[-1]] >= 0:
+            out.append(int(self.parent[out[-1]]))
+        return out[::-1]
+
+
+class LatentTreePlanner:
+    """Search the latent space for a transition the manipulated end makes by straight moves.
+
+    Args:
+        model: A shape model (``latent_model.ShapeModel`` or the same interface).
+        config: Parameters; ``None`` uses ``TreeConfig()``.
+        seed: Seed of the sampling; ``plan`` starts from it on every call, so a plan is a
+            function of (start, goal, seed).
+        **overrides: Any ``TreeConfig`` field, overriding ``config``
+            (``LatentTreePlanner(model, step_length=0.1)``).
+
+    Example:
+        >>> plan = LatentTreePlanner(model, seed=0).plan(start_shape, goal_shape)
+        >>> plan.success, plan.moves  # straight displacements of the head, metres
+    """
+
+    def __init__(
+        self, model: Any, config: TreeConfig | None = None, *, seed: int = 0, **overrides: Any
+    ) -> None:
+        known = {f.name for f in fields(TreeConfig)}
+        unknown = sorted(set(overrides) - known)
+        if unknown:
+            raise ValueError(f"unknown LatentTreePlanner parameters {unknown}; expected some of "
+                             f"{sorted(known)}")
+        self.config = replace(config if config is not None else TreeConfig(), **overrides)
+        self.surrogate = Surrogate(model)
+        self.model = model
+        self.seed = int(seed)
+        self._end = ENDS[self.config.end]
+
+    @property
+    def n_points(self) -> int:
+        """Points of the shapes the planner plans for."""
+        return self.surrogate.n_points
+
+    # ------------------------------------------------------------------ checks
+    def _check_edges(self, chains: np.ndarray, rest: float, counts: dict[str, int]) -> np.ndarray:
+        """Which decoded edges ``(B, K+1, n, 2)`` (node shape first) pass every check."""
+        cfg = self.config
+        step = error(chains[:, 1:], chains[:, :-1])  # (B, K)
+        ok_similar = step.max(axis=1) <= cfg.similarity
+        ends = chains[:, :, self._end, :].astype(np.float64)  # (B, K+1, 2)
+        rel = ends - ends[:, :1]
+        chord = rel[:, -1]  # (B, 2)
+        length = np.linalg.norm(chord, axis=1)
+        unit = chord / np.maximum(length, 1e-12)[:, None]
+        along = (rel * unit[:, None, :]).sum(axis=-1)  # (B, K+1)
+        across = np.abs(rel[..., 0] * unit[:, None, 1] - rel[..., 1] * unit[:, None, 0])
+        backwards = np.maximum(np.diff(along, axis=1).min(axis=1) * -1.0, 0.0)
+        deviation = np.where(length > 1e-9, across.max(axis=1),
+                             np.linalg.norm(rel, axis=-1).max(axis=1))
+        ok_straight = (deviation <= cfg.straightness) & (backwards <= cfg.straightness)
+        ok = ok_similar & ok_straight
+        counts["similarity"] += int((~ok_similar).sum())
+        counts["straightness"] += int((ok_similar & ~ok_straight).sum())
+        if cfg.follow_ratio is not None:
+            moved = np.linalg.norm(chains[:, -1] - chains[:, 0], axis=-1).max(axis=1)
+            ok_follow = moved <= cfg.follow_ratio * length + cfg.follow_slack
+            counts["follow"] += int((ok & ~ok_follow).sum())
+            ok &= ok_follow
+        inner = chains[:, 1:]
+        b, k = inner.shape[:2]
+        ok_cord = np.ones(b, dtype=bool)
+        if cfg.cord_like:
+            ok_cord &= np.asarray(is_cord_like(inner.reshape(b * k, -1, 2))).reshape(b, k).all(1)
+        if cfg.max_stretch is not None:
+            stretch = np.abs(segment_lengths(inner) / rest - 1.0).max(axis=(1, 2))
+            ok_cord &= stretch <= cfg.max_stretch
+        counts["cord"] += int((ok & ~ok_cord).sum())
+        return ok & ok_cord
+
+    def _edge_count(self, distance: np.ndarray) -> np.ndarray:
+        cfg = self.config
+        spacing = cfg.step_length / cfg.edge_points
+        k = np.ceil(np.asarray(distance) / spacing - 1e-9).astype(np.int64)
+        return np.clip(k, cfg.edge_points, cfg.max_edge_points)
+
+    def _try_edges(
+        self, z_from: np.ndarray, shape_from: np.ndarray, z_to: np.ndarray, rest: float,
+        counts: dict[str, int], points: int | None = None,
+    ) -> tuple[np.ndarray, np.ndarray, int]:
+        """Decode and check edges ``(B, d) -> (B, d)`` in one model call.
+
+        Returns:
+            Which pass ``(B,)``, the decoded end shapes ``(B, n, 2)`` and the points per edge.
+        """
+        if points is None:
+            points = int(self._edge_count(np.linalg.norm(z_to - z_from, axis=1)).max())
+        fractions = np.arange(1, points + 1) / points
+        latents = self.surrogate.segment(z_from, z_to, fractions)  # (B, K, d)
+        decoded = self.surrogate.decode(latents)  # (B, K, n, 2)
+        chains = np.concatenate([shape_from[:, None], decoded], axis=1)
+        return self._check_edges(chains, rest, counts), decoded[:, -1], points
+
+    # ------------------------------------------------------------------ search
+    def plan(
+        self,
+        start: np.ndarray,
+        goal: np.ndarray,
+        *,
+        goal_latent: np.ndarray | None = None,
+        seed: int | None = None,
+    ) -> Plan:
+        """Plan a transition from ``start`` to ``goal``.
+
+        Args:
+            start: ``(n, 2)`` or flat start shape, metres.
+            goal: ``(n, 2)`` or flat goal shape, metres.
+            goal_latent: The goal's latent if already inverted (closed-loop replanning).
+            seed: Seed of this call's sampling (default: the planner's seed).
+
+        Returns:
+            The plan. On failure (budget spent) ``success`` is False and the path leads to the
+            node whose shape came closest to the goal.
+        """
+        cfg = self.config
+        t0 = time.perf_counter()
+        calls0 = self.surrogate.decoder_calls
+        n = self.n_points
+        start = as_shape(start, n, "start")
+        goal = as_shape(goal, n, "goal")
+        rng = np.random.default_rng(self.seed if seed is None else seed)
+        counts = {"similarity": 0, "straightness": 0, "follow": 0, "cord": 0}
+        if goal_latent is None:
+            z, inv_err, inv_ok = self.surrogate.invert(np.stack([start, goal]))
+            z_start, z_goal = z[0], z[1]
+            goal_err, goal_ok = float(inv_err[1]), bool(inv_ok[1])
+        else:
+            z_goal = np.asarray(goal_latent, dtype=np.float32).reshape(-1)
+            if z_goal.shape != (self.surrogate.latent_dim,):
+                raise ValueError(f"goal_latent must have shape ({self.surrogate.latent_dim},), "
+                                 f"got {np.shape(goal_latent)}")
+            z, inv_err, inv_ok = self.surrogate.invert(start[None])
+            z_start = z[0]
+            goal_err, goal_ok = math.nan, True
+        ends = self.surrogate.decode(np.stack([z_start, z_goal]))
+        shape_goal = ends[1]
+        rest = float(segment_lengths(start).mean())
+        tree = _Tree(cfg.max_nodes + 1, self.surrogate.latent_dim, n)
+        tree.add(z_start[None], ends[:1], np.array([-1]), np.zeros(1), np.zeros(1, np.int64))
+        spread = np.abs(z_goal - z_start)
+        margin = max(cfg.sample_margin, float(np.linalg.norm(spread)))
+        low = np.minimum(z_start, z_goal) - margin
+        high = np.maximum(z_start, z_goal) + margin
+
+        goal_edge: tuple[int, int] | None = None  # (node, points) connected to the goal
+        reached: int | None = None  # a node within goal_threshold (the paper's stop)
+        candidates = np.array([0])
+        iterations = 0
+        stop = "goal"
+        while True:
+            # Goal connection attempts from the newest nodes nearest the goal.
+            if len(candidates):
+                dist = np.linalg.norm(tree.latents[candidates] - z_goal, axis=1)
+                candidates = candidates[np.argsort(dist)[: cfg.connect_attempts]]
+                ok, _, points = self._try_edges(
+                    tree.latents[candidates], tree.shapes[candidates],
+                    np.broadcast_to(z_goal, (len(candidates), len(z_goal))), rest, counts,
+                )
+                if ok.any():
+                    passing = candidates[ok]
+                    head_goal = shape_goal[self._end]
+                    total = tree.cost[passing] + np.linalg.norm(
+                        tree.shapes[passing, self._end] - head_goal, axis=1)
+                    goal_edge = (int(passing[np.argmin(total)]), points)
+                    break
+            if reached is not None:
+                break
+            if time.perf_counter() - t0 > cfg.max_seconds:
+                stop = "time"
+                break
+            if tree.size > cfg.max_nodes:
+                stop = "nodes"
+                break
+            iterations += 1
+            samples = rng.uniform(low, high, size=(cfg.batch_size, len(z_goal)))
+            samples[rng.random(cfg.batch_size) < cfg.goal_bias] = z_goal
+            nodes = tree.latents[: tree.size]
+            d2 = ((samples[:, None, :] - nodes[None]) ** 2).sum(axis=-1)  # (B, N)
+            nearest = d2.argmin(axis=1)
+            direction = samples - nodes[nearest]
+            dist = np.linalg.norm(direction, axis=1)
+            keep = dist > 1e-6
+            nearest, direction, dist = nearest[keep], direction[keep], dist[keep]
+            if len(nearest) == 0:
+                candidates = np.array([], dtype=np.int64)
+                continue
+            step = np.minimum(dist, cfg.step_length)
+            targets = nodes[nearest] + direction * (step / dist)[:, None]
+            ok, shapes, points = self._try_edges(
+                nodes[nearest], tree.shapes[nearest], targets, rest, counts,
+                points=cfg.edge_points,
+            )
+            parents = nearest[ok]
+            moved = np.linalg.norm(shapes[ok, self._end] - tree.shapes[parents, self._end], axis=1)
+            added = tree.add(targets[ok].astype(np.float32), shapes[ok], parents,
+                             tree.cost[parents] + moved, np.full(len(parents), points))
+            candidates = added
+            if len(added):
+                close = np.asarray(error(tree.shapes[added], shape_goal)) <= cfg.goal_threshold
+                if close.any():
+                    reached = int(added[np.argmax(close)])
+
+        # The path: to the goal latent, else to the reached node, else to the closest node.
+        if goal_edge is not None:
+            node, points = goal_edge
+            path = tree.path(node)
+            path_latents = [tree.latents[i] for i in path] + [z_goal]
+            path_points = [int(tree.edge_points[i]) for i in path[1:]] + [points]
+            success = True
+        else:
+            if reached is None:
+                gaps = np.asarray(error(tree.shapes[: tree.size], shape_goal)).reshape(-1)
+                node, success = int(np.argmin(gaps)), False
+            else:
+                node, success = reached, True
+            path = tree.path(node)
+            path_latents = [tree.latents[i] for i in path]
+            path_points = [int(tree.edge_points[i]) for i in path[1:]]
+        path_latents = np.array(path_latents, dtype=np.float32)
+        if cfg.shortcut and len(path_latents) > 2:
+            path_latents, path_points = self._shortcut(path_latents, path_points, rest, counts)
+        stats = {
+            "nodes": int(tree.size),
+            "iterations": iterations,
+            "stop": stop if not success else "goal",
+            "start_inversion_error": float(inv_err[0]),
+            "start_verified": bool(inv_ok[0]),
+            "goal_inversion_error": goal_err,
+            "goal_verified": goal_ok,
+            "rejected": dict(counts),
+        }
+        return self._build_plan(path_latents, path_points, start, goal, success, stats, t0, calls0)
+
+    def _shortcut(
+        self, latents: np.ndarray, points: list[int], rest: float, counts: dict[str, int]
+    ) -> tuple[np.ndarray, list[int]]:
+        """Greedy shortcuts: from each kept node, jump to the farthest node reachable directly."""
+        keep, keep_points = [0], []
+        i, last = 0, len(latents) - 1
+        while i < last:
+            targets = np.arange(last, i + 1, -1)  # farthest first
+            if len(targets):
+                shape_i = self.surrogate.decode(latents[i][None])
+                ok, _, k = self._try_edges(
+                    np.repeat(latents[i][None], len(targets), axis=0),
+                    np.repeat(shape_i, len(targets), axis=0), latents[targets], rest, counts,
+                )
+                if ok.any():
+                    j = int(targets[np.argmax(ok)])
+                    keep.append(j)
+                    keep_points.append(k)
+                    i = j
+                    continue
+            keep.append(i + 1)
+            keep_points.append(points[i])
+            i += 1
+        return latents[keep], keep_points
+
+    def _build_plan(
+        self, path: np.ndarray, points: list[int], start: np.ndarray, goal: np.ndarray,
+        success: bool, stats: dict[str, Any], t0: float, calls0: int,
+    ) -> Plan:
+        """Decode the path edge by edge and anchor the end's waypoints to the real shapes."""
+        latents = [path[:1]]
+        nodes = [0]
+        for a, b, k in zip(path[:-1], path[1:], points):
+            fractions = np.arange(1, k + 1) / k
+            latents.append(self.surrogate.segment(a[None], b[None], fractions)[0])
+            nodes.append(nodes[-1] + k)
+        latents = np.concatenate(latents).astype(np.float32)
+        shapes = self.surrogate.decode(latents)
+        decoded_ends = shapes[:, self._end].astype(np.float64)
+        corners = decoded_ends[nodes].copy()
+        corners[0] = start[self._end]
+        if success:
+            corners[-1] = goal[self._end]
+        waypoints = np.empty_like(decoded_ends)
+        waypoints[0] = corners[0]
+        for e, (a, b) in enumerate(zip(nodes[:-1], nodes[1:])):
+            chord = decoded_ends[b] - decoded_ends[a]
+            length2 = float(chord @ chord)
+            idx = np.arange(a + 1, b + 1)
+            if length2 > 1e-18:
+                t = np.clip((decoded_ends[idx] - decoded_ends[a]) @ chord / length2, 0.0, 1.0)
+            else:
+                t = (idx - a) / (b - a)
+            waypoints[idx] = corners[e] + t[:, None] * (corners[e + 1] - corners[e])
+        stats = dict(stats)
+        stats["path_nodes"] = len(nodes)
+        stats["direct"] = len(nodes) == 2
+        stats["decoder_calls"] = self.surrogate.decoder_calls - calls0
+        stats["seconds"] = time.perf_counter() - t0
+        return Plan(
+            shapes=shapes,
+            latents=latents,
+            waypoints=waypoints.astype(np.float32),
+            nodes=np.array(nodes, dtype=np.int64),
+            success=bool(success),
+            stats=stats,
+            end=self.config.end,
+        )

@@ -1,0 +1,40 @@
+"""Straight moves of the grasped end as environment actions."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from dlo_env.shapes import TABLE_HALF
+from dlo_env.tasks import split_move
+
+#: Corners are kept this far inside the table edge, metres (the cord's default ``rim_margin``).
+EDGE_MARGIN = 0.02
+
+
+def actions_through(end: np.ndarray, corners: np.ndarray, max_step: float) -> list[np.ndarray]:
+    """Actions that move the end from ``end`` straight to each of ``corners`` in turn.
+
+    Every straight move is split into equal actions (``dlo_env.tasks.split_move``, as the
+    environments' own tasks are made), so no action moves the end farther than ``max_step``
+    and the end stops exactly at every corner. Corners are clipped to the table.
+
+    Args:
+        end: ``(2,)`` the end's position now, metres.
+        corners: ``(K, 2)`` positions to visit, metres.
+        max_step: Displacement of an action of 1.0, metres.
+
+    Returns:
+        A list of float32 ``(2,)`` actions in ``[-1, 1]``, with ``|action| <= 1``.
+    """
+    if not max_step > 0:
+        raise ValueError(f"max_step must be > 0, got {max_step!r}")
+    lim = TABLE_HALF - EDGE_MARGIN
+    here = np.asarray(end, dtype=np.float64).reshape(2)
+    actions: list[np.ndarray] = []
+    for corner in np.clip(np.asarray(corners, dtype=np.float64).reshape(-1, 2), -lim, lim):
+        displacement = corner - here
+        if np.linalg.norm(displacement) < 1e-6:
+            continue
+        actions.extend(split_move(displacement, max_step))
+        here = corner
+    return actions

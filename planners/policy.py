@@ -1,0 +1,187 @@
+"""The latent-tree planner as a policy the environment can score.
+
+``PlannerPolicy`` has the interface of Stable-Baselines3 models, ``predict(obs, state,
+episode_start, deterministic) -> (action, state)``, so one harness drives planners and RL models.
+At the first step of an episode it inverts the observed goal, plans from the observed cord,
+and turns the plan's straight end moves into actions of at most ``max_step``. Open loop
+(``replan_every=None``) it executes that plan and then holds still. Closed loop it replans from
+the observed cord every ``replan_every`` steps (and whenever the current plan is used up).
+
+When a plan fails (the search budget is spent before the goal is reached) the policy records
+the failure in ``stats`` and falls back to the straight-line reference for that plan: the head
+moves straight to the goal's head position.
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+from planners.latent_tree import LatentTreePlanner, Plan
+from planners.moves import actions_through
+from planners.observation import read_observation
+from planners.surrogate import model_n_points
+
+
+@dataclass
+class PolicyStats:
+    """What the policy did in the current episode.
+
+    Attributes:
+        plans: Planning calls.
+        failures: Plans that did not reach the goal (the fallback was used instead).
+        seconds: Time spent inverting and planning, seconds.
+        decoder_calls: Decoder calls of all plans.
+        goal_inversion_error: ``error`` of the decoded goal inversion, metres.
+        goal_verified: Whether the goal inversion was verified by the model.
+    """
+
+    plans: int = 0
+    failures: int = 0
+    seconds: float = 0.0
+    decoder_calls: int = 0
+    goal_inversion_error: float = float("nan")
+    goal_verified: bool = False
+    plan_seconds: list[float] = field(default_factory=list)
+
+
+class PlannerPolicy:
+    """Plan with a latent-tree planner and act on the environment (SB3 interface).
+
+    Args:
+        model: The shape model (``latent_model.ShapeModel`` or the same interface); its
+            ``n_points`` must match the environment's cord.
+        planner: The planner (default: ``LatentTreePlanner(model)`` with default parameters).
+        replan_every: ``None`` for open loop; ``k`` to replan from the observed cord every ``k``
+            environment steps.
+        max_step: The environment's ``max_step`` (metres per unit action).
+
+    Attributes:
+        stats: ``PolicyStats`` of the current episode.
+        plans: The plans of the current episode, in order; ``plans[0]`` was made from the
+            episode's start.
+    """
+
+    def __init__(
+        self,
+        model: Any,
+        planner: LatentTreePlanner | None = None,
+        replan_every: int | None = None,
+        *,
+        max_step: float = 0.02,
+    ) -> None:
+        n = model_n_points(model)
+        if planner is None:
+            planner = LatentTreePlanner(model)
+        if planner.n_points != n:
+            raise ValueError(
+                f"planner must plan for the model's n_points={n}, got a planner for "
+                f"n_points={planner.n_points}"
+            )
+        if replan_every is not None and not (isinstance(replan_every, int) and replan_every >= 1):
+            raise ValueError(f"replan_every must be None or an int >= 1, got {replan_every!r}")
+        if not max_step > 0:
+            raise ValueError(f"max_step must be > 0, got {max_step!r}")
+        self.model = model
+        self.planner = planner
+        self.replan_every = replan_every
+        self.max_step = float(max_step)
+        self.n_points = n
+        self.reset()
+
+    def check_env(self, env: Any) -> None:
+        """Raise ``ValueError`` unless the environment's cord and step match this policy."""
+        base = getattr(env, "unwrapped", env)
+        params = getattr(base, "params", None)
+        n = getattr(params, "n_points", None)
+        if n is not None and n != self.n_points:
+            raise ValueError(
+                f"model has n_points={self.n_points} but the environment's cord has "
+                f"n_points={n}: use a model trained for this cord"
+            )
+        step = getattr(base, "max_step", None)
+        if step is not None and abs(float(step) - self.max_step) > 1e-12:
+            raise ValueError(
+                f"policy max_step={self.max_step} m differs from the environment's "
+                f"max_step={step} m: pass max_step=env.unwrapped.max_step"
+            )
+        grasp = getattr(getattr(base, "cord", None), "grasp", "head")
+        if grasp != self.planner.config.end:
+            raise ValueError(
+                f"the planner moves the {self.planner.config.end!r} end but the environment "
+                f"holds {grasp!r}"
+            )
+
+    def reset(self) -> None:
+        """Forget the current episode: plans, queued actions, goal latent and stats."""
+        self.stats = PolicyStats()
+        self.plans: list[Plan] = []
+        self._queue: list[np.ndarray] = []
+        self._goal_latent: np.ndarray | None = None
+        self._goal_key: bytes | None = None
+        self._since_plan = 0
+
+    def _replan(self, shape: np.ndarray, goal: np.ndarray, head: np.ndarray) -> None:
+        t0 = time.perf_counter()
+        key = goal.tobytes()
+        if self._goal_latent is None or key != self._goal_key:
+            z, err, ok = self.planner.surrogate.invert(goal[None])
+            self._goal_latent, self._goal_key = z[0], key
+            self.stats.goal_inversion_error, self.stats.goal_verified = float(err[0]), bool(ok[0])
+        plan = self.planner.plan(
+            shape, goal, goal_latent=self._goal_latent, seed=self.planner.seed + len(self.plans)
+        )
+        self.plans.append(plan)
+        self.stats.plans += 1
+        self.stats.decoder_calls += int(plan.stats.get("decoder_calls", 0))
+        if plan.success:
+            corners = plan.corners[1:]
+        else:
+            self.stats.failures += 1
+            end = 0 if self.planner.config.end == "head" else -1
+            corners = goal[end][None]  # the fallback: straight to the goal's end position
+        self._queue = actions_through(head, corners, self.max_step)
+        if not self._queue and self.replan_every is not None:
+            # Nothing to do by this plan (start and goal decode alike): wait instead of
+            # replanning at every step.
+            self._queue = [np.zeros(2, dtype=np.float32)] * self.replan_every
+        self._since_plan = 0
+        seconds = time.perf_counter() - t0
+        self.stats.seconds += seconds
+        self.stats.plan_seconds.append(seconds)
+
+    def predict(
+        self,
+        observation: dict[str, Any],
+        state: Any = None,
+        episode_start: Any = None,
+        deterministic: bool = True,
+    ) -> tuple[np.ndarray, Any]:
+        """The next action for one observation (unbatched, or a batch of one).
+
+        Args:
+            observation: A ``dlo_env`` goal observation (Dict of flat arrays).
+            state: Passed through (the policy keeps its own episode state).
+            episode_start: When true, the policy resets first (as SB3 does at episode ends).
+                Calling ``reset()`` does the same.
+            deterministic: Ignored (the plan is a function of the observation and the seed).
+
+        Returns:
+            ``(action, state)``; the action is float32 ``(2,)`` (or ``(1, 2)`` for a batched
+            observation) with Euclidean norm at most 1.
+        """
+        if episode_start is not None and bool(np.asarray(episode_start).reshape(-1)[0]):
+            self.reset()
+        obs = read_observation(observation, self.n_points)
+        closed = self.replan_every is not None
+        due = not self.plans or (
+            closed and (self._since_plan >= self.replan_every or not self._queue)
+        )
+        if due:
+            self._replan(obs.shape, obs.goal, obs.head)
+        action = self._queue.pop(0) if self._queue else np.zeros(2, dtype=np.float32)
+        self._since_plan += 1
+        return (action[None] if obs.batched else action), state
