@@ -443,7 +443,8 @@ def collect(
         num_shapes: Shapes to collect.
         config: What to collect (defaults: the documented settings).
         workers: Worker processes (1 runs in this process). The arrays written do not depend
-            on it; only the metadata records it.
+            on it; only the metadata records it. Workers are spawned, so a script calling
+            this with ``workers > 1`` needs the ``if __name__ == "__main__":`` guard.
         resume: Continue an interrupted run from the chunks in ``OUT.parts/``.
         progress: Called as ``progress(accepted, rejected)`` with increments.
 
