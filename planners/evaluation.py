@@ -297,6 +297,14 @@ def _json_ready(value: Any) -> Any:
     return value
 
 
+def write_summaries(summaries: list[dict[str, Any]], path: str | os.PathLike) -> Path:
+    """Write a list of summaries to a JSON file atomically (NaN becomes ``null``)."""
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    _write_atomic(path, json.dumps(_json_ready(summaries), indent=2) + "\n")
+    return path
+
+
 def write_evaluation(
     evaluation: Evaluation,
     folder: str | os.PathLike,

@@ -63,6 +63,9 @@ class TreeConfig:
         max_edge_points: Cap on the shapes decoded along one long edge.
         shortcut: Shorten the path found with straight connections that pass the checks.
         end: The manipulated end: ``"head"`` (point 0) or ``"tail"`` (point n-1).
+        invert_steps: Refinement steps of the start (and goal) inversion, passed to
+            ``model.invert(steps=...)``; ``None`` keeps the model's default.
+        invert_restarts: Restarts of the inversion (``model.invert(restarts=...)``).
     """
 
     step_length: float = 0.15
@@ -83,6 +86,8 @@ class TreeConfig:
     max_edge_points: int = 64
     shortcut: bool = True
     end: str = "head"
+    invert_steps: int | None = None
+    invert_restarts: int | None = None
 
     def __post_init__(self) -> None:
         positive = ("step_length", "similarity", "straightness", "goal_threshold", "max_seconds",
@@ -113,6 +118,10 @@ class TreeConfig:
             raise ValueError(
                 f"TreeConfig.max_stretch must be > 0 or None, got {self.max_stretch!r}"
             )
+        for name in ("invert_steps", "invert_restarts"):
+            value = getattr(self, name)
+            if value is not None and not (isinstance(value, int) and value >= 0):
+                raise ValueError(f"TreeConfig.{name} must be None or an int >= 0, got {value!r}")
         if self.end not in ENDS:
             raise ValueError(f"TreeConfig.end must be one of {tuple(ENDS)}, got {self.end!r}")
 
@@ -230,6 +239,11 @@ class LatentTreePlanner:
         """Points of the shapes the planner plans for."""
         return self.surrogate.n_points
 
+    def invert(self, shapes: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """The model's verified inversion with this planner's options: ``(z, err, ok)``."""
+        cfg = self.config
+        return self.surrogate.invert(shapes, steps=cfg.invert_steps, restarts=cfg.invert_restarts)
+
     # ------------------------------------------------------------------ checks
     def _check_edges(self, chains: np.ndarray, rest: float, counts: dict[str, int]) -> np.ndarray:
         """Which decoded edges ``(B, K+1, n, 2)`` (node shape first) pass every check."""
@@ -319,7 +333,7 @@ class LatentTreePlanner:
         rng = np.random.default_rng(self.seed if seed is None else seed)
         counts = {"similarity": 0, "straightness": 0, "follow": 0, "cord": 0}
         if goal_latent is None:
-            z, inv_err, inv_ok = self.surrogate.invert(np.stack([start, goal]))
+            z, inv_err, inv_ok = self.invert(np.stack([start, goal]))
             z_start, z_goal = z[0], z[1]
             goal_err, goal_ok = float(inv_err[1]), bool(inv_ok[1])
         else:
@@ -327,7 +341,7 @@ class LatentTreePlanner:
             if z_goal.shape != (self.surrogate.latent_dim,):
                 raise ValueError(f"goal_latent must have shape ({self.surrogate.latent_dim},), "
                                  f"got {np.shape(goal_latent)}")
-            z, inv_err, inv_ok = self.surrogate.invert(start[None])
+            z, inv_err, inv_ok = self.invert(start[None])
             z_start = z[0]
             goal_err, goal_ok = math.nan, True
         ends = self.surrogate.decode(np.stack([z_start, z_goal]))
@@ -339,6 +353,10 @@ class LatentTreePlanner:
         margin = max(cfg.sample_margin, float(np.linalg.norm(spread)))
         low = np.minimum(z_start, z_goal) - margin
         high = np.maximum(z_start, z_goal) + margin
+        bounds = self.surrogate.latent_bounds()
+        if bounds is not None:  # stay where the model was trained (but keep start and goal)
+            low = np.minimum(np.maximum(low, bounds[0]), np.minimum(z_start, z_goal))
+            high = np.maximum(np.minimum(high, bounds[1]), np.maximum(z_start, z_goal))
 
         goal_edge: tuple[int, int] | None = None  # (node, points) connected to the goal
         reached: int | None = None  # a node within goal_threshold (the paper's stop)

@@ -128,7 +128,7 @@ class PlannerPolicy:
         t0 = time.perf_counter()
         key = goal.tobytes()
         if self._goal_latent is None or key != self._goal_key:
-            z, err, ok = self.planner.surrogate.invert(goal[None])
+            z, err, ok = self.planner.invert(goal[None])
             self._goal_latent, self._goal_key = z[0], key
             self.stats.goal_inversion_error, self.stats.goal_verified = float(err[0]), bool(ok[0])
         plan = self.planner.plan(

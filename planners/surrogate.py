@@ -75,15 +75,33 @@ class Surrogate:
         shapes = to_numpy(self.model.decode(flat)).astype(np.float32, copy=False)
         return shapes.reshape(lead + (self.n_points, 2))
 
-    def invert(self, shapes: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """Latents ``(B, d)``, reconstruction errors ``(B,)`` (metres) and verified flags."""
-        out = self.model.invert(np.asarray(shapes, dtype=np.float32))
+    def invert(
+        self, shapes: np.ndarray, **options: Any
+    ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Latents ``(B, d)``, reconstruction errors ``(B,)`` (metres) and verified flags.
+
+        ``options`` whose value is not None go to ``model.invert`` (e.g. ``steps`` and
+        ``restarts`` of ``ShapeModel.invert``'s refinement).
+        """
+        given = {k: v for k, v in options.items() if v is not None}
+        out = self.model.invert(np.asarray(shapes, dtype=np.float32), **given)
         z, err, ok = (to_numpy(v) for v in out)
         return (
             z.astype(np.float32).reshape(-1, self.latent_dim),
             err.astype(np.float64).reshape(-1),
             ok.astype(bool).reshape(-1),
         )
+
+    def latent_bounds(self) -> tuple[np.ndarray, np.ndarray] | None:
+        """``(low, high)`` of the latents the model was trained on, if it says (else None)."""
+        low = getattr(self.model, "latent_low", None)
+        high = getattr(self.model, "latent_high", None)
+        if low is None or high is None:
+            return None
+        low, high = to_numpy(low).astype(np.float32), to_numpy(high).astype(np.float32)
+        if low.shape != (self.latent_dim,) or high.shape != (self.latent_dim,):
+            return None
+        return low, high
 
     def segment(self, start: np.ndarray, end: np.ndarray, fractions: np.ndarray) -> np.ndarray:
         """Points of straight latent segments: ``(B, d)``, ``(B, d)``, ``(K,)`` -> ``(B, K, d)``.

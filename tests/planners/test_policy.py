@@ -1,0 +1,105 @@
+from __future__ import annotations
+
+import gymnasium as gym
+import numpy as np
+import pytest
+from toy_models import ToyHeadModel
+
+import dlo_env  # noqa: F401
+from planners import LatentTreePlanner, PlannerPolicy, StraightLinePolicy
+
+
+def _run_episode(env, policy, seed, difficulty=1):
+    obs, _ = env.reset(seed=seed, options={"difficulty": difficulty})
+    policy.reset()
+    actions = []
+    for _ in range(100):
+        action, _ = policy.predict(obs)
+        actions.append(np.asarray(action))
+        obs, _, terminated, truncated, info = env.step(action)
+        if terminated or truncated:
+            break
+    return np.array(actions), info
+
+
+@pytest.mark.parametrize("replan_every", [None, 5])
+def test_planner_policy_actions_are_within_bounds(toy_model, replan_every):
+    env = gym.make("dlo_env/DLOEndpoint-v0")
+    policy = PlannerPolicy(toy_model, replan_every=replan_every)
+    policy.check_env(env)
+    for seed in range(2):
+        actions, _ = _run_episode(env, policy, seed, difficulty=2)
+        assert actions.shape[1:] == (2,) and actions.dtype == np.float32
+        assert np.isfinite(actions).all()
+        assert (np.linalg.norm(actions, axis=1) <= 1.0 + 1e-6).all()
+        assert policy.stats.plans >= 1 and len(policy.plans) == policy.stats.plans
+        if replan_every is not None and len(actions) > replan_every + 1:
+            assert policy.stats.plans > 1
+
+
+def test_closed_loop_replans_every_k_steps(toy_model):
+    env = gym.make("dlo_env/DLOEndpoint-v0")
+    policy = PlannerPolicy(toy_model, replan_every=3)
+    obs, _ = env.reset(seed=0, options={"difficulty": 3})
+    for _ in range(7):
+        action, _ = policy.predict(obs)
+        obs, *_ = env.step(action)
+    assert policy.stats.plans == 3  # steps 0, 3 and 6
+
+
+def test_planning_failure_is_recorded_and_falls_back_to_the_straight_line(toy_model):
+    env = gym.make("dlo_env/DLOEndpoint-v0")
+    planner = LatentTreePlanner(toy_model, max_nodes=1, straightness=1e-4, follow_ratio=None)
+    policy = PlannerPolicy(toy_model, planner)
+    obs, _ = env.reset(seed=0, options={"difficulty": 1})
+    head, goal_head = obs["observation"][40:42], obs["desired_goal"][:2]
+    reference = StraightLinePolicy()
+    planned, _ = policy.predict(obs)
+    expected, _ = reference.predict(obs)
+    if policy.plans[0].success:
+        pytest.skip("the toy planner found a path under the tiny budget")
+    assert policy.stats.failures == 1
+    np.testing.assert_allclose(planned, expected, atol=1e-6)
+    direction = (goal_head - head) / np.linalg.norm(goal_head - head)
+    np.testing.assert_allclose(planned / np.linalg.norm(planned), direction, atol=1e-5)
+
+
+def test_episode_start_resets_the_policy(toy_model):
+    env = gym.make("dlo_env/DLOEndpoint-v0")
+    policy = PlannerPolicy(toy_model)
+    obs, _ = env.reset(seed=0)
+    policy.predict(obs)
+    policy.predict(obs, episode_start=np.array([True]))
+    assert policy.stats.plans == 1 and len(policy.plans) == 1
+
+
+def test_batched_observations_give_batched_actions(toy_model):
+    env = gym.make("dlo_env/DLOEndpoint-v0")
+    obs, _ = env.reset(seed=0)
+    batch = {k: v[None] for k, v in obs.items()}
+    action, state = PlannerPolicy(toy_model).predict(batch, state="s")
+    assert action.shape == (1, 2) and state == "s"
+
+
+def test_a_model_for_another_cord_is_rejected_with_a_clear_error():
+    small = ToyHeadModel(n_points=10)
+    env = gym.make("dlo_env/DLOEndpoint-v0")
+    policy = PlannerPolicy(small)
+    with pytest.raises(ValueError, match="n_points=10 but the environment's cord has n_points=20"):
+        policy.check_env(env)
+    obs, _ = env.reset(seed=0)
+    with pytest.raises(ValueError, match="model's cord has n_points=10"):
+        policy.predict(obs)
+
+
+def test_a_policy_with_another_step_size_is_rejected(toy_model):
+    env = gym.make("dlo_env/DLOEndpoint-v0", max_step=0.01)
+    with pytest.raises(ValueError, match="max_step"):
+        PlannerPolicy(toy_model).check_env(env)
+
+
+def test_invalid_policy_arguments_are_rejected(toy_model):
+    with pytest.raises(ValueError, match="replan_every must be None or an int >= 1"):
+        PlannerPolicy(toy_model, replan_every=0)
+    with pytest.raises(ValueError, match="planner must plan for the model's n_points=20"):
+        PlannerPolicy(toy_model, LatentTreePlanner(ToyHeadModel(n_points=10)))
