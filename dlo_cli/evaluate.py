@@ -33,6 +33,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help="steps between replans of latent-tree-closed (default 10)")
     parser.add_argument("--max-seconds", type=float, default=None,
                         help="time budget of one latent-tree plan, seconds")
+    parser.add_argument("--threads", type=int, default=1,
+                        help="torch CPU threads (default 1: the model is small, and extra "
+                             "threads only contend on a shared machine)")
     parser.add_argument("--no-fidelity", action="store_true",
                         help="skip the transition fidelity simulation of each first plan")
     parser.add_argument("--out", default="runs/evaluate",
@@ -62,7 +65,11 @@ def run(args: argparse.Namespace) -> int:
         return 2
     model = None
     if any(a.startswith("latent-tree") for a in args.agent):
+        import torch
+
         from latent_model import ShapeModel
+
+        torch.set_num_threads(max(1, args.threads))
 
         try:
             model = (ShapeModel.load(args.model, device="cpu") if args.model

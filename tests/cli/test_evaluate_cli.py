@@ -1,0 +1,60 @@
+from __future__ import annotations
+
+import json
+
+import pytest
+
+from dlo_cli.main import main
+
+
+@pytest.fixture
+def untrained_model_file(tmp_path):
+    """A ShapeModel checkpoint with random weights: the plumbing, not the quality, is tested."""
+    from latent_model import ShapeModel
+    from latent_model.config import ModelConfig
+    from latent_model.normalisation import Normalisation
+
+    path = tmp_path / "untrained.pt"
+    ShapeModel(ModelConfig(), Normalisation(), device="cpu").save(path)
+    return path
+
+
+def test_evaluate_prints_the_table_and_writes_csv_and_json(tmp_path, capsys):
+    out = tmp_path / "eval"
+    code = main(["evaluate", "--agent", "straight-line", "--difficulty", "1", "2",
+                 "--episodes", "2", "--out", str(out)])
+    assert code == 0
+    printed = capsys.readouterr().out
+    assert "straight-line" in printed and "success" in printed
+    for name in ("straight-line-d1", "straight-line-d2"):
+        assert (out / f"{name}.csv").is_file()
+        data = json.loads((out / f"{name}.json").read_text())
+        assert data["summary"]["episodes"] == 2 and len(data["records"]) == 2
+    summary = json.loads((out / "summary.json").read_text())
+    assert [row["difficulty"] for row in summary] == [1, 2]
+
+
+@pytest.mark.slow
+def test_evaluate_runs_the_latent_tree_agents_on_a_given_model(tmp_path, untrained_model_file):
+    out = tmp_path / "eval"
+    code = main(["evaluate", "--agent", "latent-tree", "latent-tree-closed", "--episodes", "1",
+                 "--model", str(untrained_model_file), "--max-seconds", "0.05",
+                 "--replan-every", "50", "--out", str(out)])
+    assert code == 0
+    for name in ("latent-tree-d1", "latent-tree-closed-d1"):
+        record = json.loads((out / f"{name}.json").read_text())["records"][0]
+        assert record["plans"] >= 1
+        assert record["planning_seconds"] > 0
+
+
+def test_evaluate_rejects_an_unknown_agent(tmp_path, capsys):
+    code = main(["evaluate", "--agent", "teleport", "--out", str(tmp_path)])
+    assert code == 2
+    assert "agent name must be one of" in capsys.readouterr().err
+
+
+def test_evaluate_reports_a_missing_model_file(tmp_path, capsys):
+    code = main(["evaluate", "--agent", "latent-tree", "--model", str(tmp_path / "none.pt"),
+                 "--out", str(tmp_path)])
+    assert code == 2
+    assert "no shape model" in capsys.readouterr().err
