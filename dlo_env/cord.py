@@ -167,15 +167,31 @@ class Cord:
             space.add(pymunk.Segment(static, c0, c1, 0.0))
         self.space = space
         self.segments = bodies
-        self._buffer = pymunk.batch.Buffer()
-        self._buffer.clear()
-        pymunk.batch.get_space_bodies(space, pymunk.batch.BodyFields.BODY_ID, self._buffer)
-        ids = np.frombuffer(self._buffer.int_buf(), dtype=np.uintp)[: len(bodies)]
-        if ids.tolist() != [b.id for b in bodies]:  # pragma: no cover - pymunk internals changed
-            raise RuntimeError("pymunk.batch returned bodies in an unexpected order")
+        self._make_buffer()
         self.grippers = {}
         self._grip_joints = {}
         self._attach(self._grasp)
+
+    def _make_buffer(self) -> None:
+        self._buffer = pymunk.batch.Buffer()
+        self._buffer.clear()
+        pymunk.batch.get_space_bodies(self.space, pymunk.batch.BodyFields.BODY_ID, self._buffer)
+        ids = np.frombuffer(self._buffer.int_buf(), dtype=np.uintp)[: len(self.segments)]
+        if ids.tolist() != [b.id for b in self.segments]:  # pragma: no cover - pymunk changed
+            raise RuntimeError("pymunk.batch returned bodies in an unexpected order")
+
+    def __getstate__(self) -> dict:
+        # pymunk pickles the space with every body, joint and velocity, but not the solver's
+        # cached impulses, so a copy continues close to (not bitwise like) the original.
+        # The batch buffer is a C object: rebuilt on unpickle.
+        state = self.__dict__.copy()
+        state.pop("_buffer", None)
+        return state
+
+    def __setstate__(self, state: dict) -> None:
+        self.__dict__.update(state)
+        if self.space is not None:
+            self._make_buffer()
 
     def _attach(self, grasp: Grasp) -> None:
         assert self.space is not None
@@ -337,6 +353,8 @@ class Cord:
     def settle(self, tolerance: float = 1e-3, max_time: float = 2.0) -> float:
         """Wait with the grippers still until every point is slower than ``tolerance`` m/s.
 
+        Takes at least one physics step, so a freshly reset bent cord relaxes first.
+
         Returns:
             The simulated time it took, seconds (``max_time`` if not at rest by then).
         """
@@ -344,11 +362,13 @@ class Cord:
         p = self.params
         h = p.dt / p.substeps
         steps = 0
+        # Step before testing: a freshly reset cord has zero velocities without being in
+        # equilibrium (bent joints push against static friction), so "slow" alone is not "at rest".
         while steps * h < max_time:
-            if np.linalg.norm(self.point_velocities(), axis=1).max() < tolerance:
-                break
             self.space.step(h)
             steps += 1
+            if np.linalg.norm(self.point_velocities(), axis=1).max() < tolerance:
+                break
         return steps * h
 
     def _run(self, steps: int, record_every: int) -> np.ndarray:

@@ -1,0 +1,111 @@
+"""``dlo_env/DLOEndpoint-v0``: one gripper holds the head of the cord."""
+
+from __future__ import annotations
+
+from typing import ClassVar
+
+from dlo_env.cord import Grasp
+from dlo_env.envs.goal_env import CordGoalEnv
+
+
+class DLOEndpointEnv(CordGoalEnv):
+    """
+    ## Description
+
+    A cord (1 m, 20 points, default `CordParams`) lies on a 2 m x 2 m table, seen from above.
+    A gripper holds its **head** (point 0) and moves it in straight steps; table friction and
+    the cord's bending stiffness decide how the rest follows. The goal is a cord shape made
+    from the start by `difficulty` random straight head moves in the same simulator, so every
+    goal is reachable. Difficulty 1 is the experiment of *Generating Shape Transitions of
+    Deformable Linear Objects Using GANs* (one straight endpoint displacement); because friction
+    makes the result depend on the path, higher difficulties need planning.
+
+    ## Action Space
+
+    `Box(-1, 1, (2,), float32)`: the head gripper's displacement in units of `max_step`
+    (default 0.02 m). Finite out-of-range actions are clipped to [-1, 1]; NaN or infinite
+    actions raise `ValueError`. One step is one `Cord.move`: the gripper moves in a straight line
+    at most `max_speed` (0.2 m/s), i.e. one control period (0.1 s) when the displacement is at
+    most 0.02 m, two for a full diagonal action.
+
+    | Num | Action                       | Min | Max |
+    |-----|------------------------------|-----|-----|
+    | 0   | head dx / `max_step`         | -1  | 1   |
+    | 1   | head dy / `max_step`         | -1  | 1   |
+
+    ## Observation Space
+
+    A `Dict` of float32 arrays in metres, each a `Box(-1, 1)` (the table):
+
+    | Key             | Shape   | Content                                             |
+    |-----------------|---------|-----------------------------------------------------|
+    | `observation`   | `(42,)` | points (x, y), head first; then head gripper (x, y) |
+    | `achieved_goal` | `(40,)` | the current shape, flat (x0, y0, x1, y1, ...)       |
+    | `desired_goal`  | `(40,)` | the goal shape, flat                                |
+
+    ## Rewards
+
+    `error` is the mean over points of the distance between the cord and the goal (metres).
+    Dense (default): `-error`. Sparse (`reward_type="sparse"`): 0 on success, else -1.
+    `env.unwrapped.compute_reward(achieved_goal, desired_goal, info)` gives the same numbers for
+    any batch of goals (the step reward is computed by it), ready for hindsight relabelling.
+
+    ## Success
+
+    `error <= success_threshold` (default 0.02 m, 2 % of the cord length). `info` always holds
+    `is_success` (bool), `error` and `max_error` (largest per-point distance), metres.
+
+    ## Starting State
+
+    A random smooth cord-like shape (`random_cord_shape`) settled in the simulator with the
+    head held (a rest state). The goal is the shape after `difficulty` straight head moves of
+    random direction and length U(5, 30) cm (targets at least 0.1 m inside the table edge),
+    each split into equal actions of at most `max_step`, followed by zero actions until the
+    cord is at rest. Goals are always more than `success_threshold` away from the start.
+
+    ## Reset Options
+
+    | Option       | Value                  | Effect                                      |
+    |--------------|------------------------|---------------------------------------------|
+    | `difficulty` | int 1-5                | straight moves from start to goal           |
+    | `start`      | `(20, 2)` or `(40,)`   | start there (not settled); goal made from it |
+    | `goal`       | `(20, 2)` or `(40,)`   | this goal; random start; no reference moves |
+    | `task`       | `dlo_env.tasks.Task`   | the task's start and goal (not combinable)  |
+
+    `difficulty` applies to this episode only (the constructor sets the default). A given
+    `start` is used as is, its segments re-projected to rest length.
+
+    Shapes are validated: wrong size, non-finite, off the table or a segment more than 5 % from
+    rest length raise `ValueError` naming the option, as do unknown options.
+
+    The reset `info` also holds `reference_actions` (`(T, 2)` float32: replayed through `step`
+    from the reset state they reach the goal exactly, bitwise), `moves` (`(difficulty, 2)`
+    displacements, metres), `difficulty` and `task_seed` (0 and -1 when the goal was given).
+
+    ## Episode End
+
+    Termination on success. Truncation after 100 steps (the registered `max_episode_steps`).
+
+    ## Arguments
+
+    ```python
+    import gymnasium as gym
+    import dlo_env
+
+    env = gym.make(
+        "dlo_env/DLOEndpoint-v0",
+        params=None,             # dlo_env.CordParams; None = the default cord
+        max_step=0.02,           # metres per unit action
+        reward_type="dense",     # or "sparse"
+        success_threshold=0.02,  # metres
+        difficulty=1,            # default number of straight moves, 1-5
+        render_mode=None,        # or "rgb_array", "human"
+    )
+    ```
+
+    ## Version History
+
+    * v0: Initial release.
+    """
+
+    grasp: ClassVar[Grasp] = "head"

@@ -1,0 +1,297 @@
+"""The goal-conditioned cord environment shared by the endpoint environments.
+
+Follows Gymnasium-Robotics' ``GoalEnv`` convention (a Dict observation with ``observation``,
+``achieved_goal`` and ``desired_goal``; ``compute_reward`` works on batches and ``step`` calls
+it, so hindsight relabelling is exact) without depending on Gymnasium-Robotics. Subclasses only
+choose the grasp and carry the documentation.
+"""
+
+from __future__ import annotations
+
+from typing import Any, ClassVar
+
+import gymnasium as gym
+import numpy as np
+from gymnasium import spaces
+
+from dlo_env.cord import Cord, CordParams, Grasp
+from dlo_env.shapes import TABLE_HALF, error, max_error, validate_shape
+from dlo_env.tasks import (
+    DEFAULT_MAX_STEP,
+    GRASP_ENDS,
+    SUCCESS_THRESHOLD,
+    Task,
+    apply_action,
+    check_difficulty,
+    make_task,
+    random_start,
+)
+
+_OPTIONS = ("difficulty", "start", "goal", "task")
+_REWARD_TYPES = ("dense", "sparse")
+
+
+class CordGoalEnv(gym.Env[dict[str, np.ndarray], np.ndarray]):
+    """Move the grasped end(s) of a cord on a table until its shape matches a goal shape.
+
+    See :class:`dlo_env.envs.endpoint.DLOEndpointEnv` for the full documentation.
+
+    Args:
+        params: Cord parameters (the default cord if None).
+        max_step: Gripper displacement of an action of 1.0 on one axis, metres.
+        reward_type: ``"dense"`` (``-error``) or ``"sparse"`` (0 on success, else -1).
+        success_threshold: Success when ``error(cord, goal)`` is at most this, metres.
+        difficulty: Straight moves between start and goal when ``reset`` draws a task (1-5).
+        render_mode: ``None``, ``"rgb_array"`` or ``"human"``.
+    """
+
+    metadata: ClassVar[dict[str, Any]] = {"render_modes": ["human", "rgb_array"], "render_fps": 10}
+    #: The ends the grippers hold; subclasses choose.
+    grasp: ClassVar[Grasp] = "head"
+
+    def __init__(
+        self,
+        *,
+        params: CordParams | None = None,
+        max_step: float = DEFAULT_MAX_STEP,
+        reward_type: str = "dense",
+        success_threshold: float = SUCCESS_THRESHOLD,
+        difficulty: int = 1,
+        render_mode: str | None = None,
+    ) -> None:
+        if params is not None and not isinstance(params, CordParams):
+            raise ValueError(f"params must be a CordParams or None, got {type(params).__name__}")
+        if not (isinstance(max_step, (int, float)) and np.isfinite(max_step) and max_step > 0):
+            raise ValueError(f"max_step must be a finite number > 0 (metres), got {max_step!r}")
+        if reward_type not in _REWARD_TYPES:
+            raise ValueError(f"reward_type must be one of {_REWARD_TYPES}, got {reward_type!r}")
+        if not (isinstance(success_threshold, (int, float)) and success_threshold > 0):
+            raise ValueError(f"success_threshold must be a number > 0, got {success_threshold!r}")
+        if render_mode is not None and render_mode not in self.metadata["render_modes"]:
+            raise ValueError(
+                f"render_mode must be None or one of {self.metadata['render_modes']}, "
+                f"got {render_mode!r}"
+            )
+        self.params = params if params is not None else CordParams()
+        self.max_step = float(max_step)
+        self.reward_type = reward_type
+        self.success_threshold = float(success_threshold)
+        self.difficulty = check_difficulty(difficulty)
+        self.render_mode = render_mode
+
+        self.cord = Cord(self.params, grasp=self.grasp)
+        self._ends = GRASP_ENDS[self.grasp]
+        n = self.params.n_points
+        h = np.float32(TABLE_HALF)
+        self.action_space = spaces.Box(-1.0, 1.0, shape=(2 * len(self._ends),), dtype=np.float32)
+        self.observation_space = spaces.Dict(
+            {
+                "observation": spaces.Box(-h, h, shape=(2 * n + 2 * len(self._ends),),
+                                          dtype=np.float32),
+                "achieved_goal": spaces.Box(-h, h, shape=(2 * n,), dtype=np.float32),
+                "desired_goal": spaces.Box(-h, h, shape=(2 * n,), dtype=np.float32),
+            }
+        )
+        #: The current task (``None`` when the goal was given without reference moves).
+        self.task: Task | None = None
+        self.goal: np.ndarray | None = None
+        self._goal_flat: np.ndarray | None = None
+        self._renderer = None
+
+    # ----------------------------------------------------------------- goal API
+    def _pairs(self, achieved_goal: np.ndarray, desired_goal: np.ndarray) -> tuple:
+        n2 = 2 * self.params.n_points
+        a, d = np.asarray(achieved_goal), np.asarray(desired_goal)
+        for name, x in (("achieved_goal", a), ("desired_goal", d)):
+            if x.ndim < 1 or x.shape[-1] != n2:
+                raise ValueError(f"{name} must have shape (..., {n2}), got {x.shape}")
+        return a.reshape(*a.shape[:-1], n2 // 2, 2), d.reshape(*d.shape[:-1], n2 // 2, 2)
+
+    def compute_reward(
+        self, achieved_goal: np.ndarray, desired_goal: np.ndarray, info: Any
+    ) -> np.ndarray | float:
+        """Reward of reaching ``achieved_goal`` when the goal is ``desired_goal``.
+
+        Works on batches (any leading dimensions), so hindsight relabelling gives exactly the
+        rewards ``step`` would have given; ``info`` is not used.
+
+        Args:
+            achieved_goal: ``(..., 2n)`` flat shapes, metres.
+            desired_goal: ``(..., 2n)`` flat goal shapes.
+            info: Ignored (a dict, or a batch of them).
+
+        Returns:
+            ``-error`` (dense) or ``-1.0``/``0.0`` (sparse), a float for one pair and an array
+            of the leading shape for a batch.
+        """
+        dist = np.asarray(error(*self._pairs(achieved_goal, desired_goal)))
+        if self.reward_type == "dense":
+            reward = -dist
+        else:
+            reward = -(dist > self.success_threshold).astype(np.float64)
+        return float(reward) if reward.ndim == 0 else reward
+
+    def compute_terminated(
+        self, achieved_goal: np.ndarray, desired_goal: np.ndarray, info: Any
+    ) -> np.ndarray | bool:
+        """Whether ``achieved_goal`` solves ``desired_goal`` (batched like ``compute_reward``)."""
+        ok = np.asarray(error(*self._pairs(achieved_goal, desired_goal))) <= self.success_threshold
+        return bool(ok) if ok.ndim == 0 else ok
+
+    def compute_truncated(
+        self, achieved_goal: np.ndarray, desired_goal: np.ndarray, info: Any
+    ) -> np.ndarray | bool:
+        """Always False: episodes are truncated by the registered time limit only."""
+        shape = np.shape(achieved_goal)[:-1]
+        return False if shape == () else np.zeros(shape, dtype=bool)
+
+    # ----------------------------------------------------------------- gym API
+    def reset(
+        self, *, seed: int | None = None, options: dict[str, Any] | None = None
+    ) -> tuple[dict[str, np.ndarray], dict[str, Any]]:
+        """Start an episode; see the class documentation for ``options``."""
+        super().reset(seed=seed)
+        start, goal, task = self._episode(dict(options or {}))
+        self.task = task
+        self.goal = goal
+        self._goal_flat = goal.reshape(-1)
+        self.cord.reset(start)
+        obs, info = self._observe()
+        # Tuples, not (T, dim) arrays: their length varies per episode, and Gymnasium's vector
+        # envs stack equal-shape arrays but keep other objects as they are.
+        info["task"] = task
+        info["difficulty"] = task.difficulty if task is not None else 0
+        info["task_seed"] = task.seed if task is not None else -1
+        info["reference_actions"] = tuple(task.reference_actions) if task is not None else ()
+        info["moves"] = tuple(task.moves) if task is not None else ()
+        if self.render_mode == "human":
+            self.render()
+        return obs, info
+
+    def step(
+        self, action: np.ndarray
+    ) -> tuple[dict[str, np.ndarray], float, bool, bool, dict[str, Any]]:
+        """Move the held end(s) by ``clip(action, -1, 1) * max_step`` metres (one ``Cord.move``).
+
+        Raises:
+            ValueError: If ``action`` has the wrong shape or is not finite.
+        """
+        a = np.asarray(action, dtype=np.float32)
+        if a.shape != self.action_space.shape:
+            raise ValueError(f"action must have shape {self.action_space.shape}, got {a.shape}")
+        if not np.isfinite(a).all():
+            raise ValueError(f"action must be finite, got {a.tolist()}")
+        apply_action(self.cord, a, self.max_step)
+        obs, info = self._observe()
+        reward = float(self.compute_reward(obs["achieved_goal"], obs["desired_goal"], info))
+        if self.render_mode == "human":
+            self.render()
+        return obs, reward, bool(info["is_success"]), False, info
+
+    def _observe(self) -> tuple[dict[str, np.ndarray], dict[str, Any]]:
+        # One read of the shape per step (it is the costliest read-out).
+        flat = self.cord.shape.reshape(-1)
+        n2 = flat.shape[0]
+        observation = np.empty(n2 + 2 * len(self._ends), dtype=np.float32)
+        observation[:n2] = flat
+        for i, end in enumerate(self._ends):
+            observation[n2 + 2 * i : n2 + 2 * i + 2] = self.cord.grippers[end].position
+        goal = self._goal_flat
+        err = error(flat.reshape(-1, 2), goal.reshape(-1, 2))
+        info = {
+            "is_success": err <= self.success_threshold,
+            "error": err,
+            "max_error": max_error(flat.reshape(-1, 2), goal.reshape(-1, 2)),
+        }
+        obs = {"observation": observation, "achieved_goal": flat, "desired_goal": goal.copy()}
+        return obs, info
+
+    # ----------------------------------------------------------------- options
+    def _shape_option(self, options: dict, name: str) -> np.ndarray:
+        p = self.params
+        shape = validate_shape(options[name], n_points=p.n_points, length=p.length, name=name)
+        if self.grasp == "both":
+            span = float(np.linalg.norm(shape[-1] - shape[0]))
+            if span >= p.max_span * p.length:
+                raise ValueError(
+                    f"{name} must have its head and tail closer than max_span * length = "
+                    f"{p.max_span * p.length:.3f} m when both ends are held, got {span:.3f} m"
+                )
+        return shape
+
+    def _episode(self, options: dict) -> tuple[np.ndarray, np.ndarray, Task | None]:
+        unknown = sorted(set(options) - set(_OPTIONS))
+        if unknown:
+            raise ValueError(f"options has unknown keys {unknown}; expected some of {_OPTIONS}")
+        difficulty = self.difficulty
+        if "difficulty" in options:
+            difficulty = check_difficulty(options["difficulty"], name="options['difficulty']")
+        if "task" in options:
+            if len(options) > 1:
+                raise ValueError("options['task'] cannot be combined with other options, got "
+                                 f"{sorted(options)}")
+            task = self._check_task(options["task"])
+            return task.start, task.goal, task
+        p = self.params
+        start = self._shape_option(options, "start") if "start" in options else None
+        goal = self._shape_option(options, "goal") if "goal" in options else None
+        if goal is not None and "difficulty" in options:
+            raise ValueError("options['difficulty'] has no effect when options['goal'] is given")
+        if goal is not None and start is not None:
+            return start, goal, None
+        seed = int(self.np_random.integers(2**31 - 1))
+        if goal is not None:
+            return random_start(seed, self.grasp, params=p), goal, None
+        task = make_task(seed, difficulty, self.grasp, params=p, max_step=self.max_step,
+                         start=start, min_error=self.success_threshold)
+        return task.start, task.goal, task
+
+    def _check_task(self, task: object) -> Task:
+        if not isinstance(task, Task):
+            raise ValueError(f"options['task'] must be a dlo_env.tasks.Task, got "
+                             f"{type(task).__name__}")
+        if task.grasp != self.grasp:
+            raise ValueError(f"options['task'] must have grasp {self.grasp!r} for this "
+                             f"environment, got {task.grasp!r}")
+        if task.max_step != self.max_step:
+            raise ValueError(f"options['task'] was made with max_step {task.max_step}, "
+                             f"this environment uses {self.max_step}")
+        p = self.params
+        for name in ("start", "goal"):
+            validate_shape(getattr(task, name), n_points=p.n_points, length=p.length,
+                           name=f"options['task'].{name}")
+        return task
+
+    # ----------------------------------------------------------------- rendering
+    def render(self) -> np.ndarray | None:
+        """Draw the table, the goal (ghost), the cord and the grippers.
+
+        Returns:
+            An ``(H, W, 3)`` uint8 image in ``"rgb_array"`` mode, else None.
+        """
+        if self.render_mode is None:
+            gym.logger.warn(
+                "render() was called without a render_mode; pass render_mode='rgb_array' or "
+                "'human' to the constructor (gym.make(..., render_mode='rgb_array'))."
+            )
+            return None
+        if self._renderer is None:
+            from dlo_env.rendering import CordRenderer
+
+            self._renderer = CordRenderer(self.render_mode, fps=round(1.0 / self.params.dt))
+        grippers = [self.cord.grippers[e].position for e in self._ends] if self.cord.space else []
+        shape = self.cord.shape if self.cord.space is not None else None
+        return self._renderer.draw(shape, self.goal, grippers)
+
+    def close(self) -> None:
+        """Close the render window, if any; safe to call more than once."""
+        if self._renderer is not None:
+            self._renderer.close()
+            self._renderer = None
+
+    # ----------------------------------------------------------------- pickling
+    def __getstate__(self) -> dict[str, Any]:
+        # The cord pickles its pymunk space (see Cord.__getstate__); a window does not pickle.
+        state = self.__dict__.copy()
+        state["_renderer"] = None
+        return state

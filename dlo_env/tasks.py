@@ -1,0 +1,417 @@
+"""Tasks: a start shape at rest, a goal reachable from it, and the actions that reach it.
+
+A goal is made in the simulator, never drawn: from the start, ``difficulty`` random straight
+moves of the grasped end(s) (uniform direction, length U(5 cm, 30 cm), each end its own move
+when both are held) run through :func:`apply_action`, the very step primitive of the
+environments: each move is split into ``ceil(length / max_step)`` equal actions, and zero
+actions follow the last move until the cord is at rest. Because ``Cord.reset`` rebuilds the
+simulation from scratch, replaying ``reference_actions`` through ``env.step`` from the reset
+state reproduces the goal bitwise: they are an oracle and a source of demonstrations.
+
+Named suites (``linear-1``, ``linear-2``, ``linear-3``: difficulty 1, 2, 3) fix the seeds of a
+train and a test split so results are comparable. Task lists are saved as ``.npz`` data files.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+import tempfile
+import zipfile
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from dlo_env.cord import Cord, CordParams, Grasp
+from dlo_env.shapes import TABLE_HALF, error, is_cord_like, random_cord_shape, validate_shape
+
+#: Range of the length of one random straight move of a grasped end, metres.
+MOVE_LENGTH = (0.05, 0.30)
+#: Largest number of straight moves in a task.
+MAX_DIFFICULTY = 5
+#: Gripper displacement of an action of 1.0 on one axis, metres (the environments' default).
+DEFAULT_MAX_STEP = 0.02
+#: A task is solved when ``error(cord, goal)`` is at most this, metres.
+SUCCESS_THRESHOLD = 0.02
+#: Every point slower than this (m/s) means the cord is at rest.
+REST_SPEED = 1e-3
+#: At most this many zero actions after the last move wait for the cord to come to rest.
+MAX_SETTLE_ACTIONS = 10
+#: Move targets keep this distance from the table edge, metres (the cord is not pressed on it).
+TARGET_MARGIN = 0.1
+#: With both ends held, head and tail stay this much closer than ``max_span * length``, metres.
+SPAN_MARGIN = 0.02
+#: Version of the ``.npz`` task file layout written by :func:`save_tasks`.
+FORMAT_VERSION = 1
+
+#: The ends each grasp holds, in the order of their action components.
+GRASP_ENDS: dict[str, tuple[str, ...]] = {
+    "head": ("head",),
+    "tail": ("tail",),
+    "both": ("head", "tail"),
+}
+#: Named suites: name -> difficulty.
+SUITES = {"linear-1": 1, "linear-2": 2, "linear-3": 3}
+#: Tasks per split of every suite.
+SPLIT_SIZES = {"train": 200, "test": 50}
+_SPLIT_OFFSETS = {"train": 0, "test": 50_000}
+
+
+def action_dim(grasp: str) -> int:
+    """Length of an action for a grasp: two components (dx, dy) per held end."""
+    if grasp not in GRASP_ENDS:
+        raise ValueError(f"grasp must be one of {tuple(GRASP_ENDS)}, got {grasp!r}")
+    return 2 * len(GRASP_ENDS[grasp])
+
+
+@dataclass(frozen=True, eq=False, repr=False)
+class Task:
+    """One manipulation task; arrays are float32, distances metres.
+
+    Attributes:
+        start: ``(n, 2)`` start shape (at rest when generated).
+        goal: ``(n, 2)`` goal shape, the result of ``reference_actions`` from ``start``.
+        reference_actions: ``(T, action_dim)`` environment actions in ``[-1, 1]`` that reach the
+            goal bitwise from a freshly reset cord.
+        difficulty: Number of straight moves, 1 to ``MAX_DIFFICULTY``.
+        seed: The seed :func:`make_task` generated the task from (``-1`` if unknown).
+        grasp: Held ends, ``"head"``, ``"tail"`` or ``"both"``.
+        moves: ``(difficulty, action_dim)`` displacement of each straight move, metres (head
+            dx, dy then tail dx, dy when both ends are held).
+        max_step: Gripper displacement of an action of 1.0, metres.
+    """
+
+    start: np.ndarray
+    goal: np.ndarray
+    reference_actions: np.ndarray
+    difficulty: int
+    seed: int
+    grasp: str
+    moves: np.ndarray
+    max_step: float = DEFAULT_MAX_STEP
+
+    def __post_init__(self) -> None:
+        dim = action_dim(self.grasp)
+        for name in ("start", "goal", "reference_actions", "moves"):
+            object.__setattr__(self, name, np.asarray(getattr(self, name), dtype=np.float32))
+        if self.start.ndim != 2 or self.start.shape[1] != 2 or self.goal.shape != self.start.shape:
+            raise ValueError(
+                "Task.start and Task.goal must both have shape (n, 2), got "
+                f"{self.start.shape} and {self.goal.shape}"
+            )
+        check_difficulty(self.difficulty, name="Task.difficulty")
+        actions = self.reference_actions
+        if actions.ndim != 2 or actions.shape[1] != dim:
+            raise ValueError(
+                f"Task.reference_actions must have shape (T, {dim}) for grasp {self.grasp!r}, "
+                f"got {actions.shape}"
+            )
+        if not (np.isfinite(actions).all() and (np.abs(actions) <= 1.0).all()):
+            raise ValueError("Task.reference_actions must be finite and within [-1, 1]")
+        if self.moves.shape != (self.difficulty, dim):
+            raise ValueError(
+                f"Task.moves must have shape ({self.difficulty}, {dim}), got {self.moves.shape}"
+            )
+        if not (isinstance(self.max_step, (float, int)) and self.max_step > 0):
+            raise ValueError(f"Task.max_step must be a number > 0, got {self.max_step!r}")
+        object.__setattr__(self, "difficulty", int(self.difficulty))
+        object.__setattr__(self, "seed", int(self.seed))
+        object.__setattr__(self, "max_step", float(self.max_step))
+
+    @property
+    def action_dim(self) -> int:
+        """Length of one action."""
+        return action_dim(self.grasp)
+
+    def __repr__(self) -> str:
+        return (
+            f"Task(grasp={self.grasp!r}, difficulty={self.difficulty}, seed={self.seed}, "
+            f"n_points={len(self.start)}, reference_actions={len(self.reference_actions)}, "
+            f"max_step={self.max_step})"
+        )
+
+
+def check_difficulty(difficulty: object, name: str = "difficulty") -> int:
+    """Return ``difficulty`` as an int, or raise ``ValueError`` unless it is an int in 1-5."""
+    ok = isinstance(difficulty, (int, np.integer)) and not isinstance(difficulty, bool)
+    if not ok or not 1 <= int(difficulty) <= MAX_DIFFICULTY:
+        raise ValueError(f"{name} must be an int from 1 to {MAX_DIFFICULTY}, got {difficulty!r}")
+    return int(difficulty)
+
+
+def apply_action(cord: Cord, action: np.ndarray, max_step: float) -> None:
+    """The environments' step primitive: one ``Cord.move`` of the held ends.
+
+    Each component is clipped to ``[-1, 1]`` and scaled by ``max_step``; the components are
+    (dx, dy) of the head, then of the tail, for the ends ``cord.grasp`` holds. The move lasts
+    one control period when no end moves farther than ``max_speed * dt`` (0.02 m by default),
+    longer otherwise (a full diagonal action at the default settings takes two).
+
+    Args:
+        cord: A reset cord holding the ends ``GRASP_ENDS[cord.grasp]``.
+        action: ``(2 * ends,)`` finite action (validated by the caller).
+        max_step: Displacement of an action of 1.0, metres.
+    """
+    d = np.clip(action, -1.0, 1.0).astype(np.float64) * max_step
+    if cord.grasp == "both":
+        cord.move(head=d[0:2], tail=d[2:4])
+    elif cord.grasp == "head":
+        cord.move(head=d)
+    else:
+        cord.move(tail=d)
+
+
+def split_move(displacement: np.ndarray, max_step: float) -> np.ndarray:
+    """Equal actions that carry out one straight move, float32 ``(k, len(displacement))``.
+
+    ``k = ceil(longest end displacement / max_step)`` (at least 1), so every action moves each
+    end by at most ``max_step`` and lies in ``[-1, 1]``.
+    """
+    d = np.asarray(displacement, dtype=np.float64).reshape(-1)
+    longest = float(np.linalg.norm(d.reshape(-1, 2), axis=1).max())
+    k = max(1, math.ceil(longest / max_step - 1e-9))
+    step = np.clip(d / (k * max_step), -1.0, 1.0).astype(np.float32)
+    return np.tile(step, (k, 1))
+
+
+def _rest(cord: Cord) -> bool:
+    return float(np.linalg.norm(cord.point_velocities(), axis=1).max()) < REST_SPEED
+
+
+def random_start(
+    seed: int | np.random.Generator, grasp: Grasp = "head", *, params: CordParams | None = None
+) -> np.ndarray:
+    """A random cord-like start shape at rest: ``random_cord_shape`` settled in the simulator.
+
+    The shape settles with the grippers of ``grasp`` holding its ends (bent joints relax until
+    friction holds them). With both ends held, head and tail end up closer than
+    ``max_span * length - SPAN_MARGIN``.
+
+    Args:
+        seed: Seed or generator.
+        grasp: Held ends while settling, ``"head"``, ``"tail"`` or ``"both"``.
+        params: Cord parameters (default cord if None).
+
+    Returns:
+        float32 ``(n, 2)``.
+    """
+    action_dim(grasp)
+    return _random_start(np.random.default_rng(seed), Cord(params, grasp=grasp))
+
+
+def _random_start(rng: np.random.Generator, cord: Cord) -> np.ndarray:
+    p = cord.params
+    span = p.max_span * p.length - SPAN_MARGIN
+    for _ in range(1000):
+        shape = random_cord_shape(rng, n_points=p.n_points, length=p.length)
+        if cord.grasp == "both" and np.linalg.norm(shape[-1] - shape[0]) >= span:
+            continue
+        cord.reset(shape)
+        cord.settle(tolerance=REST_SPEED, max_time=3.0)
+        settled = cord.shape
+        if not _rest(cord) or not is_cord_like(settled):
+            continue
+        if cord.grasp == "both" and np.linalg.norm(settled[-1] - settled[0]) >= span:
+            continue
+        return settled
+    raise RuntimeError("could not draw a start shape that settles")  # pragma: no cover
+
+
+def _random_move(
+    rng: np.random.Generator, positions: dict[str, np.ndarray], cord: Cord
+) -> np.ndarray | None:
+    """One displacement per held end whose targets stay on the table (and within the span)."""
+    p = cord.params
+    lim = TABLE_HALF - max(TARGET_MARGIN, p.rim_margin)
+    ends = GRASP_ENDS[cord.grasp]
+    for _ in range(200):
+        angle = rng.uniform(-np.pi, np.pi, size=len(ends))
+        length = rng.uniform(*MOVE_LENGTH, size=len(ends))
+        d = length[:, None] * np.stack([np.cos(angle), np.sin(angle)], axis=1)
+        targets = np.stack([positions[e] for e in ends]) + d
+        if (np.abs(targets) > lim).any():
+            continue
+        if len(ends) == 2 and np.linalg.norm(targets[1] - targets[0]) >= (
+            p.max_span * p.length - SPAN_MARGIN
+        ):
+            continue
+        return d.reshape(-1)
+    return None
+
+
+def make_task(
+    seed: int,
+    difficulty: int = 1,
+    grasp: Grasp = "head",
+    *,
+    params: CordParams | None = None,
+    max_step: float = DEFAULT_MAX_STEP,
+    start: np.ndarray | None = None,
+    min_error: float = SUCCESS_THRESHOLD,
+) -> Task:
+    """Generate a task: a start at rest and a goal ``difficulty`` straight moves away.
+
+    Args:
+        seed: Seed of everything random in the task; the same seed gives the same task.
+        difficulty: Number of straight moves, 1-5.
+        grasp: Held ends, ``"head"``, ``"tail"`` or ``"both"``.
+        params: Cord parameters (default cord if None).
+        max_step: Gripper displacement of an action of 1.0, metres.
+        start: Use this start shape (as given, not settled) instead of a random one.
+        min_error: The goal is redrawn until ``error(start, goal) > min_error``, so a new task
+            is never solved at the start.
+
+    Returns:
+        The task; its ``reference_actions`` replayed from ``start`` reproduce ``goal`` bitwise.
+    """
+    difficulty = check_difficulty(difficulty)
+    dim = action_dim(grasp)
+    if not max_step > 0:
+        raise ValueError(f"max_step must be > 0, got {max_step!r}")
+    rng = np.random.default_rng(seed)
+    cord = Cord(params, grasp=grasp)
+    p = cord.params
+    if start is None:
+        start = _random_start(rng, cord)
+    else:
+        start = validate_shape(start, n_points=p.n_points, length=p.length, name="start")
+    zero = np.zeros(dim, dtype=np.float32)
+    for _ in range(100):
+        cord.reset(start)  # fresh, exactly as env.reset does: the replay is bitwise
+        actions, moves = [], []
+        for _ in range(difficulty):
+            move = _random_move(rng, cord.gripper_positions(), cord)
+            if move is None:
+                raise ValueError("start: no straight move of a grasped end stays on the table")
+            steps = split_move(move, max_step)
+            for action in steps:
+                apply_action(cord, action, max_step)
+            actions.append(steps)
+            moves.append(steps.astype(np.float64).sum(axis=0) * max_step)
+        for _ in range(MAX_SETTLE_ACTIONS):
+            if _rest(cord):
+                break
+            apply_action(cord, zero, max_step)
+            actions.append(zero[None])
+        goal = cord.shape
+        if error(start, goal) > min_error:
+            return Task(
+                start=start,
+                goal=goal,
+                reference_actions=np.concatenate(actions),
+                difficulty=difficulty,
+                seed=int(seed),
+                grasp=grasp,
+                moves=np.array(moves),
+                max_step=max_step,
+            )
+    raise RuntimeError(f"no goal farther than min_error={min_error} m from the start")
+
+
+def suite_seeds(name: str, split: str) -> np.ndarray:
+    """The fixed task seeds of a named suite's split."""
+    if name not in SUITES:
+        raise ValueError(f"suite name must be one of {tuple(SUITES)}, got {name!r}")
+    if split not in SPLIT_SIZES:
+        raise ValueError(f"split must be one of {tuple(SPLIT_SIZES)}, got {split!r}")
+    base = 100_000 * SUITES[name] + _SPLIT_OFFSETS[split]
+    return base + np.arange(SPLIT_SIZES[split])
+
+
+def load_suite(
+    name: str, split: str = "test", *, grasp: Grasp = "head", limit: int | None = None
+) -> list[Task]:
+    """The tasks of a named suite (generated from its fixed seeds on the default cord).
+
+    Args:
+        name: ``"linear-1"``, ``"linear-2"`` or ``"linear-3"`` (difficulty 1, 2, 3).
+        split: ``"train"`` (200 tasks) or ``"test"`` (50 tasks); their seeds never overlap.
+        grasp: ``"head"`` for ``DLOEndpoint-v0``, ``"both"`` for ``DLODualEndpoint-v0``.
+        limit: Only the first ``limit`` tasks.
+
+    Returns:
+        The tasks, in seed order.
+    """
+    seeds = suite_seeds(name, split)
+    if limit is not None:
+        if not (isinstance(limit, int) and limit >= 0):
+            raise ValueError(f"limit must be an int >= 0 or None, got {limit!r}")
+        seeds = seeds[:limit]
+    return [make_task(int(s), SUITES[name], grasp) for s in seeds]
+
+
+def save_tasks(path: str | os.PathLike, tasks: list[Task]) -> None:
+    """Write tasks to an ``.npz`` data file (atomically: a temp file, then ``os.replace``).
+
+    All tasks must share the grasp and the number of points.
+    """
+    if not tasks or not all(isinstance(t, Task) for t in tasks):
+        raise ValueError("tasks must be a non-empty list of Task")
+    if len({(t.grasp, t.start.shape) for t in tasks}) != 1:
+        raise ValueError("tasks must all have the same grasp and number of points")
+    arrays = {
+        "format_version": np.array(FORMAT_VERSION),
+        "start": np.stack([t.start for t in tasks]),
+        "goal": np.stack([t.goal for t in tasks]),
+        "reference_actions": np.concatenate([t.reference_actions for t in tasks]),
+        "action_counts": np.array([len(t.reference_actions) for t in tasks], dtype=np.int64),
+        "moves": np.concatenate([t.moves for t in tasks]),
+        "difficulty": np.array([t.difficulty for t in tasks], dtype=np.int64),
+        "seed": np.array([t.seed for t in tasks], dtype=np.int64),
+        "grasp": np.array(tasks[0].grasp),
+        "max_step": np.array([t.max_step for t in tasks], dtype=np.float64),
+    }
+    path = Path(path)
+    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=path.name, suffix=".tmp")
+    try:
+        with os.fdopen(fd, "wb") as f:
+            np.savez_compressed(f, **arrays)
+        os.replace(tmp, path)
+    except BaseException:
+        Path(tmp).unlink(missing_ok=True)
+        raise
+
+
+def load_tasks(path: str | os.PathLike) -> list[Task]:
+    """Read tasks written by :func:`save_tasks` (data only: no pickle is ever loaded)."""
+    keys = ("format_version", "start", "goal", "reference_actions", "action_counts", "moves",
+            "difficulty", "seed", "grasp", "max_step")
+    try:
+        data = np.load(path, allow_pickle=False)
+    except (OSError, EOFError, ValueError, zipfile.BadZipFile) as exc:
+        raise ValueError(f"path {str(path)!r} is not a readable .npz task file: {exc}") from exc
+    if not isinstance(data, np.lib.npyio.NpzFile):
+        raise ValueError(f"path {str(path)!r} is not a dlo task file: a single array, not .npz")
+    with data:
+        missing = [k for k in keys if k not in data.files]
+        if missing:
+            raise ValueError(f"path {str(path)!r} is not a dlo task file: missing {missing}")
+        arrays = {k: data[k] for k in keys}
+    version = int(arrays["format_version"])
+    if version != FORMAT_VERSION:
+        raise ValueError(
+            f"path {str(path)!r} has task format version {version}, this dlo reads "
+            f"version {FORMAT_VERSION}"
+        )
+    counts, difficulty = arrays["action_counts"], arrays["difficulty"]
+    action_ends = np.concatenate([[0], np.cumsum(counts)])
+    move_ends = np.concatenate([[0], np.cumsum(difficulty)])
+    if action_ends[-1] != len(arrays["reference_actions"]) or move_ends[-1] != len(
+        arrays["moves"]
+    ):
+        raise ValueError(f"path {str(path)!r} is corrupt: action or move counts do not add up")
+    grasp = str(arrays["grasp"])
+    return [
+        Task(
+            start=arrays["start"][i],
+            goal=arrays["goal"][i],
+            reference_actions=arrays["reference_actions"][action_ends[i] : action_ends[i + 1]],
+            difficulty=int(difficulty[i]),
+            seed=int(arrays["seed"][i]),
+            grasp=grasp,
+            moves=arrays["moves"][move_ends[i] : move_ends[i + 1]],
+            max_step=float(arrays["max_step"][i]),
+        )
+        for i in range(len(counts))
+    ]

@@ -1,0 +1,117 @@
+"""Specification of dlo_env.shapes: distances, the cord-like filter, validation, drawing."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from dlo_env.shapes import (
+    COSINE_THRESHOLD,
+    cord_length,
+    error,
+    is_cord_like,
+    max_error,
+    on_table,
+    random_cord_shape,
+    segment_lengths,
+    spacing_cv,
+    turning_cosines,
+    validate_shape,
+)
+
+N, LENGTH = 20, 1.0
+SEG = LENGTH / (N - 1)
+
+
+def straight(n: int = N, origin: tuple[float, float] = (-0.5, 0.0)) -> np.ndarray:
+    x = origin[0] + SEG * np.arange(n)
+    return np.stack([x, np.full(n, origin[1])], axis=1).astype(np.float32)
+
+
+def test_error_of_a_translated_shape_is_the_translation_length():
+    a = straight()
+    assert error(a, a) == 0.0
+    assert error(a, a + np.array([0.03, 0.04])) == pytest.approx(0.05)
+
+
+def test_error_is_the_mean_and_max_error_the_largest_point_distance():
+    a = straight()
+    b = a.copy()
+    b[0, 1] += 0.2
+    assert error(a, b) == pytest.approx(0.2 / N)
+    assert max_error(a, b) == pytest.approx(0.2)
+
+
+def test_error_and_max_error_work_on_batches():
+    a = np.stack([straight(), straight() + 0.1])
+    b = straight()
+    assert np.asarray(error(a, b)).shape == (2,)
+    np.testing.assert_allclose(error(a, b), [0.0, np.hypot(0.1, 0.1)], atol=1e-6)
+    np.testing.assert_allclose(max_error(a, b), [0.0, np.hypot(0.1, 0.1)], atol=1e-6)
+
+
+def test_a_straight_cord_is_cord_like_and_a_right_angle_is_not():
+    bent = straight()
+    bent[10:, 0] = bent[9, 0]
+    bent[10:, 1] = SEG * np.arange(1, N - 9)
+    assert is_cord_like(straight())
+    assert not is_cord_like(bent)
+    assert is_cord_like(np.stack([straight(), bent])).tolist() == [True, False]
+
+
+def test_cord_like_threshold_is_the_papers_and_is_checked():
+    assert COSINE_THRESHOLD == 0.25
+    with pytest.raises(ValueError, match="threshold"):
+        is_cord_like(straight(), threshold=1.5)
+
+
+def test_turning_cosine_of_a_zero_length_segment_is_zero():
+    s = straight()
+    s[1] = s[0]
+    assert turning_cosines(s)[0] == 0.0
+
+
+def test_segment_lengths_cord_length_and_spacing_of_a_straight_cord():
+    s = straight()
+    np.testing.assert_allclose(segment_lengths(s), SEG, rtol=1e-5)
+    assert cord_length(s) == pytest.approx(LENGTH, rel=1e-5)
+    assert spacing_cv(s) == pytest.approx(0.0, abs=1e-5)
+
+
+def test_on_table_checks_every_point():
+    s = straight()
+    assert on_table(s)
+    s[3, 1] = 1.01
+    assert not on_table(s)
+
+
+def test_validate_shape_accepts_flat_and_returns_float32_points():
+    out = validate_shape(straight().reshape(-1).astype(np.float64), n_points=N, length=LENGTH)
+    assert out.dtype == np.float32 and out.shape == (N, 2)
+
+
+@pytest.mark.parametrize(
+    ("shape", "match"),
+    [
+        (np.zeros((N, 3)), r"start must have shape \(20, 2\)"),
+        (np.full((N, 2), np.nan), "start must be finite"),
+        (straight(origin=(0.6, 0.0)), "start must lie on the table"),
+        (straight() * 1.2, "start must be a cord of length 1.0"),
+    ],
+)
+def test_validate_shape_rejects_bad_shapes_naming_the_argument(shape, match):
+    with pytest.raises(ValueError, match=match):
+        validate_shape(shape, n_points=N, length=LENGTH, name="start")
+
+
+def test_random_cord_shape_is_seeded_cord_like_exact_length_and_inside_the_margin():
+    a = random_cord_shape(np.random.default_rng(7))
+    b = random_cord_shape(np.random.default_rng(7))
+    assert np.array_equal(a, b)
+    shapes = np.stack([random_cord_shape(np.random.default_rng(s)) for s in range(50)])
+    assert shapes.dtype == np.float32 and shapes.shape == (50, N, 2)
+    assert is_cord_like(shapes).all()
+    np.testing.assert_allclose(segment_lengths(shapes), SEG, rtol=1e-4)
+    assert np.abs(shapes).max() <= 0.9 + 1e-6
+    # The family is varied: not all straight, not all alike.
+    assert np.ptp(np.asarray(cord_length(shapes[:, [0, -1]]))) > 0.2
