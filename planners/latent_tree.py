@@ -24,7 +24,13 @@ from typing import Any
 
 import numpy as np
 
-from dlo_env.shapes import error, is_cord_like, segment_lengths
+from dlo_env.shapes import (
+    COSINE_THRESHOLD,
+    error,
+    is_cord_like,
+    segment_lengths,
+    turning_cosines,
+)
 from planners.observation import as_shape
 from planners.surrogate import Surrogate
 
@@ -172,6 +178,27 @@ class Plan:
         return float(np.linalg.norm(self.moves, axis=1).sum())
 
 
+@dataclass(frozen=True)
+class _CordLimits:
+    """What a decoded shape must satisfy to count as a cord, for one plan.
+
+    The decoded start and goal always pass: where the model's own decodings of them bend more
+    sharply or stretch more than the defaults allow, the limits widen to include them (with a
+    small margin), so an imperfect decoder cannot make every edge fail.
+    """
+
+    rest: float
+    cosine: float
+    stretch: float
+
+    @classmethod
+    def of(cls, start: np.ndarray, ends: np.ndarray, max_stretch: float | None) -> _CordLimits:
+        rest = float(segment_lengths(start).mean())
+        cosine = min(COSINE_THRESHOLD, float(turning_cosines(ends).min()) - 0.05)
+        stretch = float(np.abs(segment_lengths(ends) / rest - 1.0).max()) + 0.05
+        return cls(rest, max(cosine, -1.0), max(max_stretch or 0.0, stretch))
+
+
 class _Tree:
     """Growing arrays of nodes: latent, decoded shape, parent, end path length, edge points."""
 
@@ -245,7 +272,9 @@ class LatentTreePlanner:
         return self.surrogate.invert(shapes, steps=cfg.invert_steps, restarts=cfg.invert_restarts)
 
     # ------------------------------------------------------------------ checks
-    def _check_edges(self, chains: np.ndarray, rest: float, counts: dict[str, int]) -> np.ndarray:
+    def _check_edges(
+        self, chains: np.ndarray, limits: _CordLimits, counts: dict[str, int]
+    ) -> np.ndarray:
         """Which decoded edges ``(B, K+1, n, 2)`` (node shape first) pass every check."""
         cfg = self.config
         step = error(chains[:, 1:], chains[:, :-1])  # (B, K)
@@ -273,10 +302,11 @@ class LatentTreePlanner:
         b, k = inner.shape[:2]
         ok_cord = np.ones(b, dtype=bool)
         if cfg.cord_like:
-            ok_cord &= np.asarray(is_cord_like(inner.reshape(b * k, -1, 2))).reshape(b, k).all(1)
+            flat = inner.reshape(b * k, -1, 2)
+            ok_cord &= np.asarray(is_cord_like(flat, limits.cosine)).reshape(b, k).all(axis=1)
         if cfg.max_stretch is not None:
-            stretch = np.abs(segment_lengths(inner) / rest - 1.0).max(axis=(1, 2))
-            ok_cord &= stretch <= cfg.max_stretch
+            stretch = np.abs(segment_lengths(inner) / limits.rest - 1.0).max(axis=(1, 2))
+            ok_cord &= stretch <= limits.stretch
         counts["cord"] += int((ok & ~ok_cord).sum())
         return ok & ok_cord
 
@@ -287,7 +317,7 @@ class LatentTreePlanner:
         return np.clip(k, cfg.edge_points, cfg.max_edge_points)
 
     def _try_edges(
-        self, z_from: np.ndarray, shape_from: np.ndarray, z_to: np.ndarray, rest: float,
+        self, z_from: np.ndarray, shape_from: np.ndarray, z_to: np.ndarray, limits: _CordLimits,
         counts: dict[str, int], points: int | None = None,
     ) -> tuple[np.ndarray, np.ndarray, int]:
         """Decode and check edges ``(B, d) -> (B, d)`` in one model call.
@@ -301,7 +331,7 @@ class LatentTreePlanner:
         latents = self.surrogate.segment(z_from, z_to, fractions)  # (B, K, d)
         decoded = self.surrogate.decode(latents)  # (B, K, n, 2)
         chains = np.concatenate([shape_from[:, None], decoded], axis=1)
-        return self._check_edges(chains, rest, counts), decoded[:, -1], points
+        return self._check_edges(chains, limits, counts), decoded[:, -1], points
 
     # ------------------------------------------------------------------ search
     def plan(
@@ -346,7 +376,7 @@ class LatentTreePlanner:
             goal_err, goal_ok = math.nan, True
         ends = self.surrogate.decode(np.stack([z_start, z_goal]))
         shape_goal = ends[1]
-        rest = float(segment_lengths(start).mean())
+        limits = _CordLimits.of(start, ends, cfg.max_stretch)
         tree = _Tree(cfg.max_nodes + 1, self.surrogate.latent_dim, n)
         tree.add(z_start[None], ends[:1], np.array([-1]), np.zeros(1), np.zeros(1, np.int64))
         spread = np.abs(z_goal - z_start)
@@ -370,7 +400,7 @@ class LatentTreePlanner:
                 candidates = candidates[np.argsort(dist)[: cfg.connect_attempts]]
                 ok, _, points = self._try_edges(
                     tree.latents[candidates], tree.shapes[candidates],
-                    np.broadcast_to(z_goal, (len(candidates), len(z_goal))), rest, counts,
+                    np.broadcast_to(z_goal, (len(candidates), len(z_goal))), limits, counts,
                 )
                 if ok.any():
                     passing = candidates[ok]
@@ -403,7 +433,7 @@ class LatentTreePlanner:
             step = np.minimum(dist, cfg.step_length)
             targets = nodes[nearest] + direction * (step / dist)[:, None]
             ok, shapes, points = self._try_edges(
-                nodes[nearest], tree.shapes[nearest], targets, rest, counts,
+                nodes[nearest], tree.shapes[nearest], targets, limits, counts,
                 points=cfg.edge_points,
             )
             parents = nearest[ok]
@@ -434,7 +464,7 @@ class LatentTreePlanner:
             path_points = [int(tree.edge_points[i]) for i in path[1:]]
         path_latents = np.array(path_latents, dtype=np.float32)
         if cfg.shortcut and len(path_latents) > 2:
-            path_latents, path_points = self._shortcut(path_latents, path_points, rest, counts)
+            path_latents, path_points = self._shortcut(path_latents, path_points, limits, counts)
         stats = {
             "nodes": int(tree.size),
             "iterations": iterations,
@@ -448,7 +478,7 @@ class LatentTreePlanner:
         return self._build_plan(path_latents, path_points, start, goal, success, stats, t0, calls0)
 
     def _shortcut(
-        self, latents: np.ndarray, points: list[int], rest: float, counts: dict[str, int]
+        self, latents: np.ndarray, points: list[int], limits: _CordLimits, counts: dict[str, int]
     ) -> tuple[np.ndarray, list[int]]:
         """Greedy shortcuts: from each kept node, jump to the farthest node reachable directly."""
         keep, keep_points = [0], []
@@ -459,7 +489,7 @@ class LatentTreePlanner:
                 shape_i = self.surrogate.decode(latents[i][None])
                 ok, _, k = self._try_edges(
                     np.repeat(latents[i][None], len(targets), axis=0),
-                    np.repeat(shape_i, len(targets), axis=0), latents[targets], rest, counts,
+                    np.repeat(shape_i, len(targets), axis=0), latents[targets], limits, counts,
                 )
                 if ok.any():
                     j = int(targets[np.argmax(ok)])
