@@ -273,7 +273,10 @@ def make_task(
     cord = Cord(params, grasp=grasp)
     p = cord.params
     if start is None:
-        start = _random_start(rng, cord)
+        # The cord re-projects every segment to its exact rest length: a drawn start is the
+        # shape the simulator actually holds after ``reset``, so an episode begins exactly there.
+        cord.reset(_random_start(rng, cord))
+        start = cord.shape
     else:
         start = validate_shape(start, n_points=p.n_points, length=p.length, name="start")
     zero = np.zeros(dim, dtype=np.float32)

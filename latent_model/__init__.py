@@ -1,0 +1,19 @@
+"""The learned surrogate of the cord: a GAN that decodes latents to shapes and an Encoder.
+
+Public API::
+
+    from latent_model import ShapeModel
+    model = ShapeModel.load_pretrained()
+    z, err, ok = model.invert(shapes)      # (B, n, 2) metres -> latents, errors, represented
+    shapes = model.decode(z)               # (B, n, 2) metres
+
+Training (``train``), additional training (``finetune``) and the quality metrics
+(``latent_model.metrics``) are documented in their modules. ``torch`` is required.
+"""
+
+from latent_model.config import ModelConfig, TrainConfig
+from latent_model.finetune import FinetuneConfig, finetune
+from latent_model.shape_model import ShapeModel
+from latent_model.training import train
+
+__all__ = ["FinetuneConfig", "ModelConfig", "ShapeModel", "TrainConfig", "finetune", "train"]

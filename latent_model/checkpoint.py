@@ -1,0 +1,62 @@
+"""Reading and writing checkpoint files: atomic writes, safe loads, clear errors."""
+
+from __future__ import annotations
+
+import os
+import tempfile
+from pathlib import Path
+from typing import Any
+
+import torch
+
+#: Marks a file as a dlo shape-model checkpoint.
+FORMAT = "dlo-shape-model"
+#: Bumped whenever the checkpoint layout changes incompatibly.
+FORMAT_VERSION = 1
+
+
+def save_atomic(obj: dict[str, Any], path: str | os.PathLike) -> Path:
+    """``torch.save`` to a temporary file in the same folder, then ``os.replace`` it into place.
+
+    A reader never sees a half-written file, and an interrupted write leaves the old one.
+    """
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
+    try:
+        with os.fdopen(fd, "wb") as f:
+            torch.save(obj, f)
+        os.replace(tmp, path)
+    except BaseException:
+        Path(tmp).unlink(missing_ok=True)
+        raise
+    return path
+
+
+def load_checkpoint(path: str | os.PathLike, name: str = "path") -> dict[str, Any]:
+    """Load a checkpoint written by ``save_atomic`` with ``weights_only=True`` and check its format.
+
+    Raises:
+        FileNotFoundError: If ``path`` does not exist.
+        ValueError: Naming ``name`` if the file is not a readable checkpoint, is not a dlo shape
+            model, or has another format version.
+    """
+    path = Path(path)
+    if not path.is_file():
+        raise FileNotFoundError(f"{name}: no checkpoint file at {str(path)!r}")
+    try:
+        data = torch.load(path, map_location="cpu", weights_only=True)
+    except Exception as exc:  # torch raises many types for corrupt or foreign files
+        raise ValueError(
+            f"{name}: {str(path)!r} is not a readable torch checkpoint "
+            f"({type(exc).__name__}: {str(exc).splitlines()[0] if str(exc) else ''})"
+        ) from exc
+    if not isinstance(data, dict) or data.get("format") != FORMAT:
+        raise ValueError(f"{name}: {str(path)!r} is not a {FORMAT} checkpoint")
+    version = data.get("format_version")
+    if version != FORMAT_VERSION:
+        raise ValueError(
+            f"{name}: {str(path)!r} has checkpoint format version {version!r}; "
+            f"this version of latent_model reads version {FORMAT_VERSION}"
+        )
+    return data

@@ -1,0 +1,138 @@
+"""Configurations of the surrogate: networks (``ModelConfig``) and training (``TrainConfig``).
+
+Defaults are the paper's (latent 5, n 20, alpha 0.5, five discriminator steps per generator
+step, Adam 2e-4 with beta1 0.5) except where a measured improvement is documented next to the
+field and in the README section "model".
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, fields
+from typing import Any
+
+REPRESENTATIONS = ("canonical", "world")
+
+
+@dataclass(frozen=True)
+class ModelConfig:
+    """Architecture of the Generator, Discriminator and Encoder.
+
+    Attributes:
+        n_points: Points of the chain the networks produce.
+        cord_length: Rest length of the cord the data came from, metres.
+        latent_dim: Dimension of the generator's shape latent ``z ~ U[-1, 1]^latent_dim``.
+        representation: ``"world"`` is the paper's: the generator outputs world coordinates, so
+            ``z`` also has to encode where the cord lies and how it is turned. ``"canonical"``
+            (default, measured better, see README): the generator outputs the shape in its
+            canonical frame (centroid at the origin, arc-length regression direction along +x)
+            and the pose is applied analytically; the full latent is then
+            ``[z, centre_x, centre_y, cos(angle), sin(angle)]``.
+        width: Hidden units of every fully connected layer.
+        depth: Hidden layers of each network.
+        leaky_slope: Negative slope of the LeakyReLU activations.
+        encoder_spectral_norm: Whether the Encoder keeps the Discriminator's spectral norm.
+    """
+
+    n_points: int = 20
+    cord_length: float = 1.0
+    latent_dim: int = 5
+    representation: str = "canonical"
+    width: int = 256
+    depth: int = 3
+    leaky_slope: float = 0.2
+    encoder_spectral_norm: bool = False
+
+    def __post_init__(self) -> None:
+        if self.representation not in REPRESENTATIONS:
+            raise ValueError(
+                f"representation must be one of {REPRESENTATIONS}, got {self.representation!r}"
+            )
+        for name in ("n_points", "latent_dim", "width", "depth"):
+            value = getattr(self, name)
+            if not isinstance(value, int) or value < 1:
+                raise ValueError(f"ModelConfig.{name} must be a positive int, got {value!r}")
+        if self.n_points < 3:
+            raise ValueError(f"ModelConfig.n_points must be >= 3, got {self.n_points!r}")
+        if not self.cord_length > 0:
+            raise ValueError(f"ModelConfig.cord_length must be > 0, got {self.cord_length!r}")
+
+    @property
+    def pose_dim(self) -> int:
+        """Extra latent dimensions that carry the pose (0 for the world representation)."""
+        return 4 if self.representation == "canonical" else 0
+
+    @property
+    def full_latent_dim(self) -> int:
+        """Dimension of the latent that ``ShapeModel.encode`` returns."""
+        return self.latent_dim + self.pose_dim
+
+
+@dataclass(frozen=True)
+class TrainConfig:
+    """How the GAN and the Encoder are trained.
+
+    Attributes:
+        batch_size: Shapes per step (the paper used 6000 on a GPU).
+        lr_generator: Adam learning rate of the Generator.
+        lr_discriminator: Adam learning rate of the Discriminator.
+        beta1: Adam beta1 (beta2 is 0.999).
+        d_steps: Discriminator updates per Generator update.
+        spacing_weight: The paper's alpha: the generator minimises
+            ``alpha * L_spacing + (1 - alpha) * L_adversarial``.
+        lr_encoder: Adam learning rate of the Encoder.
+        encoder_batch_size: Shapes per Encoder step.
+        encoder_fraction: Share of the time budget given to the Encoder when ``stage="all"``.
+        reconstruction_weight: Weight of ``||x - G(E(x))||^2`` on real shapes, trained jointly
+            into the Generator and the Encoder at every generator step (0 = the paper, where the
+            Encoder is trained only after the GAN). It ties every training shape to a latent,
+            so the generator cannot drop modes (see README "model" for the measurement).
+        prior_weight: Weight of the sliced Wasserstein distance between the Encoder's latents
+            of real shapes and ``U[-1, 1]^k`` (only with ``reconstruction_weight > 0``).
+        eval_every: Generator steps between evaluations on the held-out split.
+        eval_reference: Held-out shapes used by the evaluation during training.
+        eval_inversion: Held-out shapes inverted by the evaluation during training.
+        checkpoint_every_seconds: Wall time between checkpoints.
+        threads: Torch CPU threads (0 = leave torch's default).
+    """
+
+    batch_size: int = 1024
+    lr_generator: float = 2e-4
+    lr_discriminator: float = 2e-4
+    beta1: float = 0.5
+    d_steps: int = 5
+    spacing_weight: float = 0.5
+    lr_encoder: float = 1e-3
+    encoder_batch_size: int = 1024
+    encoder_fraction: float = 0.25
+    reconstruction_weight: float = 0.0
+    prior_weight: float = 0.0
+    eval_every: int = 500
+    eval_reference: int = 1000
+    eval_inversion: int = 200
+    checkpoint_every_seconds: float = 60.0
+    threads: int = 2
+
+    def __post_init__(self) -> None:
+        for name in ("batch_size", "d_steps", "encoder_batch_size", "eval_every"):
+            value = getattr(self, name)
+            if not isinstance(value, int) or value < 1:
+                raise ValueError(f"TrainConfig.{name} must be a positive int, got {value!r}")
+        if not 0.0 <= self.spacing_weight <= 1.0:
+            raise ValueError(
+                f"TrainConfig.spacing_weight must be in [0, 1], got {self.spacing_weight!r}"
+            )
+        if not 0.0 <= self.encoder_fraction < 1.0:
+            raise ValueError(
+                f"TrainConfig.encoder_fraction must be in [0, 1), got {self.encoder_fraction!r}"
+            )
+
+
+def config_from_dict(cls: type, values: dict[str, Any], name: str = "config") -> Any:
+    """Build a config dataclass from a (checkpoint) dict, rejecting unknown keys clearly."""
+    known = {f.name for f in fields(cls)}
+    unknown = sorted(set(values) - known)
+    if unknown:
+        raise ValueError(
+            f"{name} has unknown fields {unknown}; expected a subset of {sorted(known)}"
+        )
+    return cls(**values)

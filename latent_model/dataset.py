@@ -1,0 +1,66 @@
+"""Reading shape datasets for training (``.npz`` files written by ``dlo collect``)."""
+
+from __future__ import annotations
+
+import os
+import zipfile
+from pathlib import Path
+
+import numpy as np
+
+
+def load_shapes(path: str | os.PathLike, name: str = "path") -> np.ndarray:
+    """The ``shapes`` array ``(N, n, 2)`` float32 of a dataset file.
+
+    Files written by ``dlo collect`` (they carry ``metadata``) are read and validated by
+    ``dlo_env.data.load_shapes``; any other ``.npz`` with a ``shapes`` array is read with
+    ``allow_pickle=False`` (e.g. a set of shapes to fine-tune on).
+
+    Raises:
+        FileNotFoundError: If the file does not exist.
+        ValueError: Naming ``name`` if the file has no usable ``shapes`` array.
+    """
+    path = Path(path)
+    if not path.is_file():
+        raise FileNotFoundError(f"{name}: no dataset file at {str(path)!r}")
+    try:
+        with np.load(path, allow_pickle=False) as data:
+            files = set(data.files)
+            if "metadata" not in files:  # a plain shape array, e.g. shapes to fine-tune on
+                if "shapes" not in files:
+                    raise ValueError(
+                        f"{name}: {str(path)!r} has no 'shapes' array (found {sorted(files)})"
+                    )
+                shapes = data["shapes"]
+    except (OSError, EOFError, zipfile.BadZipFile) as exc:
+        raise ValueError(f"{name}: {str(path)!r} is not a readable .npz file ({exc})") from exc
+    if "metadata" in files:  # written by `dlo collect`: its loader checks the format
+        from dlo_env.data import load_shapes as collector_load
+
+        try:
+            shapes = collector_load(path).shapes
+        except ValueError as exc:
+            raise ValueError(f"{name}: {exc}") from exc
+    shapes = np.asarray(shapes, dtype=np.float32)
+    if shapes.ndim != 3 or shapes.shape[-1] != 2 or len(shapes) == 0:
+        raise ValueError(
+            f"{name}: 'shapes' must have shape (N, n, 2) with N > 0, got {shapes.shape}"
+        )
+    if not np.isfinite(shapes).all():
+        raise ValueError(f"{name}: 'shapes' holds NaN or infinite coordinates")
+    return shapes
+
+
+def split_heldout(
+    shapes: np.ndarray, fraction: float, seed: int
+) -> tuple[np.ndarray, np.ndarray]:
+    """Random (train, held-out) split of one dataset, for when no held-out file is given.
+
+    Shapes recorded along the same move are near duplicates, so a held-out file collected with
+    another seed is the honest measure; this split is a fallback.
+    """
+    if not 0.0 < fraction < 1.0:
+        raise ValueError(f"fraction must be in (0, 1), got {fraction!r}")
+    order = np.random.default_rng(seed).permutation(len(shapes))
+    cut = max(1, int(round(fraction * len(shapes))))
+    return shapes[order[cut:]], shapes[order[:cut]]

@@ -1,0 +1,408 @@
+"""Training of the GAN and the Encoder, with held-out evaluation, logs, checkpoints and resume.
+
+One ``Trainer`` owns the networks, their optimisers and the data in network units. ``train``
+is the function ``dlo train`` calls: it resumes from ``OUT/checkpoint.pt`` when present,
+trains each stage within its budget, evaluates on the held-out split every ``eval_every``
+steps (CSV row + PNG of the curves), checkpoints atomically, and exports ``OUT/model.pt``.
+"""
+
+from __future__ import annotations
+
+import csv
+import math
+import os
+import time
+from dataclasses import asdict, dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import torch
+
+from dlo_env.shapes import TABLE_HALF
+from latent_model import losses, metrics, pose
+from latent_model.checkpoint import FORMAT, FORMAT_VERSION, load_checkpoint, save_atomic
+from latent_model.config import ModelConfig, TrainConfig, config_from_dict
+from latent_model.networks import Discriminator, Encoder, Generator
+from latent_model.normalisation import Normalisation
+from latent_model.shape_model import ShapeModel, resolve_device
+
+STAGES = ("gan", "encoder", "all")
+CHECKPOINT_FILE = "checkpoint.pt"
+METRICS_CSV = "metrics.csv"
+METRICS_PNG = "metrics.png"
+CSV_FIELDS = (
+    "stage", "step", "train_minutes", "cov", "mmd", "nna", "spacing_cv", "length",
+    "inversion_encoder", "inversion_refined", "loss_d", "loss_g", "loss_e", "eval_seconds",
+)
+
+
+def normalisation_for(config: ModelConfig) -> Normalisation:
+    """The fixed map from metres to network units of a representation.
+
+    World: the table's half-side is one unit, so tanh covers the table. Canonical: every point
+    of a cord lies within half its length of the centroid (the mean distance to the other
+    points is at most the mean arc length to them), so ``0.525 * length`` per unit fits every
+    possible shape with 5 % headroom; no data-dependent fit that new shapes could exceed.
+    """
+    if config.representation == "canonical":
+        return Normalisation(0.0, 0.0, 0.525 * config.cord_length)
+    return Normalisation(0.0, 0.0, TABLE_HALF)
+
+
+def network_shapes(shapes: torch.Tensor, config: ModelConfig) -> torch.Tensor:
+    """World shapes ``(N, n, 2)`` as the generator must produce them, in network units."""
+    norm = normalisation_for(config)
+    if config.representation == "canonical":
+        return norm.to_network(pose.canonicalise(shapes))
+    return norm.to_network(shapes)
+
+
+@dataclass
+class Progress:
+    """Counters that make a run resumable."""
+
+    gan_step: int = 0
+    encoder_step: int = 0
+    gan_seconds: float = 0.0
+    encoder_seconds: float = 0.0
+    total_seconds: float = 0.0  # all training, including Encoder runs that were redone
+    encoder_for_gan_step: int = -1  # the GAN step the Encoder was trained against
+    rows: list[dict[str, Any]] = field(default_factory=list)
+
+
+class Trainer:
+    """Networks, optimisers and data of one training run.
+
+    Args:
+        train_shapes: ``(N, n, 2)`` world metres.
+        heldout_shapes: ``(M, n, 2)`` world metres, used only for evaluation.
+        model_config: Architecture.
+        train_config: Optimisation settings.
+        device: ``"auto"``, ``"cpu"``, ``"cuda"``...
+        seed: Seeds the networks' initialisation and every random draw of the run.
+    """
+
+    def __init__(
+        self,
+        train_shapes: np.ndarray,
+        heldout_shapes: np.ndarray,
+        model_config: ModelConfig,
+        train_config: TrainConfig,
+        device: str | torch.device = "auto",
+        seed: int = 0,
+    ) -> None:
+        self.mc, self.tc = model_config, train_config
+        self.device = resolve_device(device)
+        self.seed = seed
+        if self.tc.threads > 0 and self.device.type == "cpu":
+            torch.set_num_threads(self.tc.threads)
+        torch.manual_seed(seed)
+        shapes = torch.as_tensor(np.asarray(train_shapes, dtype=np.float32))
+        self.norm = normalisation_for(model_config)
+        x = network_shapes(shapes, model_config)
+        self.data = x.to(self.device)  # (N, n, 2) network units
+        self.rest = float(metrics.segment_lengths(x).mean())  # d_r, network units
+        self.heldout = torch.as_tensor(np.asarray(heldout_shapes, dtype=np.float32))
+        self.generator = Generator(model_config).to(self.device)
+        self.discriminator = Discriminator(model_config).to(self.device)
+        self.encoder = Encoder(model_config).to(self.device)
+        betas = (train_config.beta1, 0.999)
+        self.opt_g = torch.optim.Adam(self.generator.parameters(), train_config.lr_generator, betas)
+        self.opt_d = torch.optim.Adam(
+            self.discriminator.parameters(), train_config.lr_discriminator, betas
+        )
+        self.opt_e = torch.optim.Adam(self.encoder.parameters(), train_config.lr_encoder, betas)
+        self.rng = torch.Generator(device=self.device).manual_seed(seed)
+        self.progress = Progress()
+        self.last = {"loss_d": math.nan, "loss_g": math.nan, "loss_e": math.nan}
+
+    # ---------------------------------------------------------------- batches
+    def _real(self, size: int) -> torch.Tensor:
+        idx = torch.randint(len(self.data), (size,), generator=self.rng, device=self.device)
+        return self.data[idx]  # (B, n, 2)
+
+    def _latent(self, size: int) -> torch.Tensor:
+        u = torch.rand(size, self.mc.latent_dim, generator=self.rng, device=self.device)
+        return u * 2 - 1  # (B, k) uniform on [-1, 1]
+
+    # ------------------------------------------------------------------ steps
+    def gan_step(self) -> tuple[float, float]:
+        """``d_steps`` discriminator updates, then one generator update; returns the losses."""
+        tc = self.tc
+        for _ in range(tc.d_steps):
+            real = self._real(tc.batch_size)
+            with torch.no_grad():
+                fake = self.generator(self._latent(tc.batch_size))
+            loss_d = losses.discriminator_loss(self.discriminator(real), self.discriminator(fake))
+            self.opt_d.zero_grad(set_to_none=True)
+            loss_d.backward()
+            self.opt_d.step()
+        fake = self.generator(self._latent(tc.batch_size))
+        adversarial = losses.generator_adversarial_loss(self.discriminator(fake))
+        spacing = losses.spacing_loss(fake, self.rest)
+        loss_g = (1 - tc.spacing_weight) * adversarial + tc.spacing_weight * spacing
+        self.opt_g.zero_grad(set_to_none=True)
+        if tc.reconstruction_weight > 0:
+            real = self._real(tc.batch_size)
+            z = self.encoder(real)
+            loss_e = tc.reconstruction_weight * losses.reconstruction_loss(real, self.generator(z))
+            if tc.prior_weight > 0:
+                loss_e = loss_e + tc.prior_weight * losses.sliced_wasserstein(
+                    z, self._latent(tc.batch_size), generator=self.rng)
+            loss_g = loss_g + loss_e
+            self.opt_e.zero_grad(set_to_none=True)
+            self.last["loss_e"] = loss_e.item()
+        loss_g.backward()
+        self.opt_g.step()
+        if tc.reconstruction_weight > 0:
+            self.opt_e.step()
+        self.progress.gan_step += 1
+        self.last.update(loss_d=loss_d.item(), loss_g=loss_g.item())
+        return self.last["loss_d"], self.last["loss_g"]
+
+    def encoder_step(self) -> float:
+        """One Encoder update on ``||x - G(E(x))||^2`` with the generator frozen."""
+        x = self._real(self.tc.encoder_batch_size)
+        for p in self.generator.parameters():
+            p.requires_grad_(False)
+        loss = losses.reconstruction_loss(x, self.generator(self.encoder(x)))
+        for p in self.generator.parameters():
+            p.requires_grad_(True)
+        self.opt_e.zero_grad(set_to_none=True)
+        loss.backward()
+        self.opt_e.step()
+        self.progress.encoder_step += 1
+        self.last["loss_e"] = loss.item()
+        return loss.item()
+
+    # ------------------------------------------------------------- evaluation
+    def model(self, info: dict[str, Any] | None = None) -> ShapeModel:
+        """A ``ShapeModel`` sharing this run's networks."""
+        return ShapeModel(self.mc, self.norm, self.generator, self.encoder, self.discriminator,
+                          self.device, info)
+
+    def evaluate(self) -> dict[str, float]:
+        """Metrics on the held-out split: set quality of samples, inversion success."""
+        tc = self.tc
+        start = time.perf_counter()
+        model = self.model()
+        reference = self.heldout[: tc.eval_reference]
+        targets = self.heldout[tc.eval_reference : tc.eval_reference + tc.eval_inversion]
+        seed = self.seed + 1_000_003  # evaluation draws never disturb the training stream
+        generated = torch.from_numpy(model.sample(5 * len(reference), seed=seed))
+        quality = metrics.set_quality(generated, reference, self.mc.cord_length)
+        _, err_e, _ = model.invert(targets.numpy(), refine=False)
+        _, err_r, _ = model.invert(targets.numpy(), seed=seed)
+        for net in (self.generator, self.encoder, self.discriminator):
+            net.train()
+        return {
+            "cov": quality.cov, "mmd": quality.mmd, "nna": quality.nna,
+            "spacing_cv": quality.spacing_cv, "length": quality.length,
+            "inversion_encoder": metrics.success_rate(torch.as_tensor(err_e)),
+            "inversion_refined": metrics.success_rate(torch.as_tensor(err_r)),
+            "eval_seconds": time.perf_counter() - start,
+        }
+
+    # ------------------------------------------------------------ checkpoints
+    def state(self, data_info: dict[str, Any]) -> dict[str, Any]:
+        """Everything needed to resume: networks, optimisers, counters, random state."""
+        return {
+            "format": FORMAT,
+            "format_version": FORMAT_VERSION,
+            "kind": "training",
+            "model_config": asdict(self.mc),
+            "train_config": asdict(self.tc),
+            "normalisation": asdict(self.norm),
+            "seed": self.seed,
+            "generator": self.generator.state_dict(),
+            "discriminator": self.discriminator.state_dict(),
+            "encoder": self.encoder.state_dict(),
+            "opt_g": self.opt_g.state_dict(),
+            "opt_d": self.opt_d.state_dict(),
+            "opt_e": self.opt_e.state_dict(),
+            "rng": self.rng.get_state(),
+            "progress": asdict(self.progress),
+            "data": data_info,
+        }
+
+    def load_state(self, data: dict[str, Any]) -> None:
+        """Continue from a checkpoint written by ``state`` (same configs required)."""
+        for key, current in (("model_config", asdict(self.mc)), ("train_config", asdict(self.tc))):
+            if data[key] != current:
+                raise ValueError(
+                    f"the checkpoint was written with a different {key}: {data[key]} "
+                    f"(now {current}); use another --out folder or the same settings"
+                )
+        self.norm = config_from_dict(Normalisation, data["normalisation"], "normalisation")
+        for name in ("generator", "discriminator", "encoder"):
+            getattr(self, name).load_state_dict(data[name])
+        for name in ("opt_g", "opt_d", "opt_e"):
+            getattr(self, name).load_state_dict(data[name])
+        self.rng.set_state(data["rng"])
+        self.progress = Progress(**data["progress"])
+
+
+# ------------------------------------------------------------------- logging
+def write_csv(rows: list[dict[str, Any]], path: Path) -> None:
+    """Rewrite the metrics CSV atomically from all rows."""
+    tmp = path.with_name(f".{path.name}.tmp")
+    with open(tmp, "w", newline="") as f:
+        writer = csv.DictWriter(f, fieldnames=CSV_FIELDS, extrasaction="ignore")
+        writer.writeheader()
+        writer.writerows(rows)
+    os.replace(tmp, path)
+
+
+def plot_curves(
+    rows: list[dict[str, Any]], path: Path, floors: dict[str, float] | None = None
+) -> None:
+    """Redraw the PNG of the metric curves against training minutes."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    panels = [("cov", "COV", 1), ("mmd", "MMD (cm)", 100), ("nna", "1-NNA", 1),
+              ("spacing_cv", "spacing CV", 1), ("length", "length (m)", 1),
+              ("inversion_refined", "inversion success", 1)]
+    floors = floors or {}
+    fig, axes = plt.subplots(2, 3, figsize=(12, 6.5))
+    minutes = [r["train_minutes"] for r in rows]
+    for ax, (key, label, factor) in zip(axes.flat, panels):
+        ax.plot(minutes, [r[key] * factor for r in rows], marker=".")
+        if key == "inversion_refined":
+            encoder_only = [r["inversion_encoder"] for r in rows]
+            ax.plot(minutes, encoder_only, marker=".", label="encoder only")
+            ax.plot([], [], color="C0", label="refined")
+            ax.legend(fontsize=8)
+        if key in floors:
+            ax.axhline(floors[key] * factor, color="k", lw=0.8, ls="--")
+        ax.set_title(label)
+        ax.set_xlabel("training minutes")
+        ax.grid(alpha=0.3)
+    fig.tight_layout()
+    tmp = path.with_name(f".{path.name}.tmp.png")
+    fig.savefig(tmp, dpi=80)
+    plt.close(fig)
+    os.replace(tmp, path)
+
+
+#: The floors of the shipped model (drawn as dashed lines on the PNG).
+FLOORS = {"cov": 0.85, "mmd": 0.015, "nna": 0.75, "spacing_cv": 0.05, "inversion_refined": 0.95}
+
+
+# --------------------------------------------------------------------- train
+def train(
+    train_shapes: np.ndarray,
+    heldout_shapes: np.ndarray,
+    out_dir: str | os.PathLike,
+    model_config: ModelConfig | None = None,
+    train_config: TrainConfig | None = None,
+    *,
+    stage: str = "all",
+    minutes: float = 30.0,
+    gan_steps: int | None = None,
+    encoder_steps: int | None = None,
+    device: str | torch.device = "auto",
+    seed: int = 0,
+    data_info: dict[str, Any] | None = None,
+    progress_bar: bool = True,
+) -> ShapeModel:
+    """Train (or resume training of) a ``ShapeModel``; write logs, checkpoints and ``model.pt``.
+
+    The budget of a run is ``minutes`` of training wall time in total, evaluations excluded,
+    across resumes. With ``stage="all"`` the GAN gets ``1 - encoder_fraction`` of it and the
+    Encoder the rest; ``stage="encoder"`` trains only the Encoder of an existing run.
+    ``gan_steps``/``encoder_steps`` replace the time budget of their stage by a step count
+    (bit-reproducible runs on the same machine and torch build).
+
+    Returns:
+        The trained model (also saved to ``out_dir/model.pt``).
+    """
+    from tqdm.auto import tqdm
+
+    if stage not in STAGES:
+        raise ValueError(f"stage must be one of {STAGES}, got {stage!r}")
+    if not minutes > 0:
+        raise ValueError(f"minutes must be > 0, got {minutes!r}")
+    mc, tc = model_config or ModelConfig(), train_config or TrainConfig()
+    out = Path(out_dir)
+    out.mkdir(parents=True, exist_ok=True)
+    trainer = Trainer(train_shapes, heldout_shapes, mc, tc, device, seed)
+    ckpt_path = out / CHECKPOINT_FILE
+    if ckpt_path.exists():
+        data = load_checkpoint(ckpt_path, name="checkpoint")
+        trainer.load_state(data)
+    elif stage == "encoder":
+        raise ValueError(
+            f"stage 'encoder' needs a trained GAN: no {CHECKPOINT_FILE} in {str(out)!r}"
+        )
+    info = dict(data_info or {}, seed=seed)
+    prog = trainer.progress
+    encoder_share = tc.encoder_fraction if stage == "all" else (1.0 if stage == "encoder" else 0.0)
+    budgets = {"gan": (1 - encoder_share) * minutes * 60, "encoder": encoder_share * minutes * 60}
+    step_budgets = {"gan": gan_steps, "encoder": encoder_steps}
+    stages = {"gan": ["gan"], "encoder": ["encoder"], "all": ["gan", "encoder"]}[stage]
+
+    def save(final: bool = False) -> None:
+        save_atomic(trainer.state(info), ckpt_path)
+        last = prog.rows[-1] if prog.rows else None
+        trainer.model(dict(info, gan_step=prog.gan_step, encoder_step=prog.encoder_step,
+                           last_metrics=last)).save(out / "model.pt")
+
+    def log_eval(name: str) -> None:
+        row = {"stage": name, "step": getattr(prog, f"{name}_step"),
+               "train_minutes": prog.total_seconds / 60}
+        row.update(trainer.evaluate())
+        row.update(trainer.last)
+        prog.rows.append(row)
+        write_csv(prog.rows, out / METRICS_CSV)
+        plot_curves(prog.rows, out / METRICS_PNG, FLOORS)
+
+    for name in stages:
+        if name == "encoder" and prog.encoder_for_gan_step != prog.gan_step:
+            # The generator changed since the Encoder was trained: train it again (warm start).
+            prog.encoder_step, prog.encoder_seconds = 0, 0.0
+            prog.encoder_for_gan_step = prog.gan_step
+        step_fn = trainer.gan_step if name == "gan" else trainer.encoder_step
+        seconds_attr, step_attr = f"{name}_seconds", f"{name}_step"
+        limit_steps = step_budgets[name]
+
+        def done(limit_steps=limit_steps, step_attr=step_attr, seconds_attr=seconds_attr,
+                 name=name) -> bool:
+            if limit_steps is not None:
+                return getattr(prog, step_attr) >= limit_steps
+            return getattr(prog, seconds_attr) >= budgets[name]
+
+        total = limit_steps if limit_steps is not None else round(budgets[name])
+        bar = tqdm(total=total, desc=name, unit="step" if limit_steps is not None else "s",
+                   disable=not progress_bar, dynamic_ncols=True)
+        bar.update(getattr(prog, step_attr) if limit_steps is not None
+                   else round(getattr(prog, seconds_attr)))
+        last_save = time.perf_counter()
+        while not done():
+            t0 = time.perf_counter()
+            step_fn()
+            dt = time.perf_counter() - t0
+            setattr(prog, seconds_attr, getattr(prog, seconds_attr) + dt)
+            prog.total_seconds += dt
+            bar.update(1 if limit_steps is not None else 0)
+            if limit_steps is None:
+                bar.n = min(total, round(getattr(prog, seconds_attr)))
+                bar.refresh()
+            if getattr(prog, step_attr) % tc.eval_every == 0:
+                log_eval(name)
+                r = prog.rows[-1]
+                bar.set_postfix(cov=f"{r['cov']:.2f}", mmd=f"{100 * r['mmd']:.2f}cm",
+                                inv=f"{r['inversion_refined']:.2f}", refresh=False)
+            if time.perf_counter() - last_save > tc.checkpoint_every_seconds:
+                save()
+                last_save = time.perf_counter()
+        bar.close()
+        if not prog.rows or prog.rows[-1]["stage"] != name or \
+                prog.rows[-1]["step"] != getattr(prog, step_attr):
+            log_eval(name)
+        save()
+    return trainer.model(dict(info, gan_step=prog.gan_step, encoder_step=prog.encoder_step,
+                              last_metrics=prog.rows[-1] if prog.rows else None))
