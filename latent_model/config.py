@@ -11,6 +11,7 @@ from dataclasses import dataclass, fields
 from typing import Any
 
 REPRESENTATIONS = ("canonical", "world")
+OUTPUTS = ("points", "angles")
 
 
 @dataclass(frozen=True)
@@ -27,6 +28,13 @@ class ModelConfig:
             canonical frame (centroid at the origin, arc-length regression direction along +x)
             and the pose is applied analytically; the full latent is then
             ``[z, centre_x, centre_y, cos(angle), sin(angle)]``.
+        output: ``"points"`` is the paper's: a tanh layer of ``2 n`` coordinates, kept near
+            the rest spacing by the point-spacing loss. ``"angles"`` (canonical representation
+            only): the last layer gives the ``n - 2`` turning angles between consecutive
+            segments (``pi * tanh``), and the chain is built from segments of exactly the rest
+            length, then moved into its canonical frame. Inextensibility then holds by
+            construction (spacing CV 0, length exact; the spacing loss is 0) and the generator
+            learns only the bending. Measured better, see README "model".
         width: Hidden units of every fully connected layer.
         depth: Hidden layers of each network.
         leaky_slope: Negative slope of the LeakyReLU activations.
@@ -37,6 +45,7 @@ class ModelConfig:
     cord_length: float = 1.0
     latent_dim: int = 5
     representation: str = "canonical"
+    output: str = "points"
     width: int = 256
     depth: int = 3
     leaky_slope: float = 0.2
@@ -47,6 +56,11 @@ class ModelConfig:
             raise ValueError(
                 f"representation must be one of {REPRESENTATIONS}, got {self.representation!r}"
             )
+        if self.output not in OUTPUTS:
+            raise ValueError(f"output must be one of {OUTPUTS}, got {self.output!r}")
+        if self.output == "angles" and self.representation != "canonical":
+            raise ValueError("output='angles' needs representation='canonical' (the pose is "
+                             f"applied analytically), got representation={self.representation!r}")
         for name in ("n_points", "latent_dim", "width", "depth"):
             value = getattr(self, name)
             if not isinstance(value, int) or value < 1:

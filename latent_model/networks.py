@@ -12,6 +12,8 @@ from torch import nn
 from torch.nn.utils.parametrizations import spectral_norm
 
 from latent_model.config import ModelConfig
+from latent_model.normalisation import CANONICAL_SCALE
+from latent_model.pose import canonicalise
 
 
 def _mlp(sizes: list[int], slope: float, spectral: bool) -> nn.Sequential:
@@ -26,17 +28,33 @@ def _mlp(sizes: list[int], slope: float, spectral: bool) -> nn.Sequential:
 
 
 class Generator(nn.Module):
-    """``G(z)``: a latent ``(B, latent_dim)`` in ``[-1, 1]`` to a chain ``(B, n, 2)`` in [-1, 1]."""
+    """``G(z)``: a latent ``(B, latent_dim)`` in ``[-1, 1]`` to a chain ``(B, n, 2)``.
 
-    def __init__(self, config: ModelConfig) -> None:
+    With ``output="points"`` the chain is a tanh layer in ``[-1, 1]``. With ``output="angles"``
+    the network gives turning angles and the chain is built from segments of the rest length
+    (in network units, ``segment_units``) and moved into its canonical frame.
+    """
+
+    def __init__(self, config: ModelConfig, segment_units: float | None = None) -> None:
         super().__init__()
         self.config = config
-        sizes = [config.latent_dim] + [config.width] * config.depth + [2 * config.n_points]
+        n = config.n_points
+        out = 2 * n if config.output == "points" else n - 2
+        sizes = [config.latent_dim] + [config.width] * config.depth + [out]
         self.net = _mlp(sizes, config.leaky_slope, spectral=False)
+        if segment_units is None:
+            segment_units = 1.0 / (CANONICAL_SCALE * (n - 1))
+        self.segment_units = float(segment_units)
 
     def forward(self, z: torch.Tensor) -> torch.Tensor:
-        out = torch.tanh(self.net(z))  # (B, 2n)
-        return out.view(-1, self.config.n_points, 2)  # (B, n, 2)
+        if self.config.output == "points":
+            out = torch.tanh(self.net(z))  # (B, 2n)
+            return out.view(-1, self.config.n_points, 2)  # (B, n, 2)
+        turns = torch.pi * torch.tanh(self.net(z))  # (B, n-2)
+        headings = torch.cat([turns.new_zeros(turns.shape[0], 1), turns.cumsum(dim=-1)], dim=-1)
+        steps = self.segment_units * torch.stack([headings.cos(), headings.sin()], dim=-1)
+        chain = torch.cat([steps.new_zeros(steps.shape[0], 1, 2), steps.cumsum(dim=1)], dim=1)
+        return canonicalise(chain)  # (B, n, 2)
 
 
 class Discriminator(nn.Module):

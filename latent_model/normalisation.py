@@ -6,6 +6,9 @@ from dataclasses import dataclass
 
 import torch
 
+#: Cord lengths per network unit of the canonical representation (see ``normalisation_for``).
+CANONICAL_SCALE = 0.525
+
 
 @dataclass(frozen=True)
 class Normalisation:

@@ -24,7 +24,7 @@ from latent_model import losses, metrics, pose
 from latent_model.checkpoint import FORMAT, FORMAT_VERSION, load_checkpoint, save_atomic
 from latent_model.config import ModelConfig, TrainConfig, config_from_dict
 from latent_model.networks import Discriminator, Encoder, Generator
-from latent_model.normalisation import Normalisation
+from latent_model.normalisation import CANONICAL_SCALE, Normalisation
 from latent_model.shape_model import ShapeModel, resolve_device
 
 STAGES = ("gan", "encoder", "all")
@@ -46,7 +46,7 @@ def normalisation_for(config: ModelConfig) -> Normalisation:
     possible shape with 5 % headroom; no data-dependent fit that new shapes could exceed.
     """
     if config.representation == "canonical":
-        return Normalisation(0.0, 0.0, 0.525 * config.cord_length)
+        return Normalisation(0.0, 0.0, CANONICAL_SCALE * config.cord_length)
     return Normalisation(0.0, 0.0, TABLE_HALF)
 
 

@@ -52,3 +52,24 @@ def test_config_rejects_unknown_representation():
 def test_full_latent_adds_the_pose_only_for_the_canonical_representation():
     assert ModelConfig(representation="canonical").full_latent_dim == 5 + 4
     assert ModelConfig(representation="world").full_latent_dim == 5
+
+
+def test_angle_output_builds_inextensible_chains_in_their_canonical_frame():
+    from latent_model.metrics import cord_length, spacing_cv
+    from latent_model.normalisation import CANONICAL_SCALE
+    from latent_model.pose import canonical_pose
+
+    g = Generator(ModelConfig(width=32, depth=2, output="angles"))
+    chains = g(torch.rand(16, 5) * 2 - 1) * CANONICAL_SCALE  # metres, 1 m cord
+    assert chains.shape == (16, 20, 2)
+    assert torch.allclose(cord_length(chains), torch.ones(16), atol=1e-5)
+    assert float(spacing_cv(chains).max()) < 1e-5
+    centre, angle = canonical_pose(chains)
+    assert float(centre.abs().max()) < 1e-5 and float(angle.abs().max()) < 1e-4
+
+
+def test_angle_output_needs_the_canonical_representation():
+    with pytest.raises(ValueError, match="output='angles' needs representation='canonical'"):
+        ModelConfig(representation="world", output="angles")
+    with pytest.raises(ValueError, match="output must be one of"):
+        ModelConfig(output="splines")
