@@ -22,6 +22,11 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--seed", type=int, default=0)
     parser.add_argument("--representation", choices=("canonical", "world"), default=None,
                         help="canonical (default) or world (the paper's)")
+    parser.add_argument("--output", choices=("angles", "points"), default=None,
+                        help="generator output: angles (default, inextensible) or points (paper)")
+    parser.add_argument("--paper", action="store_true",
+                        help="the paper's recipe: points output, batch 1024, 5 D-steps, Adam "
+                             "2e-4, Encoder trained only after the GAN (overridable by the flags)")
     parser.add_argument("--width", type=int, default=None, help="hidden units per layer")
     parser.add_argument("--batch-size", type=int, default=None)
     parser.add_argument("--d-steps", type=int, default=None,
@@ -40,7 +45,7 @@ def run(args: argparse.Namespace) -> int:
     from dataclasses import replace
     from pathlib import Path
 
-    from latent_model.config import ModelConfig, TrainConfig
+    from latent_model.config import PAPER_MODEL, PAPER_TRAIN, ModelConfig, TrainConfig
     from latent_model.dataset import load_shapes, split_heldout
     from latent_model.evaluation import quality_report
     from latent_model.training import CHECKPOINT_FILE, train
@@ -52,12 +57,16 @@ def run(args: argparse.Namespace) -> int:
         print("no --heldout file: holding out 5% of --data (near duplicates leak; see README)")
         data, heldout = split_heldout(data, 0.05, args.seed)
     model_kw = {k: v for k, v in {"representation": args.representation, "width": args.width,
+                                  "output": args.output,
                                   "n_points": int(data.shape[1])}.items() if v is not None}
     train_kw = {k: v for k, v in {"batch_size": args.batch_size, "d_steps": args.d_steps,
                                   "threads": args.threads, "eval_every": args.eval_every}.items()
                 if v is not None}
-    model_config = replace(ModelConfig(), **model_kw)
-    train_config = replace(TrainConfig(), **train_kw)
+    base_model, base_train = ModelConfig(), TrainConfig()
+    if args.paper:
+        base_model, base_train = PAPER_MODEL, PAPER_TRAIN
+    model_config = replace(base_model, **model_kw)
+    train_config = replace(base_train, **train_kw)
     out = Path(args.out)
     resumed = (out / CHECKPOINT_FILE).exists()
     print(f"{'resuming' if resumed else 'training'} in {out}: {len(data)} training shapes, "

@@ -64,3 +64,22 @@ def split_heldout(
     order = np.random.default_rng(seed).permutation(len(shapes))
     cut = max(1, int(round(fraction * len(shapes))))
     return shapes[order[cut:]], shapes[order[:cut]]
+
+
+def evaluation_subsets(
+    shapes: np.ndarray, sizes: tuple[int, ...], seed: int = 0
+) -> list[np.ndarray]:
+    """Disjoint random subsets of a held-out set, one per size, the same for the same seed.
+
+    Collected files are ordered by episode (hundreds of consecutive shapes come from one cord),
+    so the first shapes of a file are a few near-duplicate clusters, not a sample of it. Every
+    evaluation draws its reference and inversion sets with this function instead.
+    """
+    if any(not isinstance(k, (int, np.integer)) or k < 0 for k in sizes):
+        raise ValueError(f"sizes must be non-negative ints, got {sizes!r}")
+    if sum(sizes) > len(shapes):
+        raise ValueError(f"the held-out set must hold at least {sum(sizes)} shapes "
+                         f"(sizes {tuple(sizes)}), got {len(shapes)}")
+    order = np.random.default_rng(seed).permutation(len(shapes))
+    bounds = np.cumsum((0, *sizes))
+    return [np.asarray(shapes)[np.sort(order[a:b])] for a, b in zip(bounds[:-1], bounds[1:])]

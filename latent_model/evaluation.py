@@ -14,6 +14,7 @@ import torch
 
 from dlo_env.shapes import TABLE_HALF, is_cord_like, shape_from_headings
 from latent_model import metrics
+from latent_model.dataset import evaluation_subsets
 from latent_model.shape_model import ShapeModel
 
 #: Floors of the shipped model (README section "model").
@@ -132,19 +133,15 @@ def quality_report(
 ) -> QualityReport:
     """Measure ``model`` against held-out simulator shapes and foreign shapes.
 
-    The first ``n_reference`` held-out shapes are the reference set, the next ``n_inversion``
-    are inverted; ``n_inversion`` foreign shapes (seeded by ``seed``) are inverted too.
+    ``n_reference`` random held-out shapes are the reference set and ``n_inversion`` others are
+    inverted (``evaluation_subsets``, seeded by ``seed``); ``n_inversion`` foreign shapes are
+    inverted too.
     """
     heldout = np.asarray(heldout, dtype=np.float32)
-    if len(heldout) < n_reference + n_inversion:
-        raise ValueError(
-            f"heldout must hold at least n_reference + n_inversion = {n_reference + n_inversion} "
-            f"shapes, got {len(heldout)}"
-        )
-    reference = torch.from_numpy(heldout[:n_reference])
+    reference_np, targets = evaluation_subsets(heldout, (n_reference, n_inversion), seed)
+    reference = torch.from_numpy(reference_np)
     generated = torch.from_numpy(model.sample(5 * n_reference, seed=seed))
     q = metrics.set_quality(generated, reference, model.cord_length)
-    targets = heldout[n_reference : n_reference + n_inversion]
     _, err_e, _ = model.invert(targets, refine=False)
     _, err, _ = model.invert(targets, seed=seed)
     foreign, _ = foreign_shapes(n_inversion, seed, n_points=model.n_points,

@@ -23,6 +23,7 @@ from dlo_env.shapes import TABLE_HALF
 from latent_model import losses, metrics, pose
 from latent_model.checkpoint import FORMAT, FORMAT_VERSION, load_checkpoint, save_atomic
 from latent_model.config import ModelConfig, TrainConfig, config_from_dict
+from latent_model.dataset import evaluation_subsets
 from latent_model.networks import Discriminator, Encoder, Generator
 from latent_model.normalisation import CANONICAL_SCALE, Normalisation
 from latent_model.shape_model import ShapeModel, resolve_device
@@ -103,7 +104,11 @@ class Trainer:
         x = network_shapes(shapes, model_config)
         self.data = x.to(self.device)  # (N, n, 2) network units
         self.rest = float(metrics.segment_lengths(x).mean())  # d_r, network units
-        self.heldout = torch.as_tensor(np.asarray(heldout_shapes, dtype=np.float32))
+        # Fixed random subsets (seed 0 whatever the run's seed, so runs compare on equal terms).
+        reference, targets = evaluation_subsets(
+            np.asarray(heldout_shapes, dtype=np.float32),
+            (train_config.eval_reference, train_config.eval_inversion), seed=0)
+        self.eval_reference, self.eval_targets = torch.from_numpy(reference), targets
         self.generator = Generator(model_config).to(self.device)
         self.discriminator = Discriminator(model_config).to(self.device)
         self.encoder = Encoder(model_config).to(self.device)
@@ -184,16 +189,14 @@ class Trainer:
 
     def evaluate(self) -> dict[str, float]:
         """Metrics on the held-out split: set quality of samples, inversion success."""
-        tc = self.tc
         start = time.perf_counter()
         model = self.model()
-        reference = self.heldout[: tc.eval_reference]
-        targets = self.heldout[tc.eval_reference : tc.eval_reference + tc.eval_inversion]
+        reference, targets = self.eval_reference, self.eval_targets
         seed = self.seed + 1_000_003  # evaluation draws never disturb the training stream
         generated = torch.from_numpy(model.sample(5 * len(reference), seed=seed))
         quality = metrics.set_quality(generated, reference, self.mc.cord_length)
-        _, err_e, _ = model.invert(targets.numpy(), refine=False)
-        _, err_r, _ = model.invert(targets.numpy(), seed=seed)
+        _, err_e, _ = model.invert(targets, refine=False)
+        _, err_r, _ = model.invert(targets, seed=seed)
         for net in (self.generator, self.encoder, self.discriminator):
             net.train()
         return {
@@ -329,15 +332,14 @@ def train(
     mc, tc = model_config or ModelConfig(), train_config or TrainConfig()
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
-    trainer = Trainer(train_shapes, heldout_shapes, mc, tc, device, seed)
     ckpt_path = out / CHECKPOINT_FILE
-    if ckpt_path.exists():
-        data = load_checkpoint(ckpt_path, name="checkpoint")
-        trainer.load_state(data)
-    elif stage == "encoder":
+    if stage == "encoder" and not ckpt_path.exists():
         raise ValueError(
             f"stage 'encoder' needs a trained GAN: no {CHECKPOINT_FILE} in {str(out)!r}"
         )
+    trainer = Trainer(train_shapes, heldout_shapes, mc, tc, device, seed)
+    if ckpt_path.exists():
+        trainer.load_state(load_checkpoint(ckpt_path, name="checkpoint"))
     info = dict(data_info or {}, seed=seed)
     prog = trainer.progress
     encoder_share = tc.encoder_fraction if stage == "all" else (1.0 if stage == "encoder" else 0.0)

@@ -110,3 +110,17 @@ def test_encoder_stage_needs_a_trained_gan(cord_shapes, tmp_path):
 def test_unknown_stage_is_rejected(cord_shapes, tmp_path):
     with pytest.raises(ValueError, match="stage must be one of"):
         train(cord_shapes, cord_shapes, tmp_path, stage="everything")
+
+
+def test_evaluation_subsets_are_disjoint_seeded_and_spread_over_the_file():
+    from latent_model.dataset import evaluation_subsets
+
+    shapes = np.arange(1000, dtype=np.float32)[:, None, None] * np.ones((1, 20, 2), np.float32)
+    ref, inv = evaluation_subsets(shapes, (100, 50), seed=0)
+    again, _ = evaluation_subsets(shapes, (100, 50), seed=0)
+    ids_ref, ids_inv = set(ref[:, 0, 0].tolist()), set(inv[:, 0, 0].tolist())
+    assert len(ids_ref) == 100 and len(ids_inv) == 50 and not ids_ref & ids_inv
+    assert np.array_equal(ref, again)
+    assert max(ids_ref) > 500  # not the first shapes of the file
+    with pytest.raises(ValueError, match="at least 1500 shapes"):
+        evaluation_subsets(shapes, (1000, 500))
