@@ -31,6 +31,10 @@ def build_agent(
 
     Returns:
         An object with SB3's ``predict`` (and ``reset`` for the planners).
+
+    Raises:
+        ValueError: For an unknown name, an ``sb3:`` folder without a baseline, or a model that
+            does not fit the environment.
     """
     base = getattr(env, "unwrapped", env)
     max_step = float(getattr(base, "max_step", 0.02))
@@ -54,11 +58,14 @@ def build_agent(
 
         return StraightLinePolicy(max_step=max_step)
     if name == "physics-mpc":
-        from planners.physics_mpc import PhysicsMPCPolicy
+        from planners.physics_mpc import PhysicsMPCConfig, PhysicsMPCPolicy
 
-        return PhysicsMPCPolicy.for_env(env)
+        return PhysicsMPCPolicy.for_env(env, PhysicsMPCConfig(seed=seed))
     if name.startswith("sb3:") and len(name) > 4:
         from planners.rl_baseline import load_baseline
 
-        return load_baseline(name[4:], device="cpu")
+        try:
+            return load_baseline(name[4:], device="cpu")
+        except FileNotFoundError as exc:  # a ValueError: callers report bad agent names alike
+            raise ValueError(str(exc)) from exc
     raise ValueError(f"agent name must be one of {AGENT_NAMES}, got {name!r}")

@@ -2,8 +2,9 @@
 
 ``train_baseline`` trains one of them on a ``dlo_env`` environment with vectorised
 environments, and writes into its output folder: the model (``model.zip``), its
-hyperparameters and the command-line-relevant settings (``hyperparameters.json``), the
-``Monitor`` logs (``monitor/*.monitor.csv``, with ``is_success``) and a learning-curve PNG.
+hyperparameters (``hyperparameters.json``), the ``Monitor`` logs (``monitor/*.monitor.csv``,
+with ``is_success``) and a learning-curve PNG. A checkpoint (``checkpoint.zip``) is written
+atomically every ``checkpoint_every`` steps, so an interrupted run resumes (``resume=True``).
 ``load_baseline`` loads such a folder back as an object with ``predict``, which the evaluation
 harness drives like any planner policy.
 """
@@ -13,15 +14,18 @@ from __future__ import annotations
 import json
 import os
 import time
-from dataclasses import asdict, dataclass, field, replace
+from dataclasses import asdict, dataclass, fields, replace
 from functools import partial
 from pathlib import Path
 from typing import Any
 
 import gymnasium as gym
+import numpy as np
 
 ALGOS = ("ppo", "sac", "sac-her")
 FORMAT_VERSION = 1
+#: Episode length of the registered ``dlo_env`` environments (their ``max_episode_steps``).
+EPISODE_STEPS = 100
 
 
 @dataclass(frozen=True)
@@ -31,39 +35,55 @@ class BaselineConfig:
     Attributes:
         algo: ``"ppo"``, ``"sac"`` or ``"sac-her"``.
         env_id: Gymnasium id of the environment.
-        difficulty: Task difficulty the agent trains on (``reset`` option).
+        difficulties: Task difficulties the agent trains on; every episode draws one uniformly
+            (the benchmark tests on 1, 2 and 3).
+        reward_type: The environment's reward, ``"dense"`` (``-error``) or ``"sparse"``.
         timesteps: Environment steps of training (summed over environments).
-        n_envs: Parallel environments (``SubprocVecEnv`` when > 1).
+        n_envs: Parallel environments.
+        subprocess: Step the environments in subprocesses (``SubprocVecEnv``) instead of in
+            turn in this process; only worth it with a free core per environment.
         seed: Seed of the agent and the environments.
-        net_arch: Hidden layer sizes of actor and critic networks.
+        net_arch: Hidden layer sizes of the actor and critic networks.
         learning_rate: Adam step size.
-        gamma: Discount factor (episodes are 100 steps).
+        gamma: Discount factor (episodes are at most 100 steps).
         ppo_n_steps: PPO rollout length per environment.
         ppo_batch_size: PPO minibatch size.
         ppo_epochs: PPO epochs per rollout.
+        ppo_gae_lambda: PPO's GAE lambda.
+        ppo_ent_coef: PPO's entropy bonus.
+        ppo_log_std_init: Initial log standard deviation of PPO's Gaussian actions.
         sac_buffer_size: Replay buffer capacity (transitions).
         sac_batch_size: SAC minibatch size.
-        sac_learning_starts: Random steps before SAC starts learning.
-        her_n_sampled_goal: Relabelled goals per real transition (HER).
+        sac_learning_starts: Random steps before SAC starts learning (with HER it must exceed
+            ``n_envs * 100`` so that whole episodes are stored first).
+        sac_gradient_steps: Gradient steps per environment step of every environment.
+        her_n_sampled_goal: Relabelled goals per real transition (HER, strategy "future").
+        checkpoint_every: Environment steps between checkpoints (0: none).
     """
 
     algo: str = "ppo"
     env_id: str = "dlo_env/DLOEndpoint-v0"
-    difficulty: int = 1
+    difficulties: tuple[int, ...] = (1, 2, 3)
+    reward_type: str = "dense"
     timesteps: int = 200_000
-    n_envs: int = 4
+    n_envs: int = 2
+    subprocess: bool = False
     seed: int = 0
     net_arch: tuple[int, ...] = (256, 256)
     learning_rate: float = 3e-4
     gamma: float = 0.98
-    ppo_n_steps: int = 512
+    ppo_n_steps: int = 1024
     ppo_batch_size: int = 256
     ppo_epochs: int = 10
+    ppo_gae_lambda: float = 0.95
+    ppo_ent_coef: float = 0.0
+    ppo_log_std_init: float = -0.5
     sac_buffer_size: int = 300_000
     sac_batch_size: int = 256
-    sac_learning_starts: int = 2_000
+    sac_learning_starts: int = 1_000
+    sac_gradient_steps: int = 1
     her_n_sampled_goal: int = 4
-    env_kwargs: dict[str, Any] = field(default_factory=dict)
+    checkpoint_every: int = 20_000
 
     def __post_init__(self) -> None:
         if self.algo not in ALGOS:
@@ -72,56 +92,94 @@ class BaselineConfig:
             raise ValueError(
                 f"timesteps and n_envs must be >= 1, got {self.timesteps} and {self.n_envs}"
             )
-        if not 1 <= self.difficulty <= 5:
-            raise ValueError(f"difficulty must be in 1..5, got {self.difficulty}")
+        if not self.difficulties or not all(1 <= d <= 5 for d in self.difficulties):
+            raise ValueError(f"difficulties must be a non-empty tuple of ints in 1..5, "
+                             f"got {self.difficulties!r}")
+        if self.reward_type not in ("dense", "sparse"):
+            raise ValueError(f"reward_type must be 'dense' or 'sparse', got {self.reward_type!r}")
+        if self.algo == "sac-her" and self.sac_learning_starts <= self.n_envs * EPISODE_STEPS:
+            # HER samples goals from finished episodes: learning cannot start before one ends.
+            raise ValueError(
+                f"sac_learning_starts must exceed n_envs * {EPISODE_STEPS} = "
+                f"{self.n_envs * EPISODE_STEPS} for sac-her, got {self.sac_learning_starts}"
+            )
+
+    @classmethod
+    def from_dict(cls, data: dict[str, Any]) -> BaselineConfig:
+        """The config of a ``hyperparameters.json`` (lists back to tuples; unknown keys fail)."""
+        known = {f.name for f in fields(cls)}
+        unknown = sorted(set(data) - known)
+        if unknown:
+            raise ValueError(f"config has unknown keys {unknown}")
+        values = {k: tuple(v) if isinstance(v, list) else v for k, v in data.items()}
+        return replace(cls(), **values)
 
 
-class FixedDifficulty(gym.Wrapper):
-    """Passes ``options={"difficulty": d}`` to every reset that gives no options."""
+class RandomDifficulty(gym.Wrapper):
+    """Passes ``options={"difficulty": d}``, ``d`` drawn from ``difficulties``, to every reset
+    that gives no options (a reset seed reseeds the draw, so runs repeat exactly)."""
 
-    def __init__(self, env: gym.Env, difficulty: int) -> None:
+    def __init__(self, env: gym.Env, difficulties: tuple[int, ...], seed: int = 0) -> None:
         super().__init__(env)
-        self.difficulty = difficulty
+        self.difficulties = tuple(difficulties)
+        self._rng = np.random.default_rng(seed)
 
     def reset(self, *, seed: int | None = None, options: dict | None = None):
-        return self.env.reset(seed=seed, options=options or {"difficulty": self.difficulty})
+        """Reset with a drawn difficulty unless ``options`` are given."""
+        if seed is not None:
+            self._rng = np.random.default_rng(seed)
+        if not options:
+            options = {"difficulty": int(self._rng.choice(self.difficulties))}
+        return self.env.reset(seed=seed, options=options)
 
 
-def _make_env(config: BaselineConfig, rank: int, monitor_dir: str | None) -> gym.Env:
+def _make_env(config: BaselineConfig, rank: int, monitor_dir: str | None,
+              append: bool = False) -> gym.Env:
     # Module-level so SubprocVecEnv can pickle it (via functools.partial).
     from stable_baselines3.common.monitor import Monitor
 
     import dlo_env  # noqa: F401  (registers the environments in the worker process)
 
-    env = FixedDifficulty(gym.make(config.env_id, **config.env_kwargs), config.difficulty)
+    env = gym.make(config.env_id, reward_type=config.reward_type)
+    env = RandomDifficulty(env, config.difficulties, seed=config.seed + 1000 * rank)
     path = None if monitor_dir is None else os.path.join(monitor_dir, str(rank))
-    return Monitor(env, path, info_keywords=("is_success",))
+    return Monitor(env, path, info_keywords=("is_success",), override_existing=not append)
 
 
-def make_vec_env(config: BaselineConfig, monitor_dir: str | None = None) -> Any:
-    """The vectorised training environment of ``config`` (subprocesses when ``n_envs > 1``)."""
+def make_vec_env(config: BaselineConfig, monitor_dir: str | None = None,
+                 append: bool = False) -> Any:
+    """The vectorised training environment of ``config``.
+
+    Args:
+        config: The run.
+        monitor_dir: Folder of the Monitor CSV files (none written if None).
+        append: Append to existing Monitor files (a resumed run) instead of replacing them.
+    """
     from stable_baselines3.common.vec_env import DummyVecEnv, SubprocVecEnv
 
-    factories = [partial(_make_env, config, i, monitor_dir) for i in range(config.n_envs)]
-    vec = SubprocVecEnv(factories) if config.n_envs > 1 else DummyVecEnv(factories)
+    factories = [partial(_make_env, config, i, monitor_dir, append)
+                 for i in range(config.n_envs)]
+    vec = SubprocVecEnv(factories) if config.subprocess else DummyVecEnv(factories)
     vec.seed(config.seed)
     return vec
 
 
-def build_model(config: BaselineConfig, env: Any, device: str = "auto") -> Any:
+def build_model(config: BaselineConfig, env: Any, device: str = "cpu") -> Any:
     """The untrained SB3 model of ``config`` on ``env``."""
     from stable_baselines3 import PPO, SAC, HerReplayBuffer
 
-    policy_kwargs = {"net_arch": list(config.net_arch)}
     common = dict(
         policy="MultiInputPolicy", env=env, learning_rate=config.learning_rate,
         gamma=config.gamma, seed=config.seed, device=device, verbose=0,
-        policy_kwargs=policy_kwargs,
     )
     if config.algo == "ppo":
         return PPO(
             n_steps=config.ppo_n_steps, batch_size=config.ppo_batch_size,
-            n_epochs=config.ppo_epochs, **common,
+            n_epochs=config.ppo_epochs, gae_lambda=config.ppo_gae_lambda,
+            ent_coef=config.ppo_ent_coef,
+            policy_kwargs={"net_arch": list(config.net_arch),
+                           "log_std_init": config.ppo_log_std_init},
+            **common,
         )
     extra: dict[str, Any] = {}
     if config.algo == "sac-her":
@@ -134,44 +192,133 @@ def build_model(config: BaselineConfig, env: Any, device: str = "auto") -> Any:
     return SAC(
         buffer_size=config.sac_buffer_size, batch_size=config.sac_batch_size,
         learning_starts=config.sac_learning_starts, tau=0.005, train_freq=1,
-        gradient_steps=1, **extra, **common,
+        gradient_steps=config.sac_gradient_steps,
+        policy_kwargs={"net_arch": list(config.net_arch)}, **extra, **common,
     )
 
 
 def _atomic_json(path: Path, data: dict[str, Any]) -> None:
     tmp = path.with_suffix(path.suffix + ".tmp")
-    tmp.write_text(json.dumps(data, indent=2))
+    tmp.write_text(json.dumps(data, indent=2) + "\n")
     os.replace(tmp, path)
 
 
+def _save_atomic(model: Any, path: Path) -> None:
+    tmp = path.with_name(path.stem + ".tmp.zip")  # SB3 appends .zip to other suffixes
+    model.save(tmp)
+    os.replace(tmp, path)
+
+
+def _training_callback(total: int, start: int, checkpoint: Path | None, every: int,
+                       monitor_dir: Path, progress_bar: bool) -> Any:
+    """A callback: tqdm progress, an atomic checkpoint and a log line every ``every`` steps."""
+    from stable_baselines3.common.callbacks import BaseCallback
+
+    class _Progress(BaseCallback):
+        def _on_training_start(self) -> None:
+            self._bar = None
+            if progress_bar:
+                from tqdm import tqdm
+
+                self._bar = tqdm(total=total, initial=start, unit="step", mininterval=5.0,
+                                 desc="training")
+            self._next = (start // every + 1) * every if every else None
+            self._t0, self._n0 = time.perf_counter(), start
+
+        def _on_step(self) -> bool:
+            if self._bar is not None:
+                self._bar.update(self.training_env.num_envs)
+            if self._next is not None and self.num_timesteps >= self._next:
+                self._next += every
+                if checkpoint is not None:
+                    _save_atomic(self.model, checkpoint)
+                rate = (self.num_timesteps - self._n0) / (time.perf_counter() - self._t0)
+                logs = read_monitor_logs(monitor_dir)
+                recent = logs["is_success"][-100:]
+                success = float(recent.mean()) if recent.size else float("nan")
+                message = (f"step {self.num_timesteps}: {rate:.0f} steps/s, success of the "
+                           f"last {recent.size} episodes {success:.2f}")
+                if self._bar is not None:
+                    self._bar.write(message)
+                else:
+                    print(message, flush=True)
+            return True
+
+        def _on_training_end(self) -> None:
+            if self._bar is not None:
+                self._bar.close()
+
+    return _Progress()
+
+
 def train_baseline(
-    config: BaselineConfig, out_dir: str | os.PathLike, device: str = "auto",
-    progress_bar: bool = True,
+    config: BaselineConfig, out_dir: str | os.PathLike, device: str = "cpu",
+    progress_bar: bool = True, resume: bool = False, threads: int | None = 1,
 ) -> Path:
     """Train the baseline of ``config`` and write model, hyperparameters, logs and curve.
+
+    Args:
+        config: The run.
+        out_dir: Output folder (created).
+        device: Torch device.
+        progress_bar: Show a tqdm bar (log lines every checkpoint either way).
+        resume: Continue from ``out_dir/checkpoint.zip`` if it exists (same config required,
+            except ``timesteps``).
+            PPO resumes where it stopped; SAC resumes its networks with an empty replay buffer
+            refilled by ``sac_learning_starts`` random steps.
+        threads: ``torch.set_num_threads`` (None leaves it alone).
 
     Returns:
         The path of the saved model (``out_dir/model.zip``).
     """
+    import torch
+    from stable_baselines3 import PPO, SAC
+
+    if threads is not None:
+        torch.set_num_threads(threads)
     out = Path(out_dir)
     monitor_dir = out / "monitor"
     monitor_dir.mkdir(parents=True, exist_ok=True)
-    env = make_vec_env(config, str(monitor_dir))
+    checkpoint = out / "checkpoint.zip"
+    resuming = resume and checkpoint.is_file()
+    if resuming:
+        saved = BaselineConfig.from_dict(json.loads((out / "run.json").read_text())["config"])
+        if replace(saved, timesteps=config.timesteps) != config:  # more steps are fine
+            raise ValueError(f"resume needs the config of the interrupted run in "
+                             f"{out}/run.json (only timesteps may change)")
+    _atomic_json(out / "run.json", {"format_version": FORMAT_VERSION, "config": asdict(config)})
+    env = make_vec_env(config, str(monitor_dir), append=resuming)
     try:
-        model = build_model(config, env, device=device)
+        if resuming:
+            cls = PPO if config.algo == "ppo" else SAC
+            model = cls.load(checkpoint, env=env, device=device)
+            if config.algo != "ppo":
+                model.learning_starts = model.num_timesteps + config.sac_learning_starts
+        else:
+            model = build_model(config, env, device=device)
+        start = int(model.num_timesteps)
+        callback = _training_callback(
+            config.timesteps, start, checkpoint if config.checkpoint_every else None,
+            config.checkpoint_every, monitor_dir, progress_bar,
+        )
         t0 = time.perf_counter()
-        model.learn(total_timesteps=config.timesteps, progress_bar=progress_bar)
+        model.learn(total_timesteps=max(0, config.timesteps - start), callback=callback,
+                    reset_num_timesteps=not resuming)
         seconds = time.perf_counter() - t0
-        tmp = out / "model.tmp.zip"
-        model.save(tmp)
-        os.replace(tmp, out / "model.zip")
+        _save_atomic(model, out / "model.zip")
     finally:
         env.close()
+    previous = 0.0
+    meta_path = out / "hyperparameters.json"
+    if resuming and meta_path.is_file():
+        previous = float(json.loads(meta_path.read_text()).get("train_seconds", 0.0))
     _atomic_json(
-        out / "hyperparameters.json",
+        meta_path,
         {"format_version": FORMAT_VERSION, "config": asdict(config),
-         "trained_timesteps": int(model.num_timesteps), "train_seconds": seconds},
+         "trained_timesteps": int(model.num_timesteps), "train_seconds": previous + seconds,
+         "resumed_at": start if resuming else None, "torch_threads": torch.get_num_threads()},
     )
+    checkpoint.unlink(missing_ok=True)
     plot_learning_curve(monitor_dir, out / "learning_curve.png", title=config.algo)
     return out / "model.zip"
 
@@ -182,14 +329,15 @@ def read_monitor_logs(monitor_dir: str | os.PathLike) -> dict[str, Any]:
     Returns:
         Arrays ``reward``, ``length``, ``is_success`` and ``timesteps`` (cumulative steps).
     """
-    import numpy as np
-
     rows = []
     for path in sorted(Path(monitor_dir).glob("*.monitor.csv")):
         lines = path.read_text().splitlines()
+        if len(lines) < 2:
+            continue
         header = lines[1].split(",")
         for line in lines[2:]:
-            rows.append(dict(zip(header, line.split(","))))
+            if line and not line.startswith("#") and not line.startswith("r,"):
+                rows.append(dict(zip(header, line.split(","))))
     rows.sort(key=lambda r: float(r["t"]))
     length = np.array([int(r["l"]) for r in rows], dtype=np.int64)
     return {
@@ -207,7 +355,6 @@ def plot_learning_curve(monitor_dir: str | os.PathLike, png: str | os.PathLike,
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
-    import numpy as np
 
     logs = read_monitor_logs(monitor_dir)
     fig, (ax1, ax2) = plt.subplots(1, 2, figsize=(9, 3.2))
@@ -227,7 +374,31 @@ def plot_learning_curve(monitor_dir: str | os.PathLike, png: str | os.PathLike,
     os.replace(tmp, png)
 
 
-def load_baseline(path: str | os.PathLike, device: str = "auto") -> Any:
+def read_baseline_metadata(path: str | os.PathLike) -> dict[str, Any]:
+    """The ``hyperparameters.json`` of a baseline folder (or of the folder of its ``model.zip``).
+
+    Raises:
+        FileNotFoundError: If there is no such file.
+        ValueError: If its format version is not this module's.
+    """
+    p = Path(path)
+    folder = p.parent if p.suffix == ".zip" else p
+    meta_path = folder / "hyperparameters.json"
+    if not meta_path.is_file() or not (folder / "model.zip").is_file():
+        raise FileNotFoundError(
+            f"path must be a baseline folder with model.zip and hyperparameters.json (written "
+            f"by `dlo baseline`), got {str(path)!r}"
+        )
+    meta = json.loads(meta_path.read_text())
+    if meta.get("format_version") != FORMAT_VERSION:
+        raise ValueError(
+            f"{meta_path} has format_version {meta.get('format_version')!r}, "
+            f"expected {FORMAT_VERSION}"
+        )
+    return meta
+
+
+def load_baseline(path: str | os.PathLike, device: str = "cpu") -> Any:
     """Load a folder written by ``train_baseline`` (or its ``model.zip``).
 
     Returns:
@@ -237,22 +408,10 @@ def load_baseline(path: str | os.PathLike, device: str = "auto") -> Any:
 
     p = Path(path)
     folder = p.parent if p.suffix == ".zip" else p
-    meta_path = folder / "hyperparameters.json"
-    if not meta_path.is_file():
-        raise FileNotFoundError(
-            f"path must be a baseline folder with hyperparameters.json, got {str(path)!r}"
-        )
-    meta = json.loads(meta_path.read_text())
-    if meta.get("format_version") != FORMAT_VERSION:
-        raise ValueError(
-            f"{meta_path} has format_version {meta.get('format_version')!r}, "
-            f"expected {FORMAT_VERSION}"
-        )
-    cfg = meta["config"]
-    config = replace(BaselineConfig(), **{**cfg, "net_arch": tuple(cfg["net_arch"])})
+    config = BaselineConfig.from_dict(read_baseline_metadata(folder)["config"])
     model_path = folder / "model.zip"
     if config.algo == "ppo":
         return PPO.load(model_path, device=device)
-    # HER needs an env to rebuild its buffer; a single in-process env is enough to act.
-    env = make_vec_env(replace(config, n_envs=1))
-    return SAC.load(model_path, env=env, device=device)
+    # HER needs an env to rebuild its (empty) buffer; one in-process env is enough to act.
+    env = make_vec_env(replace(config, n_envs=1, subprocess=False, sac_learning_starts=10**9))
+    return SAC.load(model_path, env=env, device=device, buffer_size=1)

@@ -1,0 +1,91 @@
+"""``dlo benchmark``: every agent, one table, missing agents reported."""
+
+from __future__ import annotations
+
+import json
+
+import pytest
+
+from dlo_cli.main import main
+
+AGENTS = ["straight-line", "latent-tree", "latent-tree-closed", "physics-mpc", "ppo", "sac-her"]
+ROW_KEYS = {"agent", "difficulty", "success_rate", "median_error", "seconds_per_episode",
+            "training_env_steps", "status"}
+
+
+@pytest.fixture(scope="module")
+def models(tmp_path_factory):
+    """Tiny PPO and SAC + HER baselines and an untrained shape model: plumbing, not quality."""
+    from latent_model import ShapeModel
+    from latent_model.config import ModelConfig
+    from latent_model.normalisation import Normalisation
+    from planners.rl_baseline import BaselineConfig, train_baseline
+
+    root = tmp_path_factory.mktemp("bench-models")
+    tiny = dict(timesteps=256, n_envs=1, net_arch=(16, 16), ppo_n_steps=128, ppo_batch_size=64,
+                ppo_epochs=1, sac_buffer_size=1000, sac_batch_size=32, sac_learning_starts=150,
+                checkpoint_every=0)
+    for algo in ("ppo", "sac-her"):
+        train_baseline(BaselineConfig(algo=algo, **tiny), root / algo, progress_bar=False)
+    ShapeModel(ModelConfig(), Normalisation(), device="cpu").save(root / "shape.pt")
+    return root
+
+
+@pytest.mark.slow
+def test_quick_benchmark_writes_every_agent_and_difficulty(models, tmp_path, capsys):
+    out = tmp_path / "bench"
+    # Difficulty 1 only: the physics planner is the slow agent (the other suites run the same
+    # code, and the missing-agent test covers all three).
+    code = main(["benchmark", "--quick", "--episodes", "1", "--difficulty", "1",
+                 "--models", str(models),
+                 "--shape-model", str(models / "shape.pt"), "--max-seconds", "0.05",
+                 "--replan-every", "50", "--out", str(out)])
+    assert code == 0
+    printed = capsys.readouterr().out
+    assert "planning time physics-mpc / latent-tree on the same 1 episodes" in printed
+    rows = json.loads((out / "results.json").read_text())
+    assert [r["agent"] for r in rows] == AGENTS and {r["difficulty"] for r in rows} == {1}
+    for row in rows:
+        assert ROW_KEYS <= set(row) and row["status"] == "ok" and row["episodes"] == 1
+        assert 0.0 <= row["success_rate"] <= 1.0 and row["median_error"] > 0
+        assert row["seconds_per_episode"] > 0
+    assert {r["training_env_steps"] for r in rows if r["agent"] in ("ppo", "sac-her")} == {256}
+    table = (out / "results.md").read_text()
+    assert "| physics-mpc | 1 | 1 |" in table and "Machine:" in table
+    assert "Command: `dlo benchmark --quick --episodes 1" in table
+    assert (out / "results.png").stat().st_size > 0
+    assert (out / "results_episodes" / "sac-her-d1.csv").is_file()
+
+
+def test_agents_without_a_model_are_reported_not_dropped(tmp_path, capsys):
+    out = tmp_path / "bench"
+    code = main(["benchmark", "--quick", "--agents", "straight-line", "ppo", "sac-her",
+                 "--episodes", "1", "--models", str(tmp_path / "none"), "--out", str(out)])
+    assert code == 0
+    rows = json.loads((out / "results.json").read_text())
+    assert [(r["agent"], r["difficulty"]) for r in rows] == [
+        (a, d) for a in ("straight-line", "ppo", "sac-her") for d in (1, 2, 3)]
+    rows = {r["agent"]: r for r in rows}
+    assert rows["straight-line"]["status"] == "ok"
+    for agent in ("ppo", "sac-her"):
+        assert rows[agent]["status"] == "missing" and rows[agent]["success_rate"] is None
+        assert "no trained model" in rows[agent]["note"]
+    assert "| ppo | 3 | – | missing |" in (out / "results.md").read_text()
+    assert "missing agents (reported in the table): ppo, sac-her" in capsys.readouterr().out
+
+
+def test_resume_reuses_finished_cells(tmp_path, capsys):
+    args = ["benchmark", "--agents", "straight-line", "--difficulty", "1", "--episodes", "1",
+            "--out", str(tmp_path)]
+    assert main(args) == 0
+    first = json.loads((tmp_path / "results.json").read_text())
+    capsys.readouterr()
+    assert main([*args, "--resume"]) == 0
+    assert "straight-line d1: reused" in capsys.readouterr().out
+    assert json.loads((tmp_path / "results.json").read_text())[0]["median_error"] == \
+        first[0]["median_error"]
+
+
+def test_benchmark_rejects_an_unknown_agent(tmp_path, capsys):
+    assert main(["benchmark", "--agents", "teleport", "--out", str(tmp_path)]) == 2
+    assert "agents must be" in capsys.readouterr().err
