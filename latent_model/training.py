@@ -105,9 +105,10 @@ class Trainer:
         self.data = x.to(self.device)  # (N, n, 2) network units
         self.rest = float(metrics.segment_lengths(x).mean())  # d_r, network units
         # Fixed random subsets (seed 0 whatever the run's seed, so runs compare on equal terms).
-        reference, targets = evaluation_subsets(
-            np.asarray(heldout_shapes, dtype=np.float32),
-            (train_config.eval_reference, train_config.eval_inversion), seed=0)
+        heldout = np.asarray(heldout_shapes, dtype=np.float32)
+        n_reference = min(train_config.eval_reference, len(heldout) * 5 // 6)
+        n_inversion = min(train_config.eval_inversion, len(heldout) - n_reference)
+        reference, targets = evaluation_subsets(heldout, (n_reference, n_inversion), seed=0)
         self.eval_reference, self.eval_targets = torch.from_numpy(reference), targets
         self.generator = Generator(model_config).to(self.device)
         self.discriminator = Discriminator(model_config).to(self.device)

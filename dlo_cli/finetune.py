@@ -1,0 +1,78 @@
+"""``dlo finetune``: additional training on shapes the model cannot represent (paper VI-C)."""
+
+from __future__ import annotations
+
+import argparse
+
+
+def add_arguments(parser: argparse.ArgumentParser) -> None:
+    """Flags of ``dlo finetune``."""
+    parser.add_argument("--model", required=True,
+                        help="model folder (holding model.pt) or model.pt file to improve")
+    parser.add_argument("--shapes", required=True,
+                        help=".npz with a 'shapes' array (N, n, 2) in metres the model should "
+                             "represent")
+    parser.add_argument("--data", default=None,
+                        help="the original training shapes (default: the file recorded in the "
+                             "model)")
+    parser.add_argument("--heldout", default=None,
+                        help="held-out shapes to check the metrics did not degrade (default: the "
+                             "file recorded in the model, when it exists)")
+    parser.add_argument("--out", default=None,
+                        help="output folder for the new model.pt (default: MODEL-finetuned)")
+    parser.add_argument("--gan-steps", type=int, default=None)
+    parser.add_argument("--encoder-steps", type=int, default=None)
+    parser.add_argument("--seed", type=int, default=0)
+    parser.add_argument("--report-size", type=int, default=1000,
+                        help="held-out reference and inversion shapes per report")
+    parser.add_argument("--device", default="auto")
+    parser.add_argument("--no-progress", action="store_true", help="hide the progress bars")
+
+
+def run(args: argparse.Namespace) -> int:
+    """Fine-tune, save the new model, print before/after inversion and held-out metrics."""
+    import json
+    import os
+    from dataclasses import replace
+    from pathlib import Path
+
+    from latent_model import FinetuneConfig, ShapeModel, finetune
+    from latent_model.dataset import load_shapes
+    from latent_model.shape_model import MODEL_FILE
+
+    model_path = Path(args.model)
+    if model_path.is_dir():
+        model_path = model_path / MODEL_FILE
+    model = ShapeModel.load(model_path, device=args.device)
+    shapes = load_shapes(args.shapes, name="--shapes")
+    data_path = args.data or model.info.get("data")
+    if not data_path:
+        raise ValueError("--data is required: the model does not record its training data file")
+    train_shapes = load_shapes(data_path, name="--data")
+    heldout_path = args.heldout or model.info.get("heldout")
+    heldout = None
+    if heldout_path and heldout_path != "None" and os.path.exists(heldout_path):
+        heldout = load_shapes(heldout_path, name="--heldout")
+    config = FinetuneConfig()
+    steps = {k: v for k, v in {"gan_steps": args.gan_steps,
+                               "encoder_steps": args.encoder_steps}.items() if v is not None}
+    config = replace(config, **steps)
+    out = Path(args.out) if args.out else model_path.parent.with_name(
+        model_path.parent.name + "-finetuned")
+    print(f"fine-tuning {model_path} on {len(shapes)} shapes from {args.shapes}; "
+          f"training data {data_path}; held-out {heldout_path if heldout is not None else None}")
+    new_model, report = finetune(model, shapes, train_shapes, heldout, config, seed=args.seed,
+                                 report_size=args.report_size,
+                                 progress_bar=not args.no_progress)
+    out.mkdir(parents=True, exist_ok=True)
+    new_model.save(out / MODEL_FILE)
+    summary = {k: v for k, v in vars(report).items() if not k.startswith("heldout")}
+    for key in ("heldout_before", "heldout_after"):
+        value = getattr(report, key)
+        summary[key] = value.as_dict() if value is not None else None
+    tmp = out / ".finetune_report.json.tmp"
+    tmp.write_text(json.dumps(summary, indent=2))
+    os.replace(tmp, out / "finetune_report.json")
+    print(report.format())
+    print(f"new model: {out / MODEL_FILE}")
+    return 0
