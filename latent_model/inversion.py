@@ -22,8 +22,13 @@ def refine_latents(
     high: torch.Tensor,
     steps: int = 100,
     lr: float = 0.05,
+    tolerance: float = 0.0,
 ) -> tuple[torch.Tensor, torch.Tensor]:
     """Refine ``K`` starting latents per target by Adam on the decoded error; keep the best.
+
+    The best latent seen is kept for every target (the starting latents included, so the
+    result is never worse than the best start), and the refinement stops early once every
+    target has a latent within ``tolerance``.
 
     Args:
         decode: Differentiable map from latents ``(M, L)`` to world shapes ``(M, n, 2)``.
@@ -31,8 +36,9 @@ def refine_latents(
         initial: Starting latents ``(B, K, L)``.
         low: Lower bounds ``(L,)`` of the latent (``-inf`` for free coordinates).
         high: Upper bounds ``(L,)``.
-        steps: Adam steps.
+        steps: Most Adam steps.
         lr: Adam learning rate.
+        tolerance: Stop when every target is matched this closely, metres (0: run all steps).
 
     Returns:
         The best latent per target ``(B, L)`` and its error ``(B,)`` in metres.
@@ -40,16 +46,24 @@ def refine_latents(
     b, k, dim = initial.shape
     flat_targets = targets.repeat_interleave(k, dim=0)  # (B*K, n, 2)
     latent = initial.reshape(b * k, dim).clone().requires_grad_(True)
+    best = latent.detach().clone()
+    best_err = torch.full((b * k,), float("inf"), device=latent.device)
     optimiser = torch.optim.Adam([latent], lr=lr)
-    for _ in range(steps):
+    rows = torch.arange(b, device=latent.device)
+    for step in range(steps + 1):
+        errors = error(decode(latent), flat_targets)  # (B*K,) at the current latents
+        with torch.no_grad():
+            better = errors < best_err
+            best_err = torch.where(better, errors, best_err)
+            best[better] = latent[better]
+            if step == steps or bool((best_err.view(b, k).min(dim=1).values <= tolerance).all()):
+                break
         optimiser.zero_grad(set_to_none=True)
         # Sum, not mean: each latent's gradient must not shrink with the batch size.
-        error(decode(latent), flat_targets).sum().backward()
+        errors.sum().backward()
         optimiser.step()
         with torch.no_grad():
             latent.copy_(torch.maximum(torch.minimum(latent, high), low))
-    with torch.no_grad():
-        final = error(decode(latent), flat_targets).view(b, k)  # (B, K)
-        best = final.argmin(dim=1)  # (B,)
-        chosen = latent.view(b, k, dim)[torch.arange(b), best]
-        return chosen.detach(), final[torch.arange(b), best]
+    per_target = best_err.view(b, k)  # (B, K)
+    choice = per_target.argmin(dim=1)  # (B,)
+    return best.view(b, k, dim)[rows, choice], per_target[rows, choice].detach()

@@ -231,6 +231,7 @@ class ShapeModel:
         steps: int = 150,
         lr: float = 0.03,
         threshold: float = REPRESENTED,
+        tolerance: float = 0.002,
         seed: int = 0,
     ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """Verified inversion: the latent of each shape, its error and whether it is represented.
@@ -246,6 +247,8 @@ class ShapeModel:
             steps: Adam steps of the refinement.
             lr: Adam learning rate.
             threshold: A shape is represented when ``error(decode(z), shape) <= threshold``, m.
+            tolerance: Refinement stops once every shape is matched this closely, metres
+                (0 runs all ``steps``); the best latent seen is returned either way.
             seed: Seed of the random restarts.
 
         Returns:
@@ -269,7 +272,8 @@ class ShapeModel:
             low[:k] = -1.0
             with _frozen(self.generator):
                 latent, err = refine_latents(
-                    self.decode_torch, x, starts, low, -low, steps=steps, lr=lr
+                    self.decode_torch, x, starts, low, -low, steps=steps, lr=lr,
+                    tolerance=tolerance,
                 )
         ok = err <= threshold
         return self._out(latent, single), self._out(err, single), self._out(ok, single)
