@@ -12,7 +12,11 @@ Every number is measured in this run:
    on that dataset.
 
 The machine is shared: the load average at the start is printed, since other processes on the
-two cores lower the parallel rate.
+two cores lower the parallel rate. To separate the code's speed from the machine's load, the
+CPU time the worker processes actually got is measured too (``getrusage`` of the children):
+accepted shapes per worker CPU-second is the rate of one worker that has a core to itself, and
+``workers`` times it is what the run would reach on that many free cores (an estimate, printed
+as such, not the floor's measurement).
 
 Usage::
 
@@ -23,6 +27,7 @@ from __future__ import annotations
 
 import argparse
 import os
+import resource
 import tempfile
 import time
 from dataclasses import dataclass
@@ -80,17 +85,28 @@ def main(args: Args) -> None:
     one_rate, physics_share = single_process(config, args.single_shapes)
     print(f"1 process : {one_rate:7.0f} accepted shapes/s "
           f"({physics_share:.0%} of the time in pymunk Space.step)")
+    children = resource.getrusage(resource.RUSAGE_CHILDREN)
     with tempfile.TemporaryDirectory() as tmp:
         t = time.perf_counter()
         data = collect(os.path.join(tmp, "bench.npz"), args.num_shapes, config,
                        workers=args.workers)
         wall = time.perf_counter() - t
+    after = resource.getrusage(resource.RUSAGE_CHILDREN)
+    worker_cpu = (after.ru_utime - children.ru_utime) + (after.ru_stime - children.ru_stime)
     rate = data.num_shapes / wall
     meta = data.metadata
     seen = meta["accepted"] + meta["rejected"]["total"]
     print(f"{args.workers} workers : {rate:7.0f} accepted shapes/s "
           f"({data.num_shapes} shapes in {wall:.1f} s wall, start-up and final file included; "
           f"{rate / one_rate:.2f}x one process)")
+    if args.workers > 1 and worker_cpu > 0:
+        per_cpu = data.num_shapes / worker_cpu
+        print(f"per worker: {rate / args.workers:7.0f} accepted shapes/s of wall time; the workers "
+              f"got {worker_cpu:.1f} CPU-s in {wall:.1f} s ({worker_cpu / wall:.2f} of "
+              f"{args.workers} cores)")
+        print(f"per CPU-s : {per_cpu:7.0f} accepted shapes per worker CPU-second "
+              f"(start-up included) -> estimate on {args.workers} free cores: "
+              f"{args.workers * per_cpu:.0f}/s")
     print(f"rejected  : {meta['rejected']['total'] / max(seen, 1):.2%} "
           f"({meta['rejected']['cosine']} not cord-like, {meta['rejected']['stretch']} stretched)")
     report = diversity_report(data.shapes)

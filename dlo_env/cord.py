@@ -259,12 +259,13 @@ class Cord:
         return self._points(rows[:, 0:2], rows[:, 2]).astype(np.float32)
 
     def _points(self, pos: np.ndarray, ang: np.ndarray) -> np.ndarray:
-        offset = 0.5 * self.params.segment * np.stack([np.cos(ang), np.sin(ang)], axis=1)
+        # pos (..., n-1, 2), ang (..., n-1) -> (..., n, 2); batched for recorded moves.
+        offset = 0.5 * self.params.segment * np.stack([np.cos(ang), np.sin(ang)], axis=-1)
         starts, ends = pos - offset, pos + offset
-        points = np.empty((len(pos) + 1, 2))
-        points[0] = starts[0]
-        points[-1] = ends[-1]
-        points[1:-1] = 0.5 * (ends[:-1] + starts[1:])
+        points = np.empty(pos.shape[:-2] + (pos.shape[-2] + 1, 2))
+        points[..., 0, :] = starts[..., 0, :]
+        points[..., -1, :] = ends[..., -1, :]
+        points[..., 1:-1, :] = 0.5 * (ends[..., :-1, :] + starts[..., 1:, :])
         return points
 
     def point_velocities(self) -> np.ndarray:
@@ -380,9 +381,13 @@ class Cord:
             for _ in range(steps):
                 space.step(h)
             return np.empty((0, p.n_points, 2), dtype=np.float32)
-        out = []
+        # Copy the raw poses while stepping and turn them into points once per move: a
+        # recorded shape then costs one batch read instead of a full ``shape`` conversion.
+        poses = np.empty((steps // record_every, len(self.segments), 3))
+        k = 0
         for i in range(1, steps + 1):
             space.step(h)
             if i % record_every == 0:
-                out.append(self.shape)
-        return np.array(out, dtype=np.float32).reshape(-1, p.n_points, 2)
+                poses[k] = self._read(self._POSE, 3)
+                k += 1
+        return self._points(poses[..., 0:2], poses[..., 2]).astype(np.float32)

@@ -24,7 +24,14 @@ from pathlib import Path
 import numpy as np
 
 from dlo_env.cord import Cord, CordParams, Grasp
-from dlo_env.shapes import TABLE_HALF, error, is_cord_like, random_cord_shape, validate_shape
+from dlo_env.shapes import (
+    TABLE_HALF,
+    error,
+    is_cord_like,
+    on_table,
+    random_cord_shape,
+    validate_shape,
+)
 
 #: Range of the length of one random straight move of a grasped end, metres.
 MOVE_LENGTH = (0.05, 0.30)
@@ -210,7 +217,9 @@ def _random_start(rng: np.random.Generator, cord: Cord) -> np.ndarray:
         cord.reset(shape)
         cord.settle(tolerance=REST_SPEED, max_time=3.0)
         settled = cord.shape
-        if not _rest(cord) or not is_cord_like(settled):
+        # A strongly bent shape can sweep far while it relaxes and end pressed into the table's
+        # rim (the rim yields a few millimetres), i.e. off the table: not a valid start.
+        if not _rest(cord) or not is_cord_like(settled) or not on_table(settled):
             continue
         if cord.grasp == "both" and np.linalg.norm(settled[-1] - settled[0]) >= span:
             continue
@@ -260,7 +269,7 @@ def make_task(
         max_step: Gripper displacement of an action of 1.0, metres.
         start: Use this start shape (as given, not settled) instead of a random one.
         min_error: The goal is redrawn until ``error(start, goal) > min_error``, so a new task
-            is never solved at the start.
+            is never solved at the start (and until every goal point is on the table).
 
     Returns:
         The task; its ``reference_actions`` replayed from ``start`` reproduce ``goal`` bitwise.
@@ -298,7 +307,7 @@ def make_task(
             apply_action(cord, zero, max_step)
             actions.append(zero[None])
         goal = cord.shape
-        if error(start, goal) > min_error:
+        if error(start, goal) > min_error and on_table(goal):
             return Task(
                 start=start,
                 goal=goal,

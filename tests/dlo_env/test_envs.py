@@ -358,3 +358,35 @@ def test_render_without_a_render_mode_warns_and_returns_none():
     with pytest.warns(UserWarning, match="render_mode"):
         assert env.render() is None
     env.close()
+
+
+# ------------------------------------------------------------------- what a task asks
+
+
+def head_straight_to(env: gym.Env, goal_head: np.ndarray) -> np.ndarray:
+    """The action moving the head gripper straight towards ``goal_head`` (at most max_step)."""
+    head = env.unwrapped.cord.gripper_positions()["head"]
+    gap = goal_head - head
+    dist = float(np.linalg.norm(gap))
+    max_step = env.unwrapped.max_step
+    if dist < 1e-9:
+        return np.zeros(2, np.float32)
+    return (gap * min(1.0, max_step / dist) / max_step).astype(np.float32)
+
+
+@pytest.mark.slow
+def test_moving_the_head_straight_to_the_goal_head_solves_95_percent_of_one_move_tasks():
+    # Difficulty 1 is the paper's experiment: one straight head move. Going straight there
+    # in max_step actions (not the reference's equal actions) and waiting must solve it.
+    env = gym.make(ENDPOINT)
+    tasks = load_suite("linear-1", "test")
+    solved = []
+    for task in tasks:
+        obs, _ = env.reset(options={"task": task})
+        goal_head = obs["desired_goal"][:2].astype(np.float64)
+        terminated = truncated = False
+        while not (terminated or truncated):
+            obs, _, terminated, truncated, info = env.step(head_straight_to(env, goal_head))
+        solved.append(info["is_success"])
+    assert len(solved) == 50
+    assert np.mean(solved) >= 0.95

@@ -78,6 +78,15 @@ def test_starts_are_cord_like_rest_states_and_goals_are_not_solved_at_the_start(
         assert error(cord.shape, task.start) < 1e-3
 
 
+def test_a_start_that_relaxes_off_the_table_is_redrawn():
+    # Seed 250005 (linear-2, test split) first draws a strongly bent shape that sweeps into
+    # the rim while it relaxes and rests 5 mm past the edge; it must be redrawn, not crash.
+    task = make_task(250005, 2, "head")
+    for shape in (task.start, task.goal):
+        validate_shape(shape, n_points=P.n_points, length=P.length)
+    assert np.array_equal(replay(task), task.goal)
+
+
 def test_dual_starts_keep_head_and_tail_within_max_span():
     for seed in range(10):
         start = random_start(seed, "both")
