@@ -58,7 +58,13 @@ def run(args: argparse.Namespace) -> int:
 
     import dlo_env  # noqa: F401  (registers the environments)
     from planners.agents import build_agent
-    from planners.evaluation import evaluate, format_table, write_evaluation, write_summaries
+    from planners.evaluation import (
+        evaluate,
+        format_divergence,
+        format_table,
+        write_evaluation,
+        write_summaries,
+    )
 
     if args.episodes < 1:
         print(f"dlo evaluate: --episodes must be >= 1, got {args.episodes}", file=sys.stderr)
@@ -102,6 +108,11 @@ def run(args: argparse.Namespace) -> int:
             write_evaluation(result, out, _file_name(agent, label), extra=extra)
             summaries.append(result.summary)
     print(format_table(summaries))
+    parting = format_divergence(summaries)
+    if parting:
+        print("\nwhere plans and the real cord part ways: mean error (cm) of the first plan's "
+              "shapes,\nby distance the end has travelled and by straight move")
+        print(parting)
     write_summaries(summaries, out / "summary.json")
     print(f"wrote {len(summaries)} CSV and JSON files and summary.json to {out}")
     return 0

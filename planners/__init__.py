@@ -7,7 +7,15 @@ cord doing the same end motion.
 
 from __future__ import annotations
 
-from planners.evaluation import EpisodeRecord, Evaluation, evaluate, format_table
+from planners.evaluation import (
+    EpisodeRecord,
+    Evaluation,
+    FidelityProfile,
+    divergence,
+    evaluate,
+    format_divergence,
+    format_table,
+)
 from planners.fidelity import Fidelity, transition_fidelity
 from planners.interpolation import interpolate
 from planners.latent_tree import LatentTreePlanner, Plan, TreeConfig
@@ -18,12 +26,15 @@ __all__ = [
     "EpisodeRecord",
     "Evaluation",
     "Fidelity",
+    "FidelityProfile",
     "LatentTreePlanner",
     "Plan",
     "PlannerPolicy",
     "StraightLinePolicy",
     "TreeConfig",
+    "divergence",
     "evaluate",
+    "format_divergence",
     "format_table",
     "interpolate",
     "transition_fidelity",

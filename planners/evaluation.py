@@ -17,7 +17,7 @@ import math
 import os
 import tempfile
 import time
-from dataclasses import asdict, dataclass, fields
+from dataclasses import asdict, dataclass, field, fields
 from pathlib import Path
 from typing import Any
 
@@ -37,6 +37,11 @@ TABLE_COLUMNS = (
     ("mean_fidelity", "fidelity (cm)", "{:.2f}"),
 )
 _CENTIMETRES = {"median_final_error", "mean_final_error", "mean_fidelity"}
+#: Bins of the distance the manipulated end has travelled along a plan, metres: the
+#: divergence table reports the mean fidelity error of the planned shapes in each.
+TRAVEL_BINS = (0.0, 0.05, 0.10, 0.20, 0.30, math.inf)
+#: Straight moves of a plan reported one by one in the divergence table; later ones together.
+MOVE_BINS = 3
 
 
 @dataclass(frozen=True)
@@ -61,6 +66,12 @@ class EpisodeRecord:
         fidelity: Transition fidelity of the episode's first plan (NaN without plans).
         plan_final_error: ``error`` between that plan's last shape and the real cord at rest
             after executing it (NaN without plans).
+        fidelity_max: Largest error along that plan (NaN without plans).
+        plan_moves: Straight moves of the first plan (0 without plans).
+        plan_travel: Distance the end travels in the first plan, metres (NaN without plans).
+        start_inversion_error: ``error`` of the first plan's decoded start inversion (NaN
+            without plans).
+        goal_inversion_error: ``error`` of the decoded goal inversion (NaN if not reported).
     """
 
     episode: int
@@ -78,14 +89,78 @@ class EpisodeRecord:
     planning_failures: int
     fidelity: float
     plan_final_error: float
+    fidelity_max: float = math.nan
+    plan_moves: int = 0
+    plan_travel: float = math.nan
+    start_inversion_error: float = math.nan
+    goal_inversion_error: float = math.nan
+
+
+@dataclass(frozen=True)
+class FidelityProfile:
+    """Where one plan and the real cord part ways: the error at every planned shape.
+
+    Attributes:
+        episode: Index of the episode whose first plan this is.
+        errors: ``(T,)`` ``error(planned, real)`` at each planned shape, metres.
+        travel: ``(T,)`` distance the end had travelled at each planned shape, metres.
+        move: ``(T,)`` index of the straight move of each planned shape (0-based).
+    """
+
+    episode: int
+    errors: np.ndarray
+    travel: np.ndarray
+    move: np.ndarray
 
 
 @dataclass(frozen=True)
 class Evaluation:
-    """Per-episode records and their summary (see :func:`summarise`)."""
+    """Per-episode records, their summary (see :func:`summarise`) and fidelity profiles."""
 
     records: list[EpisodeRecord]
     summary: dict[str, Any]
+    profiles: list[FidelityProfile] = field(default_factory=list)
+
+
+def _travel_label(low: float, high: float) -> str:
+    if math.isinf(high):
+        return f">={100 * low:.0f} cm"
+    return f"{100 * low:.0f}-{100 * high:.0f} cm"
+
+
+def divergence(profiles: list[FidelityProfile]) -> dict[str, Any]:
+    """Mean fidelity error of planned shapes by end travel and by straight move, metres.
+
+    Pools the planned shapes of all ``profiles``: ``by_travel`` maps each ``TRAVEL_BINS``
+    interval to the mean error of the shapes planned there (NaN if none), ``by_move`` the move
+    index (``"1"``, ``"2"``, ``"3+"``) to the same; ``at_start`` is the mean error of the first
+    planned shapes (the start inversion), ``at_end`` of the last ones; ``plans`` and
+    ``shapes`` count them.
+    """
+    if not profiles:
+        return {"plans": 0, "shapes": 0, "at_start": math.nan, "at_end": math.nan, "by_travel": {},
+                "by_move": {}}
+    errors = np.concatenate([p.errors for p in profiles])
+    travel = np.concatenate([p.travel for p in profiles])
+    move = np.concatenate([p.move for p in profiles])
+    by_travel = {}
+    for low, high in zip(TRAVEL_BINS[:-1], TRAVEL_BINS[1:]):
+        inside = (travel >= low) & (travel < high)
+        by_travel[_travel_label(low, high)] = float(errors[inside].mean()) if inside.any() else (
+            math.nan)
+    by_move = {}
+    for k in range(MOVE_BINS):
+        inside = move >= k if k == MOVE_BINS - 1 else move == k
+        label = f"{k + 1}+" if k == MOVE_BINS - 1 else str(k + 1)
+        by_move[label] = float(errors[inside].mean()) if inside.any() else math.nan
+    return {
+        "plans": len(profiles),
+        "shapes": int(errors.size),
+        "at_start": float(np.mean([p.errors[0] for p in profiles])),
+        "at_end": float(np.mean([p.errors[-1] for p in profiles])),
+        "by_travel": by_travel,
+        "by_move": by_move,
+    }
 
 
 def _nanstat(values: list[float], fn: Any) -> float:
@@ -120,6 +195,12 @@ def summarise(records: list[EpisodeRecord], agent: str = "", env_id: str = "") -
         "mean_fidelity": _nanstat([r.fidelity for r in records], np.mean),
         "median_fidelity": _nanstat([r.fidelity for r in records], np.median),
         "mean_plan_final_error": _nanstat([r.plan_final_error for r in records], np.mean),
+        "mean_plan_moves": _nanstat([r.plan_moves for r in records if r.plans], np.mean),
+        "mean_plan_travel": _nanstat([r.plan_travel for r in records], np.mean),
+        "mean_start_inversion_error": _nanstat([r.start_inversion_error for r in records],
+                                               np.mean),
+        "mean_goal_inversion_error": _nanstat([r.goal_inversion_error for r in records],
+                                              np.mean),
     }
 
 
@@ -191,7 +272,7 @@ def evaluate(
         grasp = getattr(getattr(base, "cord", None), "grasp", "head")
         options = _episode_options(difficulty, suite, split, episodes, grasp)
         n = base.params.n_points
-        records = []
+        records, profiles = [], []
         bar = None
         if progress:
             from tqdm import tqdm
@@ -220,11 +301,15 @@ def evaluate(
                     break
             stats = getattr(policy, "stats", None)
             plans = list(getattr(policy, "plans", []) or [])
-            fid, plan_final = math.nan, math.nan
+            fid = plan_final = fid_max = travel = start_inv = math.nan
+            if plans:
+                travel = plans[0].path_length
+                start_inv = float(plans[0].stats.get("start_inversion_error", math.nan))
             if fidelity and plans:
                 result = transition_fidelity(plans[0], start, params=base.params,
                                              max_step=base.max_step)
-                fid, plan_final = result.mean_error, result.final_error
+                fid, plan_final, fid_max = result.mean_error, result.final_error, result.max_error
+                profiles.append(FidelityProfile(i, result.errors, result.travel, result.move))
             records.append(
                 EpisodeRecord(
                     episode=i,
@@ -242,6 +327,11 @@ def evaluate(
                     planning_failures=int(getattr(stats, "failures", 0)),
                     fidelity=fid,
                     plan_final_error=plan_final,
+                    fidelity_max=fid_max,
+                    plan_moves=len(plans[0].nodes) - 1 if plans else 0,
+                    plan_travel=travel,
+                    start_inversion_error=start_inv,
+                    goal_inversion_error=float(getattr(stats, "goal_inversion_error", math.nan)),
                 )
             )
             if bar is not None:
@@ -251,7 +341,9 @@ def evaluate(
             bar.close()
     finally:
         env.close()
-    return Evaluation(records=records, summary=summarise(records, agent=agent, env_id=env_id))
+    summary = summarise(records, agent=agent, env_id=env_id)
+    summary["divergence"] = divergence(profiles)
+    return Evaluation(records=records, summary=summary, profiles=profiles)
 
 
 def format_table(summaries: list[dict[str, Any]]) -> str:
@@ -270,6 +362,39 @@ def format_table(summaries: list[dict[str, Any]]) -> str:
         rows.append(row)
     widths = [max(len(r[c]) for r in rows) for c in range(len(rows[0]))]
     lines = ["  ".join(cell.rjust(w) for cell, w in zip(r, widths)) for r in rows]
+    lines.insert(1, "  ".join("-" * w for w in widths))
+    return "\n".join(lines)
+
+
+def format_divergence(summaries: list[dict[str, Any]]) -> str:
+    """A plain-text table of where plans and the real cord part ways (centimetres).
+
+    One row per summary that has plans: the mean error at the plan's first shape (the start
+    inversion), by the distance the end has travelled, by straight move, at the plan's last
+    shape, and between the plan's last shape and the real cord at rest after it.
+    """
+    rows = []
+    for s in summaries:
+        d = s.get("divergence") or {}
+        if not d.get("shapes"):
+            continue
+        rows.append((s, d))
+    if not rows:
+        return ""
+    travel_keys = list(rows[0][1]["by_travel"])
+    move_keys = list(rows[0][1]["by_move"])
+    header = (["agent", "diff", "plans", "at start"] + [f"travel {k}" for k in travel_keys]
+              + [f"move {k}" for k in move_keys] + ["at end", "end at rest"])
+    table = [header]
+    for s, d in rows:
+        values = ([d["at_start"]] + [d["by_travel"].get(k, math.nan) for k in travel_keys]
+                  + [d["by_move"].get(k, math.nan) for k in move_keys]
+                  + [d["at_end"], s.get("mean_plan_final_error", math.nan)])
+        cells = ["-" if not math.isfinite(v) else f"{100 * v:.2f}" for v in values]
+        table.append([str(s.get("agent", "")), str(s.get("difficulty", "")),
+                      str(d["plans"])] + cells)
+    widths = [max(len(r[c]) for r in table) for c in range(len(header))]
+    lines = ["  ".join(cell.rjust(w) for cell, w in zip(r, widths)) for r in table]
     lines.insert(1, "  ".join("-" * w for w in widths))
     return "\n".join(lines)
 
@@ -334,6 +459,11 @@ def write_evaluation(
     data = {
         "summary": evaluation.summary,
         "records": [asdict(r) for r in evaluation.records],
+        "fidelity_profiles": [
+            {"episode": p.episode, "errors": p.errors.tolist(), "travel": p.travel.tolist(),
+             "move": p.move.tolist()}
+            for p in evaluation.profiles
+        ],
         **(extra or {}),
     }
     _write_atomic(json_path, json.dumps(_json_ready(data), indent=2) + "\n")

@@ -26,6 +26,10 @@ class Fidelity:
         final_error: ``error`` between the plan's last shape and the real cord at rest after the
             motion, metres.
         final_shape: ``(n, 2)`` the real cord at rest after the motion.
+        travel: ``(T,)`` distance the end has travelled along the plan at each planned shape,
+            metres (0 at the start).
+        move: ``(T,)`` index of the straight move each planned shape belongs to (0 for the
+            start shape and the first move).
     """
 
     mean_error: float
@@ -33,6 +37,8 @@ class Fidelity:
     real_shapes: np.ndarray
     final_error: float
     final_shape: np.ndarray
+    travel: np.ndarray
+    move: np.ndarray
 
     @property
     def max_error(self) -> float:
@@ -106,10 +112,14 @@ def transition_fidelity(
         apply_action(cord, zero, max_step)
     final = cord.shape
     errors = np.asarray(error(plan.shapes, real), dtype=np.float64).reshape(-1)
+    steps = np.linalg.norm(np.diff(plan.waypoints.astype(np.float64), axis=0), axis=1)
+    move = np.searchsorted(plan.nodes, np.arange(len(plan.shapes)), side="left") - 1
     return Fidelity(
         mean_error=float(errors.mean()),
         errors=errors,
         real_shapes=real,
         final_error=float(error(plan.shapes[-1], final)),
         final_shape=final,
+        travel=np.concatenate([[0.0], np.cumsum(steps)]),
+        move=np.maximum(move, 0),
     )

@@ -10,6 +10,11 @@ the observed cord every ``replan_every`` steps (and whenever the current plan is
 When a plan fails (the search budget is spent before the goal is reached) the policy records
 the failure in ``stats`` and falls back to the straight-line reference for that plan: the head
 moves straight to the goal's head position.
+
+Closed loop, a stall guard ends the episode's motion: after ``patience`` replans in a row that
+found the real cord no closer to the goal than the best it has been (by ``min_progress``), the
+policy holds still. Without it a near miss keeps being "repaired" by plans whose shapes the
+real cord does not follow, and the error grows instead.
 """
 
 from __future__ import annotations
@@ -20,6 +25,7 @@ from typing import Any
 
 import numpy as np
 
+from dlo_env.shapes import error
 from planners.latent_tree import LatentTreePlanner, Plan
 from planners.moves import actions_through
 from planners.observation import read_observation
@@ -37,6 +43,9 @@ class PolicyStats:
         decoder_calls: Decoder calls of all plans.
         goal_inversion_error: ``error`` of the decoded goal inversion, metres.
         goal_verified: Whether the goal inversion was verified by the model.
+        plan_seconds: Seconds of each planning call.
+        best_error: Smallest real ``error(cord, goal)`` seen at a replan, metres.
+        stalled: Whether the stall guard stopped the motion.
     """
 
     plans: int = 0
@@ -46,6 +55,8 @@ class PolicyStats:
     goal_inversion_error: float = float("nan")
     goal_verified: bool = False
     plan_seconds: list[float] = field(default_factory=list)
+    best_error: float = float("inf")
+    stalled: bool = False
 
 
 class PlannerPolicy:
@@ -58,6 +69,9 @@ class PlannerPolicy:
         replan_every: ``None`` for open loop; ``k`` to replan from the observed cord every ``k``
             environment steps.
         max_step: The environment's ``max_step`` (metres per unit action).
+        patience: Closed loop: replans in a row without progress after which the policy holds
+            still (``None``: never).
+        min_progress: Metres by which the real error must beat its best to count as progress.
 
     Attributes:
         stats: ``PolicyStats`` of the current episode.
@@ -72,6 +86,8 @@ class PlannerPolicy:
         replan_every: int | None = None,
         *,
         max_step: float = 0.02,
+        patience: int | None = 3,
+        min_progress: float = 0.002,
     ) -> None:
         n = model_n_points(model)
         if planner is None:
@@ -85,6 +101,12 @@ class PlannerPolicy:
             raise ValueError(f"replan_every must be None or an int >= 1, got {replan_every!r}")
         if not max_step > 0:
             raise ValueError(f"max_step must be > 0, got {max_step!r}")
+        if patience is not None and not (isinstance(patience, int) and patience >= 1):
+            raise ValueError(f"patience must be None or an int >= 1, got {patience!r}")
+        if not min_progress >= 0:
+            raise ValueError(f"min_progress must be >= 0, got {min_progress!r}")
+        self.patience = patience
+        self.min_progress = float(min_progress)
         self.model = model
         self.planner = planner
         self.replan_every = replan_every
@@ -123,6 +145,19 @@ class PlannerPolicy:
         self._goal_latent: np.ndarray | None = None
         self._goal_key: bytes | None = None
         self._since_plan = 0
+        self._no_progress = 0
+
+    def _stalled(self, shape: np.ndarray, goal: np.ndarray) -> bool:
+        """Update the stall guard with the real error now; True when the motion must stop."""
+        now = float(error(shape, goal))
+        if now < self.stats.best_error - self.min_progress:
+            self._no_progress = 0
+        else:
+            self._no_progress += 1
+        self.stats.best_error = min(self.stats.best_error, now)
+        if self.patience is not None and self._no_progress >= self.patience:
+            self.stats.stalled = True
+        return self.stats.stalled
 
     def _replan(self, shape: np.ndarray, goal: np.ndarray, head: np.ndarray) -> None:
         t0 = time.perf_counter()
@@ -180,8 +215,11 @@ class PlannerPolicy:
         due = not self.plans or (
             closed and (self._since_plan >= self.replan_every or not self._queue)
         )
-        if due:
-            self._replan(obs.shape, obs.goal, obs.head)
+        if due and not self.stats.stalled:
+            if closed and self._stalled(obs.shape, obs.goal):
+                self._queue = []
+            else:
+                self._replan(obs.shape, obs.goal, obs.head)
         action = self._queue.pop(0) if self._queue else np.zeros(2, dtype=np.float32)
         self._since_plan += 1
         return (action[None] if obs.batched else action), state

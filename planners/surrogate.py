@@ -9,6 +9,7 @@ one (a latent that holds an angle may need to wrap), a straight line otherwise.
 
 from __future__ import annotations
 
+import inspect
 from typing import Any
 
 import numpy as np
@@ -43,6 +44,18 @@ def model_latent_dim(model: Any) -> int:
     return int(d)
 
 
+def _keyword_names(function: Any) -> set[str] | None:
+    """Keyword parameters ``function`` accepts (``None``: any, it takes ``**kwargs``)."""
+    try:
+        parameters = inspect.signature(function).parameters.values()
+    except (TypeError, ValueError):  # builtins without a signature: pass nothing extra
+        return set()
+    if any(p.kind is inspect.Parameter.VAR_KEYWORD for p in parameters):
+        return None
+    return {p.name for p in parameters
+            if p.kind in (inspect.Parameter.KEYWORD_ONLY, inspect.Parameter.POSITIONAL_OR_KEYWORD)}
+
+
 class Surrogate:
     """A shape model seen through numpy float32 arrays, with a count of decoder calls.
 
@@ -63,6 +76,7 @@ class Surrogate:
         self.latent_dim = model_latent_dim(model)
         self.decoder_calls = 0
         self._interpolate = getattr(model, "interpolate_latents", None)
+        self._invert_options = _keyword_names(model.invert)
 
     def decode(self, latents: np.ndarray) -> np.ndarray:
         """Shapes ``(..., n, 2)`` of latents ``(..., d)``, in one model call."""
@@ -81,9 +95,11 @@ class Surrogate:
         """Latents ``(B, d)``, reconstruction errors ``(B,)`` (metres) and verified flags.
 
         ``options`` whose value is not None go to ``model.invert`` (e.g. ``steps`` and
-        ``restarts`` of ``ShapeModel.invert``'s refinement).
+        ``restarts`` of ``ShapeModel.invert``'s refinement) when it accepts them; a model
+        whose ``invert`` has no such option inverts its own way.
         """
-        given = {k: v for k, v in options.items() if v is not None}
+        given = {k: v for k, v in options.items()
+                 if v is not None and (self._invert_options is None or k in self._invert_options)}
         out = self.model.invert(np.asarray(shapes, dtype=np.float32), **given)
         z, err, ok = (to_numpy(v) for v in out)
         return (

@@ -10,7 +10,15 @@ import pytest
 
 import dlo_env  # noqa: F401
 from dlo_env.tasks import suite_seeds
-from planners import PlannerPolicy, StraightLinePolicy, evaluate, format_table
+from planners import (
+    FidelityProfile,
+    PlannerPolicy,
+    StraightLinePolicy,
+    divergence,
+    evaluate,
+    format_divergence,
+    format_table,
+)
 from planners.evaluation import write_evaluation
 
 ENV_ID = "dlo_env/DLOEndpoint-v0"
@@ -126,3 +134,40 @@ def test_evaluate_drives_a_stable_baselines3_model():
     record = result.records[0]
     assert 1 <= record.steps <= 100
     assert record.plans == 0 and math.isnan(record.fidelity)
+
+
+def test_divergence_pools_planned_shapes_by_end_travel_and_by_move():
+    profiles = [
+        FidelityProfile(0, errors=np.array([0.001, 0.01, 0.03]), travel=np.array([0.0, 0.06, 0.12]),
+                        move=np.array([0, 0, 1])),
+        FidelityProfile(1, errors=np.array([0.003, 0.02]), travel=np.array([0.0, 0.04]),
+                        move=np.array([0, 0])),
+    ]
+    d = divergence(profiles)
+    assert d["plans"] == 2 and d["shapes"] == 5
+    assert d["at_start"] == pytest.approx(0.002) and d["at_end"] == pytest.approx(0.025)
+    assert d["by_travel"]["0-5 cm"] == pytest.approx((0.001 + 0.003 + 0.02) / 3)
+    assert d["by_travel"]["5-10 cm"] == pytest.approx(0.01)
+    assert d["by_travel"]["10-20 cm"] == pytest.approx(0.03)
+    assert math.isnan(d["by_travel"][">=30 cm"])
+    assert d["by_move"]["1"] == pytest.approx((0.001 + 0.01 + 0.003 + 0.02) / 4)
+    assert d["by_move"]["2"] == pytest.approx(0.03) and math.isnan(d["by_move"]["3+"])
+
+
+def test_evaluate_records_the_first_plan_and_where_it_parts_ways_with_the_cord(toy_model,
+                                                                               tmp_path):
+    result = evaluate(PlannerPolicy(toy_model), ENV_ID, difficulty=1, episodes=2, seed=0,
+                      agent="toy")
+    assert len(result.profiles) == 2
+    for record, profile in zip(result.records, result.profiles):
+        assert record.plan_moves >= 1 and record.plan_travel > 0
+        assert record.fidelity == pytest.approx(profile.errors.mean())
+        assert record.fidelity_max == pytest.approx(profile.errors.max())
+        assert record.start_inversion_error == pytest.approx(profile.errors[0], abs=1e-6)
+        assert math.isfinite(record.goal_inversion_error)
+    assert result.summary["divergence"]["plans"] == 2
+    table = format_divergence([result.summary])
+    assert "toy" in table and "travel 0-5 cm" in table
+    _, json_path = write_evaluation(result, tmp_path, "toy-d1")
+    data = json.loads(json_path.read_text())
+    assert len(data["fidelity_profiles"]) == 2

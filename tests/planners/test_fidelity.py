@@ -66,3 +66,14 @@ def test_fidelity_rejects_a_start_of_the_wrong_shape():
     plan = _recorded_plan(start, [(0.0, 0.1)])
     with pytest.raises(ValueError, match="start must have shape"):
         transition_fidelity(plan, start[:10])
+
+
+def test_fidelity_says_how_far_the_end_had_travelled_and_in_which_move_at_every_shape():
+    start = _straight_start()
+    plan = _recorded_plan(start, [(0.0, 0.1), (0.06, 0.0)])
+    result = transition_fidelity(plan, start)
+    assert result.travel[0] == 0.0 and np.all(np.diff(result.travel) >= 0)
+    assert result.travel[-1] == pytest.approx(plan.path_length, abs=1e-6)
+    assert result.travel[plan.nodes[1]] == pytest.approx(0.1, abs=1e-4)
+    expected_move = np.r_[0, np.zeros(plan.nodes[1]), np.ones(plan.nodes[2] - plan.nodes[1])]
+    np.testing.assert_array_equal(result.move, expected_move)

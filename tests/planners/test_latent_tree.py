@@ -58,6 +58,14 @@ def test_a_direct_line_that_keeps_the_head_straight_is_planned_as_one_move(toy_m
     assert plan.stats["nodes"] == 1
 
 
+def test_the_straightness_tolerance_grows_with_the_length_of_the_move(toy_model):
+    start, goal = toy_model.decode(FAR)  # the direct line bends the head by 0.24 m over 0.72 m
+    strict = LatentTreePlanner(toy_model, seed=0, straightness_ratio=0.0).plan(start, goal)
+    lenient = LatentTreePlanner(toy_model, seed=0, straightness_ratio=0.5).plan(start, goal)
+    assert not strict.stats["direct"]
+    assert lenient.success and lenient.stats["direct"]
+
+
 def test_candidates_are_decoded_in_batches(toy_model):
     start, goal = toy_model.decode(FAR)
     plan = LatentTreePlanner(toy_model, seed=0, straightness=0.005).plan(start, goal)
@@ -97,6 +105,8 @@ def test_unknown_or_invalid_parameters_are_rejected(toy_model):
         TreeConfig(step_length=0.0)
     with pytest.raises(ValueError, match="TreeConfig.end must be one of"):
         TreeConfig(end="middle")
+    with pytest.raises(ValueError, match="TreeConfig.straightness_ratio must be >= 0"):
+        TreeConfig(straightness_ratio=-0.1)
 
 
 def test_a_model_without_the_interface_is_rejected():

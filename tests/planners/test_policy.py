@@ -6,7 +6,16 @@ import pytest
 from toy_models import ToyHeadModel
 
 import dlo_env  # noqa: F401
-from planners import LatentTreePlanner, PlannerPolicy, StraightLinePolicy
+from planners import LatentTreePlanner, Plan, PlannerPolicy, StraightLinePolicy
+
+
+class HoldingPlanner(LatentTreePlanner):
+    """Plans to stay where the cord is: the real cord never gets closer to the goal."""
+
+    def plan(self, start, goal, *, goal_latent=None, seed=None):
+        start = np.asarray(start, dtype=np.float32).reshape(-1, 2)
+        return Plan(shapes=start[None], latents=np.zeros((1, 2), np.float32),
+                    waypoints=start[:1], nodes=np.array([0]), success=True)
 
 
 def _run_episode(env, policy, seed, difficulty=1):
@@ -45,6 +54,23 @@ def test_closed_loop_replans_every_k_steps(toy_model):
         action, _ = policy.predict(obs)
         obs, *_ = env.step(action)
     assert policy.stats.plans == 3  # steps 0, 3 and 6
+
+
+@pytest.mark.parametrize("patience, plans", [(2, 2), (None, 4)])
+def test_closed_loop_holds_still_after_replans_without_progress(toy_model, patience, plans):
+    env = gym.make("dlo_env/DLOEndpoint-v0")
+    policy = PlannerPolicy(toy_model, HoldingPlanner(toy_model), replan_every=3,
+                           patience=patience)
+    obs, _ = env.reset(seed=0, options={"difficulty": 2})
+    for _ in range(12):
+        action, _ = policy.predict(obs)
+        assert not action.any()
+        obs, *_ = env.step(action)
+    # Replans at steps 0, 3, 6, 9; the second and third find no progress, so with patience 2
+    # the policy stops before planning at step 6.
+    assert policy.stats.plans == plans
+    assert policy.stats.stalled == (patience is not None)
+    assert policy.stats.best_error > 0.02
 
 
 def test_planning_failure_is_recorded_and_falls_back_to_the_straight_line(toy_model):
@@ -101,5 +127,7 @@ def test_a_policy_with_another_step_size_is_rejected(toy_model):
 def test_invalid_policy_arguments_are_rejected(toy_model):
     with pytest.raises(ValueError, match="replan_every must be None or an int >= 1"):
         PlannerPolicy(toy_model, replan_every=0)
+    with pytest.raises(ValueError, match="patience must be None or an int >= 1"):
+        PlannerPolicy(toy_model, replan_every=5, patience=0)
     with pytest.raises(ValueError, match="planner must plan for the model's n_points=20"):
         PlannerPolicy(toy_model, LatentTreePlanner(ToyHeadModel(n_points=10)))
