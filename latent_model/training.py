@@ -69,6 +69,8 @@ class Progress:
     encoder_seconds: float = 0.0
     total_seconds: float = 0.0  # all training, including Encoder runs that were redone
     encoder_for_gan_step: int = -1  # the GAN step the Encoder was trained against
+    best_score: float = -math.inf  # COV - 1-NNA of the best GAN evaluation (validation subset)
+    best_step: int = -1  # its GAN step; the GAN stage ends by restoring it
     rows: list[dict[str, Any]] = field(default_factory=list)
 
 
@@ -108,7 +110,12 @@ class Trainer:
         heldout = np.asarray(heldout_shapes, dtype=np.float32)
         n_reference = min(train_config.eval_reference, len(heldout) * 5 // 6)
         n_inversion = min(train_config.eval_inversion, len(heldout) - n_reference)
-        reference, targets = evaluation_subsets(heldout, (n_reference, n_inversion), seed=0)
+        # The validation subsets come from the END of the seed-0 permutation, the final
+        # report's subsets (``quality_report``, seed 0) from its start: with a large held-out
+        # file, choosing the best GAN step never sees the shapes it is reported on.
+        rest = len(heldout) - n_reference - n_inversion
+        _, reference, targets = evaluation_subsets(
+            heldout, (rest, n_reference, n_inversion), seed=0)
         self.eval_reference, self.eval_targets = torch.from_numpy(reference), targets
         self.generator = Generator(model_config).to(self.device)
         self.discriminator = Discriminator(model_config).to(self.device)
@@ -121,6 +128,7 @@ class Trainer:
         self.opt_e = torch.optim.Adam(self.encoder.parameters(), train_config.lr_encoder, betas)
         self.rng = torch.Generator(device=self.device).manual_seed(seed)
         self.progress = Progress()
+        self.best_state: dict[str, Any] | None = None  # networks at progress.best_step
         self.last = {"loss_d": math.nan, "loss_g": math.nan, "loss_e": math.nan}
 
     # ---------------------------------------------------------------- batches
@@ -227,6 +235,7 @@ class Trainer:
             "opt_e": self.opt_e.state_dict(),
             "rng": self.rng.get_state(),
             "progress": asdict(self.progress),
+            "best": self.best_state,
             "data": data_info,
         }
 
@@ -245,6 +254,12 @@ class Trainer:
             getattr(self, name).load_state_dict(data[name])
         self.rng.set_state(data["rng"])
         self.progress = Progress(**data["progress"])
+        self.best_state = data.get("best")
+
+    def networks_state(self) -> dict[str, Any]:
+        """Copies of the three networks' state dicts."""
+        return {name: {k: v.detach().clone() for k, v in getattr(self, name).state_dict().items()}
+                for name in ("generator", "discriminator", "encoder")}
 
 
 # ------------------------------------------------------------------- logging
@@ -359,6 +374,9 @@ def train(
                "train_minutes": prog.total_seconds / 60}
         row.update(trainer.evaluate())
         row.update(trainer.last)
+        if name == "gan" and row["cov"] - row["nna"] > prog.best_score:
+            prog.best_score, prog.best_step = row["cov"] - row["nna"], prog.gan_step
+            trainer.best_state = trainer.networks_state()
         prog.rows.append(row)
         write_csv(prog.rows, out / METRICS_CSV)
         plot_curves(prog.rows, out / METRICS_PNG, FLOORS)
@@ -406,6 +424,15 @@ def train(
         if not prog.rows or prog.rows[-1]["stage"] != name or \
                 prog.rows[-1]["step"] != getattr(prog, step_attr):
             log_eval(name)
+        if name == "gan" and trainer.best_state is not None and prog.best_step != prog.gan_step:
+            # GAN quality oscillates from evaluation to evaluation: keep the best one (chosen
+            # on the validation subsets) and go on from there.
+            for net in ("generator", "discriminator", "encoder"):
+                getattr(trainer, net).load_state_dict(trainer.best_state[net])
+            best_row = next(r for r in prog.rows
+                            if r["stage"] == "gan" and r["step"] == prog.best_step)
+            prog.rows.append(dict(best_row, stage="gan-best"))
+            write_csv(prog.rows, out / METRICS_CSV)
         save()
     return trainer.model(dict(info, gan_step=prog.gan_step, encoder_step=prog.encoder_step,
                               last_metrics=prog.rows[-1] if prog.rows else None))

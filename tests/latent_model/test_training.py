@@ -124,3 +124,17 @@ def test_evaluation_subsets_are_disjoint_seeded_and_spread_over_the_file():
     assert max(ids_ref) > 500  # not the first shapes of the file
     with pytest.raises(ValueError, match="at least 1500 shapes"):
         evaluation_subsets(shapes, (1000, 500))
+
+
+def test_gan_stage_ends_with_the_best_evaluated_networks(tmp_path, cord_shapes, tiny_config,
+                                                         tiny_train_config):
+    config = replace(tiny_train_config, eval_every=5)
+    train(cord_shapes, cord_shapes, tmp_path, tiny_config, config, stage="gan", gan_steps=20,
+          device="cpu", progress_bar=False)
+    rows = list(csv.DictReader(open(tmp_path / "metrics.csv")))
+    gan = [r for r in rows if r["stage"] == "gan"]
+    best = max(gan, key=lambda r: float(r["cov"]) - float(r["nna"]))
+    chosen = load_checkpoint(tmp_path / "checkpoint.pt")["progress"]["best_step"]
+    assert chosen == int(best["step"])
+    if chosen != 20:
+        assert rows[-1]["stage"] == "gan-best" and int(rows[-1]["step"]) == chosen
