@@ -44,6 +44,10 @@ class CordParams:
         inertia_scale: Factor on each segment's moment of inertia. The motion is quasi-static
             (friction dominated), so inflating rotational inertia changes the shapes little and
             keeps the explicit joint springs stable at this ``dt / substeps``.
+        velocity_retention: pymunk ``Space.damping``, the share of velocity kept per second
+            (1.0: no extra damping; table friction dissipates the motion).
+        joint_error_bias: pymunk ``error_bias`` of the link and gripper joints, the fraction of
+            a joint's drift left after one second (small: links stay at rest length).
         dt: Control period, seconds (one environment step).
         substeps: Equal physics steps per control period.
         iterations: Constraint solver iterations per physics step.
@@ -77,6 +81,10 @@ class CordParams:
         for name in ("friction", "bending_stiffness", "bending_damping", "rim_margin"):
             if not getattr(self, name) >= 0:
                 raise ValueError(f"CordParams.{name} must be >= 0, got {getattr(self, name)!r}")
+        for name in ("velocity_retention", "joint_error_bias"):
+            value = getattr(self, name)
+            if not 0 < value <= 1:
+                raise ValueError(f"CordParams.{name} must be in (0, 1], got {value!r}")
         if self.n_points < 3:
             raise ValueError(f"CordParams.n_points must be >= 3, got {self.n_points!r}")
         if self.substeps < 1 or self.iterations < 1:

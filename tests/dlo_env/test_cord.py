@@ -39,6 +39,10 @@ def test_cord_params_reject_nonsense_naming_the_field():
         CordParams(n_points=2)
     with pytest.raises(ValueError, match="max_span"):
         CordParams(max_span=1.5)
+    with pytest.raises(ValueError, match="velocity_retention"):
+        CordParams(velocity_retention=1.5)
+    with pytest.raises(ValueError, match="joint_error_bias"):
+        CordParams(joint_error_bias=0.0)
 
 
 def test_reset_places_the_cord_in_the_shape_and_reads_float32_points():
