@@ -24,6 +24,8 @@ class Args:
     """episode i resets with seed + i"""
     replan_every: int = 10
     """steps between replans of the closed-loop planner"""
+    model: str = ""
+    """a shape model file (default: the shipped pretrained model)"""
 
 
 def parse_args() -> Args:
@@ -38,7 +40,8 @@ if __name__ == "__main__":
     args = parse_args()
     torch.set_num_threads(1)  # a small model: more threads only contend
 
-    model = ShapeModel.load_pretrained(device="cpu")
+    model = (ShapeModel.load(args.model, device="cpu") if args.model
+             else ShapeModel.load_pretrained(device="cpu"))
     agents = {
         "straight-line": StraightLinePolicy(),
         "latent-tree": PlannerPolicy(model),

@@ -27,6 +27,8 @@ class Args:
     """the paper's l: latent distance of one tree edge"""
     straightness: float = 0.01
     """how far (m) the head may leave the straight line of an edge"""
+    model: str = ""
+    """a shape model file (default: the shipped pretrained model)"""
 
 
 def parse_args() -> Args:
@@ -44,7 +46,8 @@ if __name__ == "__main__":
     obs, _ = env.reset(seed=args.seed, options={"difficulty": args.difficulty})
     start, goal = obs["achieved_goal"].reshape(-1, 2), obs["desired_goal"].reshape(-1, 2)
 
-    model = ShapeModel.load_pretrained(device="cpu")
+    model = (ShapeModel.load(args.model, device="cpu") if args.model
+             else ShapeModel.load_pretrained(device="cpu"))
     planner = LatentTreePlanner(model, seed=args.seed, step_length=args.step_length,
                                 straightness=args.straightness)
     plan = planner.plan(start, goal)

@@ -82,7 +82,7 @@ class TreeConfig:
     edge_points: int = 4
     similarity: float = 0.03
     straightness: float = 0.01
-    straightness_ratio: float = 0.0
+    straightness_ratio: float = 0.05
     follow_ratio: float | None = 1.5
     follow_slack: float = 0.01
     max_stretch: float | None = 0.25
