@@ -4,8 +4,11 @@
 episode_start, deterministic) -> (action, state)``, so one harness drives planners and RL models.
 At the first step of an episode it inverts the observed goal, plans from the observed cord,
 and turns the plan's straight end moves into actions of at most ``max_step``. Open loop
-(``replan_every=None``) it executes that plan and then holds still. Closed loop it replans from
-the observed cord every ``replan_every`` steps (and whenever the current plan is used up).
+(``replan_every=None``) it executes that plan and then holds still. Closed loop it compares the
+observed cord with the shape the plan predicts for that moment every ``replan_every`` steps, and
+replans from the observed cord when they differ by more than ``replan_tolerance`` (and whenever
+the current plan is used up). A plan the real cord follows is kept: replanning from the middle
+of a good straight move only risks a worse plan.
 
 When a plan fails (the search budget is spent before the goal is reached) the policy records
 the failure in ``stats`` and falls back to the straight-line reference for that plan: the head
@@ -44,6 +47,7 @@ class PolicyStats:
         goal_inversion_error: ``error`` of the decoded goal inversion, metres.
         goal_verified: Whether the goal inversion was verified by the model.
         plan_seconds: Seconds of each planning call.
+        kept: Closed-loop checks that found the cord following the plan (no replan).
         best_error: Smallest real ``error(cord, goal)`` seen at a replan, metres.
         stalled: Whether the stall guard stopped the motion.
     """
@@ -57,6 +61,7 @@ class PolicyStats:
     plan_seconds: list[float] = field(default_factory=list)
     best_error: float = float("inf")
     stalled: bool = False
+    kept: int = 0
 
 
 class PlannerPolicy:
@@ -66,9 +71,11 @@ class PlannerPolicy:
         model: The shape model (``latent_model.ShapeModel`` or the same interface); its
             ``n_points`` must match the environment's cord.
         planner: The planner (default: ``LatentTreePlanner(model)`` with default parameters).
-        replan_every: ``None`` for open loop; ``k`` to replan from the observed cord every ``k``
-            environment steps.
+        replan_every: ``None`` for open loop; ``k`` to check the plan against the observed cord
+            every ``k`` environment steps (closed loop).
         max_step: The environment's ``max_step`` (metres per unit action).
+        replan_tolerance: Closed loop: replan when ``error`` between the observed cord and the
+            plan's prediction exceeds this, metres; ``0`` replans at every check.
         patience: Closed loop: replans in a row without progress after which the policy holds
             still (``None``: never).
         min_progress: Metres by which the real error must beat its best to count as progress.
@@ -86,6 +93,7 @@ class PlannerPolicy:
         replan_every: int | None = None,
         *,
         max_step: float = 0.02,
+        replan_tolerance: float = 0.01,
         patience: int | None = 3,
         min_progress: float = 0.002,
     ) -> None:
@@ -105,6 +113,9 @@ class PlannerPolicy:
             raise ValueError(f"patience must be None or an int >= 1, got {patience!r}")
         if not min_progress >= 0:
             raise ValueError(f"min_progress must be >= 0, got {min_progress!r}")
+        if not replan_tolerance >= 0:
+            raise ValueError(f"replan_tolerance must be >= 0, got {replan_tolerance!r}")
+        self.replan_tolerance = float(replan_tolerance)
         self.patience = patience
         self.min_progress = float(min_progress)
         self.model = model
@@ -142,6 +153,8 @@ class PlannerPolicy:
         self.stats = PolicyStats()
         self.plans: list[Plan] = []
         self._queue: list[np.ndarray] = []
+        self._expected: list[np.ndarray] | None = None
+        self._done = 0
         self._goal_latent: np.ndarray | None = None
         self._goal_key: bytes | None = None
         self._since_plan = 0
@@ -158,6 +171,13 @@ class PlannerPolicy:
         if self.patience is not None and self._no_progress >= self.patience:
             self.stats.stalled = True
         return self.stats.stalled
+
+    def _on_track(self, shape: np.ndarray) -> bool:
+        """Whether the cord is where the current plan predicts it now, with actions left."""
+        if not self._queue or self._expected is None or self._done == 0:
+            return False
+        expected = self._expected[min(self._done, len(self._expected)) - 1]
+        return float(error(shape, expected)) <= self.replan_tolerance
 
     def _replan(self, shape: np.ndarray, goal: np.ndarray, head: np.ndarray) -> None:
         t0 = time.perf_counter()
@@ -179,6 +199,9 @@ class PlannerPolicy:
             end = 0 if self.planner.config.end == "head" else -1
             corners = goal[end][None]  # the fallback: straight to the goal's end position
         self._queue = actions_through(head, corners, self.max_step)
+        self._expected = (expected_shapes(plan, self._queue, self.max_step) if plan.success
+                          else None)
+        self._done = 0
         if not self._queue and self.replan_every is not None:
             # Nothing to do by this plan (start and goal decode alike): wait instead of
             # replanning at every step.
@@ -215,11 +238,33 @@ class PlannerPolicy:
         due = not self.plans or (
             closed and (self._since_plan >= self.replan_every or not self._queue)
         )
-        if due and not self.stats.stalled:
+        if due and closed and self._on_track(obs.shape):
+            self.stats.kept += 1
+            self._since_plan = 0
+        elif due and not self.stats.stalled:
             if closed and self._stalled(obs.shape, obs.goal):
                 self._queue = []
             else:
                 self._replan(obs.shape, obs.goal, obs.head)
         action = self._queue.pop(0) if self._queue else np.zeros(2, dtype=np.float32)
         self._since_plan += 1
+        self._done += 1
         return (action[None] if obs.batched else action), state
+
+
+def expected_shapes(plan: Plan, actions: list[np.ndarray], max_step: float) -> list[np.ndarray]:
+    """The shape ``plan`` predicts after each of ``actions`` (its end path, executed in order).
+
+    The end's distance along the plan after each action is matched with the distance at which
+    each planned shape was predicted; shapes in between are blended linearly.
+    """
+    steps = np.linalg.norm(np.diff(plan.waypoints.astype(np.float64), axis=0), axis=1)
+    travel = np.concatenate([[0.0], np.cumsum(steps)])
+    done = np.cumsum([float(np.linalg.norm(a)) * max_step for a in actions])
+    out = []
+    for s in done:
+        j = int(np.clip(np.searchsorted(travel, s, side="right"), 1, len(travel) - 1))
+        span = travel[j] - travel[j - 1]
+        w = 1.0 if span <= 1e-12 else float(np.clip((s - travel[j - 1]) / span, 0.0, 1.0))
+        out.append(((1.0 - w) * plan.shapes[j - 1] + w * plan.shapes[j]).astype(np.float32))
+    return out

@@ -6,7 +6,10 @@ import pytest
 from toy_models import ToyHeadModel
 
 import dlo_env  # noqa: F401
+from dlo_env.cord import Cord
+from dlo_env.tasks import apply_action
 from planners import LatentTreePlanner, Plan, PlannerPolicy, StraightLinePolicy
+from planners.moves import actions_through
 
 
 class HoldingPlanner(LatentTreePlanner):
@@ -16,6 +19,30 @@ class HoldingPlanner(LatentTreePlanner):
         start = np.asarray(start, dtype=np.float32).reshape(-1, 2)
         return Plan(shapes=start[None], latents=np.zeros((1, 2), np.float32),
                     waypoints=start[:1], nodes=np.array([0]), success=True)
+
+
+class RecordingPlanner(LatentTreePlanner):
+    """Plans one straight head move to the goal's head, predicting the shapes by simulation.
+
+    ``offset`` (metres) is added to the predicted shapes: a plan the real cord does not follow.
+    """
+
+    offset = 0.0
+
+    def plan(self, start, goal, *, goal_latent=None, seed=None):
+        start = np.asarray(start, dtype=np.float32).reshape(-1, 2)
+        goal = np.asarray(goal, dtype=np.float32).reshape(-1, 2)
+        cord = Cord(grasp="head")
+        cord.reset(start)
+        shapes, heads = [cord.shape], [cord.gripper_positions()["head"]]
+        for action in actions_through(heads[0], goal[:1], 0.02):
+            apply_action(cord, action, 0.02)
+            shapes.append(cord.shape)
+            heads.append(cord.gripper_positions()["head"])
+        shapes = np.array(shapes) + np.float32(self.offset)
+        return Plan(shapes=shapes, latents=np.zeros((len(shapes), 2), np.float32),
+                    waypoints=np.array(heads, np.float32), nodes=np.array([0, len(shapes) - 1]),
+                    success=True)
 
 
 def _run_episode(env, policy, seed, difficulty=1):
@@ -73,17 +100,32 @@ def test_closed_loop_holds_still_after_replans_without_progress(toy_model, patie
     assert policy.stats.best_error > 0.02
 
 
+@pytest.mark.parametrize("offset, kept", [(0.0, True), (0.03, False)])
+def test_closed_loop_keeps_a_plan_the_cord_follows_and_replans_one_it_does_not(
+    toy_model, offset, kept
+):
+    env = gym.make("dlo_env/DLOEndpoint-v0")
+    planner = RecordingPlanner(toy_model)
+    planner.offset = offset
+    policy = PlannerPolicy(toy_model, planner, replan_every=3, replan_tolerance=0.01)
+    obs, _ = env.reset(seed=1, options={"difficulty": 1})
+    for _ in range(7):
+        action, _ = policy.predict(obs)
+        obs, *_ = env.step(action)
+    assert (policy.stats.kept, policy.stats.plans) == ((2, 1) if kept else (0, 3))
+
+
 def test_planning_failure_is_recorded_and_falls_back_to_the_straight_line(toy_model):
     env = gym.make("dlo_env/DLOEndpoint-v0")
-    planner = LatentTreePlanner(toy_model, max_nodes=1, straightness=1e-4, follow_ratio=None)
+    # No edge passes: every decoded step moves the cord more than the similarity bound.
+    planner = LatentTreePlanner(toy_model, max_nodes=1, similarity=1e-9)
     policy = PlannerPolicy(toy_model, planner)
     obs, _ = env.reset(seed=0, options={"difficulty": 1})
     head, goal_head = obs["observation"][40:42], obs["desired_goal"][:2]
     reference = StraightLinePolicy()
     planned, _ = policy.predict(obs)
     expected, _ = reference.predict(obs)
-    if policy.plans[0].success:
-        pytest.skip("the toy planner found a path under the tiny budget")
+    assert not policy.plans[0].success
     assert policy.stats.failures == 1
     np.testing.assert_allclose(planned, expected, atol=1e-6)
     direction = (goal_head - head) / np.linalg.norm(goal_head - head)
@@ -127,6 +169,8 @@ def test_a_policy_with_another_step_size_is_rejected(toy_model):
 def test_invalid_policy_arguments_are_rejected(toy_model):
     with pytest.raises(ValueError, match="replan_every must be None or an int >= 1"):
         PlannerPolicy(toy_model, replan_every=0)
+    with pytest.raises(ValueError, match="replan_tolerance must be >= 0"):
+        PlannerPolicy(toy_model, replan_every=5, replan_tolerance=-0.01)
     with pytest.raises(ValueError, match="patience must be None or an int >= 1"):
         PlannerPolicy(toy_model, replan_every=5, patience=0)
     with pytest.raises(ValueError, match="planner must plan for the model's n_points=20"):
