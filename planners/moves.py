@@ -11,12 +11,15 @@ from dlo_env.tasks import split_move
 EDGE_MARGIN = 0.02
 
 
-def actions_through(end: np.ndarray, corners: np.ndarray, max_step: float) -> list[np.ndarray]:
-    """Actions that move the end from ``end`` straight to each of ``corners`` in turn.
+def actions_by_move(
+    end: np.ndarray, corners: np.ndarray, max_step: float
+) -> list[list[np.ndarray]]:
+    """Actions that move the end from ``end`` straight to each of ``corners``, move by move.
 
     Every straight move is split into equal actions (``dlo_env.tasks.split_move``, as the
     environments' own tasks are made), so no action moves the end farther than ``max_step``
-    and the end stops exactly at every corner. Corners are clipped to the table.
+    and the end stops exactly at every corner. Corners are clipped to the table; a corner
+    less than a micrometre from the previous one gives an empty move.
 
     Args:
         end: ``(2,)`` the end's position now, metres.
@@ -24,17 +27,29 @@ def actions_through(end: np.ndarray, corners: np.ndarray, max_step: float) -> li
         max_step: Displacement of an action of 1.0, metres.
 
     Returns:
-        A list of float32 ``(2,)`` actions in ``[-1, 1]``, with ``|action| <= 1``.
+        ``K`` lists of float32 ``(2,)`` actions in ``[-1, 1]``, with ``|action| <= 1``.
     """
     if not max_step > 0:
         raise ValueError(f"max_step must be > 0, got {max_step!r}")
     lim = TABLE_HALF - EDGE_MARGIN
     here = np.asarray(end, dtype=np.float64).reshape(2)
-    actions: list[np.ndarray] = []
+    moves: list[list[np.ndarray]] = []
     for corner in np.clip(np.asarray(corners, dtype=np.float64).reshape(-1, 2), -lim, lim):
         displacement = corner - here
         if np.linalg.norm(displacement) < 1e-6:
+            moves.append([])
             continue
-        actions.extend(split_move(displacement, max_step))
+        moves.append(list(split_move(displacement, max_step)))
         here = corner
-    return actions
+    return moves
+
+
+def actions_through(end: np.ndarray, corners: np.ndarray, max_step: float) -> list[np.ndarray]:
+    """Actions that move the end from ``end`` straight to each of ``corners`` in turn.
+
+    The moves of :func:`actions_by_move`, one after the other.
+
+    Returns:
+        A list of float32 ``(2,)`` actions in ``[-1, 1]``, with ``|action| <= 1``.
+    """
+    return [action for move in actions_by_move(end, corners, max_step) for action in move]

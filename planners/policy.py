@@ -5,10 +5,11 @@ episode_start, deterministic) -> (action, state)``, so one harness drives planne
 At the first step of an episode it inverts the observed goal, plans from the observed cord,
 and turns the plan's straight end moves into actions of at most ``max_step``. Open loop
 (``replan_every=None``) it executes that plan and then holds still. Closed loop it compares the
-observed cord with the shape the plan predicts for that moment every ``replan_every`` steps, and
-replans from the observed cord when they differ by more than ``replan_tolerance`` (and whenever
-the current plan is used up). A plan the real cord follows is kept: replanning from the middle
-of a good straight move only risks a worse plan.
+observed cord with the shape the plan predicts for that moment every ``replan_every`` steps
+(deferred to the end of the straight move under way, ``wait_for_corner``), and replans from the
+observed cord when they differ by more than ``replan_tolerance`` (and whenever the current plan
+is used up). A plan the real cord follows is kept: replanning from the middle of a good straight
+move only risks a worse plan.
 
 When a plan fails (the search budget is spent before the goal is reached) the policy records
 the failure in ``stats`` and falls back to the straight-line reference for that plan: the head
@@ -30,7 +31,7 @@ import numpy as np
 
 from dlo_env.shapes import error
 from planners.latent_tree import LatentTreePlanner, Plan
-from planners.moves import actions_through
+from planners.moves import actions_by_move
 from planners.observation import read_observation
 from planners.surrogate import model_n_points
 
@@ -79,6 +80,9 @@ class PlannerPolicy:
             is about the 95th percentile of the largest deviation along open-loop plans that
             solved their task (linear-2 train split): in the middle of a straight move the
             surrogate's shapes are least accurate even when the move ends right.
+        wait_for_corner: Closed loop: defer each check to the end of the straight move under
+            way (the surrogate is most accurate at the ends of a move, and a move cut short
+            and replanned from its middle often ends worse).
         patience: Closed loop: replans in a row without progress after which the policy holds
             still (``None``: never).
         min_progress: Metres by which the real error must beat its best to count as progress.
@@ -97,6 +101,7 @@ class PlannerPolicy:
         *,
         max_step: float = 0.02,
         replan_tolerance: float = 0.04,
+        wait_for_corner: bool = True,
         patience: int | None = 3,
         min_progress: float = 0.002,
     ) -> None:
@@ -116,6 +121,7 @@ class PlannerPolicy:
             raise ValueError(f"patience must be None or an int >= 1, got {patience!r}")
         if not min_progress >= 0:
             raise ValueError(f"min_progress must be >= 0, got {min_progress!r}")
+        self.wait_for_corner = bool(wait_for_corner)
         if not replan_tolerance >= 0:
             raise ValueError(f"replan_tolerance must be >= 0, got {replan_tolerance!r}")
         self.replan_tolerance = float(replan_tolerance)
@@ -201,7 +207,9 @@ class PlannerPolicy:
             self.stats.failures += 1
             end = 0 if self.planner.config.end == "head" else -1
             corners = goal[end][None]  # the fallback: straight to the goal's end position
-        self._queue = actions_through(head, corners, self.max_step)
+        moves = actions_by_move(head, corners, self.max_step)
+        self._queue = [action for move in moves for action in move]
+        self._corners = set(np.cumsum([len(move) for move in moves]).tolist())
         self._expected = (expected_shapes(plan, self._queue, self.max_step) if plan.success
                           else None)
         self._done = 0
@@ -238,9 +246,10 @@ class PlannerPolicy:
             self.reset()
         obs = read_observation(observation, self.n_points)
         closed = self.replan_every is not None
-        due = not self.plans or (
-            closed and (self._since_plan >= self.replan_every or not self._queue)
-        )
+        due = not self.plans or (closed and (not self._queue or (
+            self._since_plan >= self.replan_every
+            and (self._done in self._corners or not self.wait_for_corner)
+        )))
         if due and closed and self._on_track(obs.shape):
             self.stats.kept += 1
             self._since_plan = 0

@@ -75,12 +75,36 @@ def test_planner_policy_actions_are_within_bounds(toy_model, replan_every):
 
 def test_closed_loop_replans_every_k_steps(toy_model):
     env = gym.make("dlo_env/DLOEndpoint-v0")
-    policy = PlannerPolicy(toy_model, replan_every=3)
+    policy = PlannerPolicy(toy_model, replan_every=3, replan_tolerance=0.0,
+                           wait_for_corner=False)
     obs, _ = env.reset(seed=0, options={"difficulty": 3})
     for _ in range(7):
         action, _ = policy.predict(obs)
         obs, *_ = env.step(action)
     assert policy.stats.plans == 3  # steps 0, 3 and 6
+
+
+def test_closed_loop_checks_the_plan_only_at_the_end_of_a_straight_move(toy_model):
+    env = gym.make("dlo_env/DLOEndpoint-v0")
+    planner = RecordingPlanner(toy_model)
+    planner.offset = 0.03  # never on track: every check replans
+    policy = PlannerPolicy(toy_model, planner, replan_every=3)
+    obs, _ = env.reset(seed=1, options={"difficulty": 1})
+    moves = []
+    for _ in range(12):
+        action, _ = policy.predict(obs)
+        moves.append(len(policy.plans))
+        obs, _, terminated, truncated, _ = env.step(action)
+        if terminated or truncated:
+            break
+    first = policy.plans[0]
+    steps_of_move = len(first.shapes) - 1  # one straight move, one action per recorded shape
+    assert steps_of_move > 3
+    # The one plan runs to its corner (or the end of the episode) although the cord is 3 cm
+    # off from step 1 on: there is no replan at steps 3, 6, ... in the middle of the move.
+    executed = min(len(moves), steps_of_move)
+    assert executed > 3
+    assert moves[:executed] == [1] * executed
 
 
 @pytest.mark.parametrize("patience, plans", [(2, 2), (None, 4)])
@@ -107,7 +131,8 @@ def test_closed_loop_keeps_a_plan_the_cord_follows_and_replans_one_it_does_not(
     env = gym.make("dlo_env/DLOEndpoint-v0")
     planner = RecordingPlanner(toy_model)
     planner.offset = offset
-    policy = PlannerPolicy(toy_model, planner, replan_every=3, replan_tolerance=0.01)
+    policy = PlannerPolicy(toy_model, planner, replan_every=3, replan_tolerance=0.01,
+                           wait_for_corner=False)
     obs, _ = env.reset(seed=1, options={"difficulty": 1})
     for _ in range(7):
         action, _ = policy.predict(obs)
