@@ -8,9 +8,9 @@ import argparse
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     """Flags of ``dlo baseline`` (they map onto ``planners.rl_baseline.BaselineConfig``)."""
     parser.add_argument("--algo", choices=("ppo", "sac", "sac-her"), required=True)
-    parser.add_argument("--timesteps", type=int, default=200_000,
+    parser.add_argument("--timesteps", type=int, default=300_000,
                         help="environment steps of training, summed over environments "
-                             "(default 200000)")
+                             "(default 300000)")
     parser.add_argument("--n-envs", type=int, default=2, help="environments (default 2)")
     parser.add_argument("--subprocess", action="store_true",
                         help="step the environments in subprocesses (needs a free core each)")
@@ -53,7 +53,12 @@ def run(args: argparse.Namespace) -> int:
     from dataclasses import asdict
     from pathlib import Path
 
-    from planners.rl_baseline import BaselineConfig, read_monitor_logs, train_baseline
+    from planners.rl_baseline import (
+        BaselineConfig,
+        ResumeMismatch,
+        read_monitor_logs,
+        train_baseline,
+    )
 
     try:
         settings = dict(
@@ -73,7 +78,7 @@ def run(args: argparse.Namespace) -> int:
     try:
         path = train_baseline(config, out, device=args.device, resume=args.resume,
                               threads=args.threads)
-    except ValueError as exc:
+    except ResumeMismatch as exc:
         print(f"dlo baseline: {exc}", file=sys.stderr)
         return 2
     meta = json.loads((out / "hyperparameters.json").read_text())

@@ -65,7 +65,7 @@ class BaselineConfig:
     env_id: str = "dlo_env/DLOEndpoint-v0"
     difficulties: tuple[int, ...] = (1, 2, 3)
     reward_type: str = "dense"
-    timesteps: int = 200_000
+    timesteps: int = 300_000
     n_envs: int = 2
     subprocess: bool = False
     seed: int = 0
@@ -113,6 +113,10 @@ class BaselineConfig:
             raise ValueError(f"config has unknown keys {unknown}")
         values = {k: tuple(v) if isinstance(v, list) else v for k, v in data.items()}
         return replace(cls(), **values)
+
+
+class ResumeMismatch(ValueError):
+    """A resumed run was given another config than the interrupted one."""
 
 
 class RandomDifficulty(gym.Wrapper):
@@ -270,6 +274,9 @@ def train_baseline(
 
     Returns:
         The path of the saved model (``out_dir/model.zip``).
+
+    Raises:
+        ResumeMismatch: If resuming with another config than the interrupted run's.
     """
     import torch
     from stable_baselines3 import PPO, SAC
@@ -284,7 +291,7 @@ def train_baseline(
     if resuming:
         saved = BaselineConfig.from_dict(json.loads((out / "run.json").read_text())["config"])
         if replace(saved, timesteps=config.timesteps) != config:  # more steps are fine
-            raise ValueError(f"resume needs the config of the interrupted run in "
+            raise ResumeMismatch(f"resume needs the config of the interrupted run in "
                              f"{out}/run.json (only timesteps may change)")
     _atomic_json(out / "run.json", {"format_version": FORMAT_VERSION, "config": asdict(config)})
     env = make_vec_env(config, str(monitor_dir), append=resuming)
