@@ -8,8 +8,9 @@ and turns the plan's straight end moves into actions of at most ``max_step``. Op
 observed cord with the shape the plan predicts for that moment every ``replan_every`` steps
 (deferred to the end of the straight move under way, ``wait_for_corner``), and replans from the
 observed cord when they differ by more than ``replan_tolerance`` (and whenever the current plan
-is used up). A plan the real cord follows is kept: replanning from the middle of a good straight
-move only risks a worse plan.
+is used up, once the cord has come to rest: up to ``settle_steps`` zero actions, as the tasks'
+goals are shapes at rest). A plan the real cord follows is kept: replanning from the middle of a
+good straight move only risks a worse plan.
 
 When a plan fails (the search budget is spent before the goal is reached) the policy records
 the failure in ``stats`` and falls back to the straight-line reference for that plan: the head
@@ -34,6 +35,9 @@ from planners.latent_tree import LatentTreePlanner, Plan
 from planners.moves import actions_by_move
 from planners.observation import read_observation
 from planners.surrogate import model_n_points
+
+#: The cord counts as at rest when no point moved farther than this in one step, metres.
+REST_MOTION = 5e-4
 
 
 @dataclass
@@ -102,6 +106,7 @@ class PlannerPolicy:
         max_step: float = 0.02,
         replan_tolerance: float = 0.04,
         wait_for_corner: bool = True,
+        settle_steps: int = 10,
         patience: int | None = 3,
         min_progress: float = 0.002,
     ) -> None:
@@ -122,6 +127,9 @@ class PlannerPolicy:
         if not min_progress >= 0:
             raise ValueError(f"min_progress must be >= 0, got {min_progress!r}")
         self.wait_for_corner = bool(wait_for_corner)
+        if not (isinstance(settle_steps, int) and settle_steps >= 0):
+            raise ValueError(f"settle_steps must be an int >= 0, got {settle_steps!r}")
+        self.settle_steps = settle_steps
         if not replan_tolerance >= 0:
             raise ValueError(f"replan_tolerance must be >= 0, got {replan_tolerance!r}")
         self.replan_tolerance = float(replan_tolerance)
@@ -164,6 +172,9 @@ class PlannerPolicy:
         self._queue: list[np.ndarray] = []
         self._expected: list[np.ndarray] | None = None
         self._done = 0
+        self._corners: set[int] = set()
+        self._previous: np.ndarray | None = None
+        self._waited = 0
         self._goal_latent: np.ndarray | None = None
         self._goal_key: bytes | None = None
         self._since_plan = 0
@@ -213,6 +224,7 @@ class PlannerPolicy:
         self._expected = (expected_shapes(plan, self._queue, self.max_step) if plan.success
                           else None)
         self._done = 0
+        self._waited = 0
         if not self._queue and self.replan_every is not None:
             # Nothing to do by this plan (start and goal decode alike): wait instead of
             # replanning at every step.
@@ -246,6 +258,14 @@ class PlannerPolicy:
             self.reset()
         obs = read_observation(observation, self.n_points)
         closed = self.replan_every is not None
+        moving = self._previous is not None and float(
+            np.abs(obs.shape - self._previous).max()) > REST_MOTION
+        self._previous = obs.shape
+        if closed and self.plans and not self._queue and moving and (
+                self._waited < self.settle_steps):
+            self._waited += 1  # let the cord come to rest before judging the plan's outcome
+            action = np.zeros(2, dtype=np.float32)
+            return (action[None] if obs.batched else action), state
         due = not self.plans or (closed and (not self._queue or (
             self._since_plan >= self.replan_every
             and (self._done in self._corners or not self.wait_for_corner)

@@ -10,6 +10,7 @@ from dlo_env.cord import Cord
 from dlo_env.tasks import apply_action
 from planners import LatentTreePlanner, Plan, PlannerPolicy, StraightLinePolicy
 from planners.moves import actions_through
+from planners.policy import REST_MOTION
 
 
 class HoldingPlanner(LatentTreePlanner):
@@ -140,6 +141,27 @@ def test_closed_loop_keeps_a_plan_the_cord_follows_and_replans_one_it_does_not(
     assert (policy.stats.kept, policy.stats.plans) == ((2, 1) if kept else (0, 3))
 
 
+def test_closed_loop_lets_the_cord_come_to_rest_before_the_next_plan(toy_model):
+    env = gym.make("dlo_env/DLOEndpoint-v0")
+    policy = PlannerPolicy(toy_model, RecordingPlanner(toy_model), replan_every=3)
+    obs, _ = env.reset(seed=0, options={"difficulty": 2})
+    first_move = None
+    shapes, plans, actions = [obs["achieved_goal"]], [], []
+    for _ in range(30):
+        action, _ = policy.predict(obs)
+        if first_move is None:
+            first_move = len(policy.plans[0].shapes) - 1  # actions of the one straight move
+        plans.append(len(policy.plans))
+        actions.append(action)
+        obs, *_ = env.step(action)
+        shapes.append(obs["achieved_goal"])
+    second = plans.index(2)  # the step at which the second plan was made
+    assert second > first_move, "the policy waited after the first plan's last action"
+    assert not np.any(actions[first_move:second])
+    motion = np.abs(shapes[second] - shapes[second - 1]).max()
+    assert motion <= REST_MOTION or second - first_move == policy.settle_steps
+
+
 def test_planning_failure_is_recorded_and_falls_back_to_the_straight_line(toy_model):
     env = gym.make("dlo_env/DLOEndpoint-v0")
     # No edge passes: every decoded step moves the cord more than the similarity bound.
@@ -196,6 +218,8 @@ def test_invalid_policy_arguments_are_rejected(toy_model):
         PlannerPolicy(toy_model, replan_every=0)
     with pytest.raises(ValueError, match="replan_tolerance must be >= 0"):
         PlannerPolicy(toy_model, replan_every=5, replan_tolerance=-0.01)
+    with pytest.raises(ValueError, match="settle_steps must be an int >= 0"):
+        PlannerPolicy(toy_model, replan_every=5, settle_steps=-1)
     with pytest.raises(ValueError, match="patience must be None or an int >= 1"):
         PlannerPolicy(toy_model, replan_every=5, patience=0)
     with pytest.raises(ValueError, match="planner must plan for the model's n_points=20"):
