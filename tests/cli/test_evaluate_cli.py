@@ -35,16 +35,22 @@ def test_evaluate_prints_the_table_and_writes_csv_and_json(tmp_path, capsys):
 
 
 @pytest.mark.slow
-def test_evaluate_runs_the_latent_tree_agents_on_a_given_model(tmp_path, untrained_model_file):
+def test_evaluate_runs_the_latent_tree_agents_on_a_given_model(tmp_path, untrained_model_file,
+                                                              capsys):
     out = tmp_path / "eval"
     code = main(["evaluate", "--agent", "latent-tree", "latent-tree-closed", "--episodes", "1",
                  "--model", str(untrained_model_file), "--max-seconds", "0.05",
                  "--replan-every", "50", "--out", str(out)])
     assert code == 0
     for name in ("latent-tree-d1", "latent-tree-closed-d1"):
-        record = json.loads((out / f"{name}.json").read_text())["records"][0]
+        data = json.loads((out / f"{name}.json").read_text())
+        record = data["records"][0]
         assert record["plans"] >= 1
         assert record["planning_seconds"] > 0
+        assert len(data["fidelity_profiles"]) == 1
+    printed = capsys.readouterr().out
+    assert "where plans and the real cord part ways" in printed
+    assert "travel 0-5 cm" in printed
 
 
 def test_evaluate_rejects_an_unknown_agent(tmp_path, capsys):
