@@ -52,6 +52,7 @@ if __name__ == "__main__":
                                 straightness=args.straightness)
     plan = planner.plan(start, goal)
     s = plan.stats
+    # The first call includes PyTorch's one-time warm-up (about a second); later plans are fast.
     print(f"success {plan.success}: {s['nodes']} nodes, {s['decoder_calls']} decoder calls, "
           f"{s['seconds']:.3f} s")
     print(f"{len(plan.moves)} straight head moves (m): {plan.moves.round(3).tolist()}")
