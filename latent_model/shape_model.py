@@ -306,7 +306,9 @@ class ShapeModel:
                    name: str = "path") -> ShapeModel:
         """Rebuild a model from a checkpoint dict (as written by ``save``)."""
         try:
-            config = config_from_dict(ModelConfig, data["model_config"], "model_config")
+            # Checkpoints written before ``output`` existed all had the paper's point output.
+            config = config_from_dict(ModelConfig, {"output": "points", **data["model_config"]},
+                                      "model_config")
             norm = config_from_dict(Normalisation, data["normalisation"], "normalisation")
             generator, encoder = Generator(config), Encoder(config)
             generator.load_state_dict(data["generator"])
