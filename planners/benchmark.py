@@ -390,7 +390,7 @@ def plot_results(rows: list[dict[str, Any]], png: str | os.PathLike) -> None:
     panels = (("success_rate", "success rate", 1.0, False),
               ("median_error", "median final error (cm)", 100.0, False),
               ("seconds_per_episode", "seconds per episode", 1.0, True))
-    fig, axes = plt.subplots(1, 3, figsize=(13, 3.8))
+    fig, axes = plt.subplots(1, 3, figsize=(13, 4.2))
     width = 0.8 / max(1, len(agents))
     x = np.arange(len(difficulties))
     for ax, (key, label, scale, log) in zip(axes, panels):
@@ -406,13 +406,17 @@ def plot_results(rows: list[dict[str, Any]], png: str | os.PathLike) -> None:
             ax.set_yscale("log")
         if key == "success_rate":
             ax.set_ylim(0, 1)
-    axes[0].legend(fontsize=7, loc="lower left")
+        if key == "median_error":
+            ax.axhline(2.0, color="k", lw=0.8, ls="--")  # the success threshold
+    handles, labels = axes[0].get_legend_handles_labels()
+    fig.legend(handles, labels, loc="lower center", ncol=len(agents), fontsize=8,
+               frameon=False)
     missing = sorted({r["agent"] for r in rows if r["status"] != "ok"})
     title = "dlo benchmark (test suites)"
     if missing:
         title += " — missing: " + ", ".join(missing)
     fig.suptitle(title)
-    fig.tight_layout()
+    fig.tight_layout(rect=(0, 0.07, 1, 1))
     png = Path(png)
     tmp = png.with_name(png.stem + ".tmp.png")
     fig.savefig(tmp, dpi=100)
