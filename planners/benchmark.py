@@ -16,6 +16,7 @@ import json
 import math
 import os
 import platform
+import time
 from dataclasses import asdict, dataclass
 from pathlib import Path
 from typing import Any
@@ -195,6 +196,8 @@ def row_of(agent: LoadedAgent, difficulty: int, evaluation: Evaluation | None,
         "mean_fidelity": None,
         "training_env_steps": agent.training_env_steps,
         "model": agent.model,
+        "wall_seconds": None,
+        "commit": "",
     }
     if evaluation is not None:
         records, s = evaluation.records, evaluation.summary
@@ -213,7 +216,10 @@ def row_of(agent: LoadedAgent, difficulty: int, evaluation: Evaluation | None,
     return row
 
 
-def _load_cell(path: Path, key: dict[str, Any]) -> Evaluation | None:
+def _load_cell(path: Path, key: dict[str, Any]) -> tuple[Evaluation, dict[str, Any]] | None:
+    """A cell written by an earlier run with the same key: its evaluation and run facts."""
+    from dataclasses import fields
+
     from planners.evaluation import EpisodeRecord, summarise
 
     if not path.is_file():
@@ -224,9 +230,31 @@ def _load_cell(path: Path, key: dict[str, Any]) -> Evaluation | None:
         return None
     if data.get("benchmark_key") != _json_ready(key):
         return None
-    records = [EpisodeRecord(**{k: (math.nan if v is None else v) for k, v in r.items()})
-               for r in data["records"]]
-    return Evaluation(records, summarise(records, agent=key["agent"], env_id=key["env_id"]))
+    known = {f.name for f in fields(EpisodeRecord)}
+    try:
+        records = [EpisodeRecord(**{k: (math.nan if v is None else v)
+                                    for k, v in r.items() if k in known})
+                   for r in data["records"]]
+    except TypeError:  # written by another version of EpisodeRecord: run the cell again
+        return None
+    facts = {"wall_seconds": data.get("wall_seconds"), "commit": data.get("commit", "")}
+    return Evaluation(records, summarise(records, agent=key["agent"], env_id=key["env_id"])), facts
+
+
+def code_version() -> str:
+    """``git`` commit of the code (``+dirty`` with uncommitted changes), "" outside a checkout."""
+    import subprocess
+
+    root = Path(__file__).resolve().parent.parent
+    try:
+        commit = subprocess.run(["git", "rev-parse", "--short", "HEAD"], cwd=root, check=True,
+                                capture_output=True, text=True, timeout=10).stdout.strip()
+        dirty = subprocess.run(["git", "status", "--porcelain", "--untracked-files=no"],
+                               cwd=root, check=True, capture_output=True, text=True,
+                               timeout=10).stdout.strip()
+    except (OSError, subprocess.SubprocessError):
+        return ""
+    return commit + ("+dirty" if dirty else "")
 
 
 def run_benchmark(config: BenchmarkConfig, out_dir: str | os.PathLike, *,
@@ -267,16 +295,20 @@ def run_benchmark(config: BenchmarkConfig, out_dir: str | os.PathLike, *,
                 continue
             key = cell_key(config, agent, difficulty)
             path = cells / f"{name}-d{difficulty}.json"
-            result = _load_cell(path, key) if resume else None
-            if result is None:
+            loaded = _load_cell(path, key) if resume else None
+            if loaded is None:
+                t0 = time.perf_counter()
                 result = evaluate(agent.policy, config.env_id, suite=SUITES[difficulty],
                                   episodes=config.episodes, seed=config.seed, split="test",
                                   agent=name, fidelity=config.fidelity, progress=progress)
+                facts = {"wall_seconds": time.perf_counter() - t0, "commit": code_version()}
                 write_evaluation(result, cells, f"{name}-d{difficulty}",
-                                 extra={"benchmark_key": key})
-            elif progress:
-                print(f"{name} d{difficulty}: reused {path}", flush=True)
-            rows.append(row_of(agent, difficulty, result, config.episodes))
+                                 extra={"benchmark_key": key, **facts})
+            else:
+                result, facts = loaded
+                if progress:
+                    print(f"{name} d{difficulty}: reused {path}", flush=True)
+            rows.append({**row_of(agent, difficulty, result, config.episodes), **facts})
     return rows
 
 
@@ -365,11 +397,16 @@ def results_markdown(rows: list[dict[str, Any]], ratios: dict[str, float],
     models = sorted({(r["agent"], r["model"]) for r in rows if r["model"]})
     if models:
         lines += ["", "Models: " + "; ".join(f"`{a}` {m}" for a, m in models) + "."]
+    evaluated = sum(r["wall_seconds"] or 0.0 for r in rows)
+    commits = sorted({r["commit"] for r in rows if r.get("commit")})
     lines += [
         "",
         f"Machine: {machine['platform']}, {machine['processor']}, {machine['cpu_count']} CPUs, "
         f"Python {machine['python']}, torch {machine['torch']} "
-        f"({machine['torch_threads']} thread(s)). Wall time {seconds / 60:.1f} min.",
+        f"({machine['torch_threads']} thread(s)). Wall time of the evaluations "
+        f"{evaluated / 60:.1f} min (this invocation {seconds / 60:.1f} min).",
+        "",
+        f"Code: {', '.join(commits) if commits else 'unknown'} (git commit of each cell's run).",
         "",
         f"Command: `{command}`",
         "",
