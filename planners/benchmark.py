@@ -257,6 +257,16 @@ def code_version() -> str:
     return commit + ("+dirty" if dirty else "")
 
 
+def _warm_up(policy: Any, env: Any) -> None:
+    """One untimed action on a random task, so first-call costs (torch) are not timed."""
+    obs, _ = env.reset(seed=2**20, options={"difficulty": 1})
+    if hasattr(policy, "reset"):
+        policy.reset()
+    policy.predict(obs, episode_start=np.array([True]), deterministic=True)
+    if hasattr(policy, "reset"):
+        policy.reset()
+
+
 def run_benchmark(config: BenchmarkConfig, out_dir: str | os.PathLike, *,
                   resume: bool = False, progress: bool = True) -> list[dict[str, Any]]:
     """Evaluate every agent on every difficulty's test suite; write each cell as it finishes.
@@ -283,6 +293,8 @@ def run_benchmark(config: BenchmarkConfig, out_dir: str | os.PathLike, *,
         env = gym.make(config.env_id)
         try:
             agent = load_agent(name, config, env, shape_model)
+            if agent.policy is not None:
+                _warm_up(agent.policy, env)
         finally:
             env.close()
         if agent.missing and name.startswith("latent-tree") and why:
@@ -348,6 +360,14 @@ def machine_description() -> dict[str, Any]:
     }
 
 
+def _display_path(path: str) -> str:
+    """``path`` relative to the working directory when it lies below it."""
+    try:
+        return str(Path(path).resolve().relative_to(Path.cwd().resolve()))
+    except ValueError:
+        return path
+
+
 def _fmt(value: Any, fmt: str, scale: float = 1.0) -> str:
     if value is None or (isinstance(value, float) and not math.isfinite(value)):
         return "–"
@@ -387,6 +407,11 @@ def results_markdown(rows: list[dict[str, Any]], ratios: dict[str, float],
         parts = ", ".join(f"{k} {v:.1f}x" for k, v in ratios.items() if k != "all")
         lines.append(f"**Planning time, physics-mpc / latent-tree on the same episodes:** "
                      f"{ratios.get('all', float('nan')):.1f}x ({parts}).")
+        closed = planning_time_ratios(rows, fast="latent-tree-closed")
+        if closed:
+            parts = ", ".join(f"{k} {v:.1f}x" for k, v in closed.items() if k != "all")
+            lines.append(f"Against the closed loop (latent-tree-closed, which replans): "
+                         f"{closed.get('all', float('nan')):.1f}x ({parts}).")
     else:
         lines.append("**Planning time ratio:** not measured (physics-mpc and latent-tree did "
                      "not both run).")
@@ -396,7 +421,8 @@ def results_markdown(rows: list[dict[str, Any]], ratios: dict[str, float],
         lines += [f"- `{agent}`: {note}" for agent, note in missing]
     models = sorted({(r["agent"], r["model"]) for r in rows if r["model"]})
     if models:
-        lines += ["", "Models: " + "; ".join(f"`{a}` {m}" for a, m in models) + "."]
+        lines += ["", "Models (SHA-256 prefix): " + "; ".join(
+            f"`{a}` {_display_path(m)} ({file_digest(m)[:8] or 'gone'})" for a, m in models) + "."]
     evaluated = sum(r["wall_seconds"] or 0.0 for r in rows)
     commits = sorted({r["commit"] for r in rows if r.get("commit")})
     lines += [
