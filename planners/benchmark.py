@@ -242,15 +242,16 @@ def _load_cell(path: Path, key: dict[str, Any]) -> tuple[Evaluation, dict[str, A
 
 
 def code_version() -> str:
-    """``git`` commit of the code (``+dirty`` with uncommitted changes), "" outside a checkout."""
+    """``git`` commit of the code (``+dirty`` with uncommitted changes to Python files), "" outside
+    a checkout."""
     import subprocess
 
     root = Path(__file__).resolve().parent.parent
     try:
         commit = subprocess.run(["git", "rev-parse", "--short", "HEAD"], cwd=root, check=True,
                                 capture_output=True, text=True, timeout=10).stdout.strip()
-        dirty = subprocess.run(["git", "status", "--porcelain", "--untracked-files=no"],
-                               cwd=root, check=True, capture_output=True, text=True,
+        dirty = subprocess.run(["git", "status", "--porcelain", "--untracked-files=no", "--",
+                                "*.py"], cwd=root, check=True, capture_output=True, text=True,
                                timeout=10).stdout.strip()
     except (OSError, subprocess.SubprocessError):
         return ""
