@@ -36,6 +36,7 @@ def run(args: argparse.Namespace) -> int:
     from dataclasses import replace
     from pathlib import Path
 
+    from dlo_env.atomic import write_text_atomic
     from latent_model import FinetuneConfig, ShapeModel, finetune
     from latent_model.dataset import load_shapes
     from latent_model.shape_model import MODEL_FILE
@@ -70,9 +71,7 @@ def run(args: argparse.Namespace) -> int:
     for key in ("heldout_before", "heldout_after"):
         value = getattr(report, key)
         summary[key] = value.as_dict() if value is not None else None
-    tmp = out / ".finetune_report.json.tmp"
-    tmp.write_text(json.dumps(summary, indent=2))
-    os.replace(tmp, out / "finetune_report.json")
+    write_text_atomic(out / "finetune_report.json", json.dumps(summary, indent=2))
     print(report.format())
     print(f"new model: {out / MODEL_FILE}")
     return 0

@@ -35,6 +35,7 @@ from typing import Any
 
 import numpy as np
 
+from dlo_env.atomic import write_text_atomic
 from dlo_env.cord import Cord, CordParams
 from dlo_env.data import (
     FORMAT_VERSION,
@@ -382,11 +383,8 @@ def _check_resumable(parts: Path, config: CollectConfig) -> None:
 
 
 def _write_manifest(parts: Path, config: CollectConfig) -> None:
-    manifest = parts / "manifest.json"
-    tmp = parts / f".manifest.json.tmp-{os.getpid()}"
-    tmp.write_text(json.dumps({"format_version": FORMAT_VERSION, "collect": config.to_json()},
-                              indent=1, sort_keys=True))
-    os.replace(tmp, manifest)
+    write_text_atomic(parts / "manifest.json", json.dumps(
+        {"format_version": FORMAT_VERSION, "collect": config.to_json()}, indent=1, sort_keys=True))
 
 
 def assemble(parts: Path, plan: list[tuple[int, int]]) -> tuple[ShapeDataset, dict[str, Any]]:

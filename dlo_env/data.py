@@ -38,6 +38,8 @@ from typing import Any
 
 import numpy as np
 
+from dlo_env.atomic import atomic_path
+
 #: Name stored in every file's metadata, so other ``.npz`` files are recognised as such.
 FORMAT_NAME = "dlo-shapes"
 #: Version of the file layout; bumped on any incompatible change.
@@ -169,17 +171,12 @@ def save_shapes(path: str | os.PathLike[str], dataset: ShapeDataset) -> Path:
     path = Path(path)
     meta = {"format": FORMAT_NAME, "format_version": FORMAT_VERSION, **dataset.metadata}
     arrays = {**dataset.arrays(), "metadata": np.array(json.dumps(meta, sort_keys=True))}
-    tmp = path.with_name(f".{path.name}.tmp-{os.getpid()}")
-    try:
+    with atomic_path(path) as tmp:
         with zipfile.ZipFile(tmp, "w", compression=zipfile.ZIP_STORED, allowZip64=True) as zf:
             for name, arr in arrays.items():
                 info = zipfile.ZipInfo(f"{name}.npy", date_time=(1980, 1, 1, 0, 0, 0))
                 with zf.open(info, "w", force_zip64=True) as f:
                     np.lib.format.write_array(f, np.asarray(arr), allow_pickle=False)
-        os.replace(tmp, path)
-    finally:
-        if tmp.exists():
-            tmp.unlink()
     return path
 
 

@@ -16,13 +16,13 @@ from __future__ import annotations
 
 import math
 import os
-import tempfile
 import zipfile
 from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 
+from dlo_env.atomic import atomic_path
 from dlo_env.cord import Cord, CordParams, Grasp
 from dlo_env.shapes import (
     TABLE_HALF,
@@ -375,14 +375,8 @@ def save_tasks(path: str | os.PathLike, tasks: list[Task]) -> None:
         "max_step": np.array([t.max_step for t in tasks], dtype=np.float64),
     }
     path = Path(path)
-    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=path.name, suffix=".tmp")
-    try:
-        with os.fdopen(fd, "wb") as f:
-            np.savez_compressed(f, **arrays)
-        os.replace(tmp, path)
-    except BaseException:
-        Path(tmp).unlink(missing_ok=True)
-        raise
+    with atomic_path(path) as tmp, open(tmp, "wb") as f:
+        np.savez_compressed(f, **arrays)
 
 
 def load_tasks(path: str | os.PathLike) -> list[Task]:

@@ -3,11 +3,12 @@
 from __future__ import annotations
 
 import os
-import tempfile
 from pathlib import Path
 from typing import Any
 
 import torch
+
+from dlo_env.atomic import atomic_path
 
 #: Marks a file as a dlo shape-model checkpoint.
 FORMAT = "dlo-shape-model"
@@ -21,15 +22,8 @@ def save_atomic(obj: dict[str, Any], path: str | os.PathLike) -> Path:
     A reader never sees a half-written file, and an interrupted write leaves the old one.
     """
     path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
-    try:
-        with os.fdopen(fd, "wb") as f:
-            torch.save(obj, f)
-        os.replace(tmp, path)
-    except BaseException:
-        Path(tmp).unlink(missing_ok=True)
-        raise
+    with atomic_path(path) as tmp:
+        torch.save(obj, tmp)
     return path
 
 

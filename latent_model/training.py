@@ -19,6 +19,7 @@ from typing import Any
 import numpy as np
 import torch
 
+from dlo_env.atomic import atomic_path
 from dlo_env.shapes import TABLE_HALF
 from latent_model import losses, metrics, pose
 from latent_model.checkpoint import FORMAT, FORMAT_VERSION, load_checkpoint, save_atomic
@@ -265,12 +266,10 @@ class Trainer:
 # ------------------------------------------------------------------- logging
 def write_csv(rows: list[dict[str, Any]], path: Path) -> None:
     """Rewrite the metrics CSV atomically from all rows."""
-    tmp = path.with_name(f".{path.name}.tmp")
-    with open(tmp, "w", newline="") as f:
+    with atomic_path(path) as tmp, open(tmp, "w", newline="") as f:
         writer = csv.DictWriter(f, fieldnames=CSV_FIELDS, extrasaction="ignore")
         writer.writeheader()
         writer.writerows(rows)
-    os.replace(tmp, path)
 
 
 def plot_curves(
@@ -301,10 +300,9 @@ def plot_curves(
         ax.set_xlabel("training minutes")
         ax.grid(alpha=0.3)
     fig.tight_layout()
-    tmp = path.with_name(f".{path.name}.tmp.png")
-    fig.savefig(tmp, dpi=80)
+    with atomic_path(path) as tmp:
+        fig.savefig(tmp, dpi=80)
     plt.close(fig)
-    os.replace(tmp, path)
 
 
 #: The floors of the shipped model (drawn as dashed lines on the PNG).

@@ -23,7 +23,8 @@ from typing import Any
 
 import numpy as np
 
-from planners.evaluation import Evaluation, _json_ready, _write_atomic, evaluate, write_evaluation
+from dlo_env.atomic import atomic_path, write_text_atomic
+from planners.evaluation import Evaluation, evaluate, json_ready, write_evaluation
 
 #: The agents of the benchmark, in table order.
 AGENTS = ("straight-line", "latent-tree", "latent-tree-closed", "physics-mpc", "ppo", "sac-her")
@@ -228,7 +229,7 @@ def _load_cell(path: Path, key: dict[str, Any]) -> tuple[Evaluation, dict[str, A
         data = json.loads(path.read_text())
     except json.JSONDecodeError:
         return None
-    if data.get("benchmark_key") != _json_ready(key):
+    if data.get("benchmark_key") != json_ready(key):
         return None
     known = {f.name for f in fields(EpisodeRecord)}
     try:
@@ -481,11 +482,9 @@ def plot_results(rows: list[dict[str, Any]], png: str | os.PathLike) -> None:
         title += " — missing: " + ", ".join(missing)
     fig.suptitle(title)
     fig.tight_layout(rect=(0, 0.07, 1, 1))
-    png = Path(png)
-    tmp = png.with_name(png.stem + ".tmp.png")
-    fig.savefig(tmp, dpi=100)
+    with atomic_path(png) as tmp:
+        fig.savefig(tmp, dpi=100)
     plt.close(fig)
-    os.replace(tmp, png)
 
 
 def write_results(rows: list[dict[str, Any]], out_dir: str | os.PathLike, command: str,
@@ -500,7 +499,7 @@ def write_results(rows: list[dict[str, Any]], out_dir: str | os.PathLike, comman
     ratios = planning_time_ratios(rows)
     machine = machine_description()
     paths = {"json": out / "results.json", "md": out / "results.md", "png": out / "results.png"}
-    _write_atomic(paths["json"], json.dumps(_json_ready(rows), indent=2) + "\n")
-    _write_atomic(paths["md"], results_markdown(rows, ratios, machine, command, seconds))
+    write_text_atomic(paths["json"], json.dumps(json_ready(rows), indent=2) + "\n")
+    write_text_atomic(paths["md"], results_markdown(rows, ratios, machine, command, seconds))
     plot_results(rows, paths["png"])
     return paths

@@ -15,13 +15,14 @@ import io
 import json
 import math
 import os
-import tempfile
 import time
 from dataclasses import asdict, dataclass, field, fields
 from pathlib import Path
 from typing import Any
 
 import numpy as np
+
+from dlo_env.atomic import write_text_atomic
 
 #: Columns of the printed table: (summary key, header, format).
 TABLE_COLUMNS = (
@@ -399,27 +400,16 @@ def format_divergence(summaries: list[dict[str, Any]]) -> str:
     return "\n".join(lines)
 
 
-def _write_atomic(path: Path, text: str) -> None:
-    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=path.name, suffix=".tmp")
-    try:
-        with os.fdopen(fd, "w", newline="") as f:
-            f.write(text)
-        os.chmod(tmp, 0o644)  # mkstemp makes 0600; results are meant to be shared
-        os.replace(tmp, path)
-    except BaseException:
-        Path(tmp).unlink(missing_ok=True)
-        raise
-
-
-def _json_ready(value: Any) -> Any:
+def json_ready(value: Any) -> Any:
+    """``value`` with non-finite floats as None (strict JSON), recursively."""
     if isinstance(value, float) and not math.isfinite(value):
         return None
     if isinstance(value, dict):
-        return {k: _json_ready(v) for k, v in value.items()}
+        return {k: json_ready(v) for k, v in value.items()}
     if isinstance(value, (list, tuple)):
-        return [_json_ready(v) for v in value]
+        return [json_ready(v) for v in value]
     if isinstance(value, (np.integer, np.floating, np.bool_)):
-        return _json_ready(value.item())
+        return json_ready(value.item())
     return value
 
 
@@ -427,7 +417,7 @@ def write_summaries(summaries: list[dict[str, Any]], path: str | os.PathLike) ->
     """Write a list of summaries to a JSON file atomically (NaN becomes ``null``)."""
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
-    _write_atomic(path, json.dumps(_json_ready(summaries), indent=2) + "\n")
+    write_text_atomic(path, json.dumps(json_ready(summaries), indent=2) + "\n")
     return path
 
 
@@ -455,7 +445,7 @@ def write_evaluation(
         writer.writerow({k: ("" if isinstance(v, float) and math.isnan(v) else v)
                          for k, v in row.items()})
     csv_path, json_path = folder / f"{name}.csv", folder / f"{name}.json"
-    _write_atomic(csv_path, buffer.getvalue())
+    write_text_atomic(csv_path, buffer.getvalue())
     data = {
         "summary": evaluation.summary,
         "records": [asdict(r) for r in evaluation.records],
@@ -466,5 +456,5 @@ def write_evaluation(
         ],
         **(extra or {}),
     }
-    _write_atomic(json_path, json.dumps(_json_ready(data), indent=2) + "\n")
+    write_text_atomic(json_path, json.dumps(json_ready(data), indent=2) + "\n")
     return csv_path, json_path

@@ -7,12 +7,12 @@ the planners run without them. Files are written atomically.
 from __future__ import annotations
 
 import os
-import tempfile
 from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 
+from dlo_env.atomic import atomic_path
 from dlo_env.shapes import TABLE_HALF
 
 _FLOOR = (60, 60, 60)
@@ -39,11 +39,6 @@ class Frame:
     goal: np.ndarray
     ghosts: np.ndarray
     caption: str = ""
-
-
-def _atomic_target(path: Path) -> tuple[int, str]:
-    path.parent.mkdir(parents=True, exist_ok=True)
-    return tempfile.mkstemp(dir=path.parent, prefix=path.name, suffix=".tmp")
 
 
 def _view(frames: list[Frame], size: int, margin: float = 0.08):
@@ -93,16 +88,9 @@ def save_episode_gif(frames: list[Frame], path: str | os.PathLike, size: int = 4
             draw.text((6, 4), frame.caption, fill=_TEXT)
         draw.text((6, size - 16), "cord (blue), goal (green), current plan (pale)", fill=_TEXT)
         images.append(image.convert("P", palette=Image.Palette.ADAPTIVE, colors=64))
-    fd, tmp = _atomic_target(path)
-    try:
-        with os.fdopen(fd, "wb") as f:
-            images[0].save(f, format="GIF", save_all=True, append_images=images[1:],
-                           duration=int(1000 / fps), loop=0)
-        os.chmod(tmp, 0o644)  # mkstemp makes 0600
-        os.replace(tmp, path)
-    except BaseException:
-        Path(tmp).unlink(missing_ok=True)
-        raise
+    with atomic_path(path) as tmp:
+        images[0].save(tmp, format="GIF", save_all=True, append_images=images[1:],
+                       duration=int(1000 / fps), loop=0)
     return path
 
 
@@ -168,15 +156,9 @@ def save_interpolation_png(
     if title:
         fig.suptitle(title, fontsize=10)
     fig.tight_layout()
-    fd, tmp = _atomic_target(path)
     try:
-        with os.fdopen(fd, "wb") as f:
-            fig.savefig(f, format="png", dpi=110)
-        os.chmod(tmp, 0o644)  # mkstemp makes 0600
-        os.replace(tmp, path)
-    except BaseException:
-        Path(tmp).unlink(missing_ok=True)
-        raise
+        with atomic_path(path) as tmp:
+            fig.savefig(tmp, format="png", dpi=110)
     finally:
         plt.close(fig)
     return path

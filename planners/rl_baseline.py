@@ -22,6 +22,8 @@ from typing import Any
 import gymnasium as gym
 import numpy as np
 
+from dlo_env.atomic import atomic_path, write_text_atomic
+
 ALGOS = ("ppo", "sac", "sac-her")
 FORMAT_VERSION = 1
 #: Episode length of the registered ``dlo_env`` environments (their ``max_episode_steps``).
@@ -202,15 +204,12 @@ def build_model(config: BaselineConfig, env: Any, device: str = "cpu") -> Any:
 
 
 def _atomic_json(path: Path, data: dict[str, Any]) -> None:
-    tmp = path.with_suffix(path.suffix + ".tmp")
-    tmp.write_text(json.dumps(data, indent=2) + "\n")
-    os.replace(tmp, path)
+    write_text_atomic(path, json.dumps(data, indent=2) + "\n")
 
 
 def _save_atomic(model: Any, path: Path) -> None:
-    tmp = path.with_name(path.stem + ".tmp.zip")  # SB3 appends .zip to other suffixes
-    model.save(tmp)
-    os.replace(tmp, path)
+    with atomic_path(path) as tmp:  # the temporary name ends in .zip, as SB3 wants
+        model.save(tmp)
 
 
 def _training_callback(total: int, start: int, checkpoint: Path | None, every: int,
@@ -375,10 +374,9 @@ def plot_learning_curve(monitor_dir: str | os.PathLike, png: str | os.PathLike,
     ax2.set(xlabel="environment steps", ylabel="success rate", ylim=(0, 1),
             title=f"{title} success")
     fig.tight_layout()
-    tmp = Path(str(png) + ".tmp.png")
-    fig.savefig(tmp, dpi=100)
+    with atomic_path(png) as tmp:
+        fig.savefig(tmp, dpi=100)
     plt.close(fig)
-    os.replace(tmp, png)
 
 
 def read_baseline_metadata(path: str | os.PathLike) -> dict[str, Any]:
