@@ -98,6 +98,31 @@ def on_table(shapes: np.ndarray, half: float = TABLE_HALF) -> np.ndarray | bool:
     return bool(ok) if np.ndim(ok) == 0 else ok
 
 
+def as_points(
+    value: object, n_points: int, name: str = "shape", dtype: type = np.float32,
+    context: str = "",
+) -> np.ndarray:
+    """``value`` as finite ``(n_points, 2)`` points; accepts ``(n, 2)`` or flat ``(2n,)``.
+
+    Only size and finiteness are checked (``validate_shape`` checks a whole cord).
+
+    Raises:
+        ValueError: Naming ``name`` (followed by ``context``) when the size is wrong or a
+            coordinate is not finite.
+    """
+    arr = np.asarray(value, dtype=dtype)
+    if arr.shape == (2 * n_points,):
+        arr = arr.reshape(n_points, 2)
+    if arr.shape != (n_points, 2):
+        raise ValueError(
+            f"{name} must have shape ({n_points}, 2) or ({2 * n_points},){context}, "
+            f"got {arr.shape}"
+        )
+    if not np.isfinite(arr).all():
+        raise ValueError(f"{name} must be finite, got NaN or infinite coordinates")
+    return arr
+
+
 def validate_shape(
     shape: object,
     *,
@@ -119,15 +144,7 @@ def validate_shape(
         ValueError: Naming ``name`` when the shape is of the wrong size, not finite, off the
             table, or its segments are not of the cord's rest length.
     """
-    arr = np.asarray(shape, dtype=np.float64)
-    if arr.shape == (2 * n_points,):
-        arr = arr.reshape(n_points, 2)
-    if arr.shape != (n_points, 2):
-        raise ValueError(
-            f"{name} must have shape ({n_points}, 2) or ({2 * n_points},), got {arr.shape}"
-        )
-    if not np.isfinite(arr).all():
-        raise ValueError(f"{name} must be finite, got NaN or infinite coordinates")
+    arr = as_points(shape, n_points, name, dtype=np.float64)
     if not on_table(arr):
         raise ValueError(
             f"{name} must lie on the table [-{TABLE_HALF}, {TABLE_HALF}]^2 m, "

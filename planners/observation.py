@@ -12,6 +12,8 @@ from typing import Any
 
 import numpy as np
 
+from dlo_env.shapes import as_points
+
 
 def as_shape(value: Any, n_points: int, name: str = "shape") -> np.ndarray:
     """``value`` as a float32 ``(n_points, 2)`` shape; accepts ``(n, 2)`` or flat ``(2n,)``.
@@ -19,17 +21,8 @@ def as_shape(value: Any, n_points: int, name: str = "shape") -> np.ndarray:
     Raises:
         ValueError: Naming ``name`` when the size is wrong or a coordinate is not finite.
     """
-    arr = np.asarray(value, dtype=np.float32)
-    if arr.shape == (2 * n_points,):
-        arr = arr.reshape(n_points, 2)
-    if arr.shape != (n_points, 2):
-        raise ValueError(
-            f"{name} must have shape ({n_points}, 2) or ({2 * n_points},) to match the "
-            f"model's n_points={n_points}, got {arr.shape}"
-        )
-    if not np.isfinite(arr).all():
-        raise ValueError(f"{name} must be finite, got NaN or infinite coordinates")
-    return arr
+    return as_points(value, n_points, name,
+                     context=f" to match the model's n_points={n_points}")
 
 
 @dataclass(frozen=True)
