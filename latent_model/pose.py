@@ -30,23 +30,27 @@ def canonical_pose(shapes: torch.Tensor) -> tuple[torch.Tensor, torch.Tensor]:
     return centre, torch.atan2(v[..., 1], v[..., 0])
 
 
-def rotation(angle: torch.Tensor) -> torch.Tensor:
-    """Rotation matrices ``(B, 2, 2)`` for angles ``(B,)``."""
-    c, s = torch.cos(angle), torch.sin(angle)
-    return torch.stack([torch.stack([c, -s], dim=-1), torch.stack([s, c], dim=-1)], dim=-2)
+def rotate(points: torch.Tensor, angle: torch.Tensor) -> torch.Tensor:
+    """Points ``(B, n, 2)`` turned by ``angle`` ``(B,)`` about the origin.
+
+    Elementwise rather than a batched ``(n, 2) @ (2, 2)`` matmul: for 2 x 2 rotations that is
+    several times faster on the CPU and identical up to rounding.
+    """
+    c, s = torch.cos(angle)[..., None], torch.sin(angle)[..., None]  # (B, 1)
+    x, y = points[..., 0], points[..., 1]  # (B, n)
+    return torch.stack([c * x - s * y, s * x + c * y], dim=-1)
 
 
 def to_canonical(
     shapes: torch.Tensor, centre: torch.Tensor, angle: torch.Tensor
 ) -> torch.Tensor:
     """Move world shapes ``(B, n, 2)`` into the frame given by ``centre`` and ``angle``."""
-    # Row vectors times R equals R^T applied to column vectors: the inverse rotation.
-    return (shapes - centre[..., None, :]) @ rotation(angle)
+    return rotate(shapes - centre[..., None, :], -angle)
 
 
 def to_world(canonical: torch.Tensor, centre: torch.Tensor, angle: torch.Tensor) -> torch.Tensor:
     """Place canonical shapes ``(B, n, 2)`` at ``centre`` ``(B, 2)``, turned by ``angle`` (B,)."""
-    return canonical @ rotation(angle).transpose(-1, -2) + centre[..., None, :]
+    return rotate(canonical, angle) + centre[..., None, :]
 
 
 def canonicalise(shapes: torch.Tensor) -> torch.Tensor:

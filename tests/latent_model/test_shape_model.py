@@ -6,7 +6,7 @@ import torch
 
 from latent_model.checkpoint import FORMAT, FORMAT_VERSION
 from latent_model.config import ModelConfig
-from latent_model.shape_model import ShapeModel
+from latent_model.shape_model import DECODE_CHUNK, ShapeModel
 from latent_model.training import normalisation_for
 
 
@@ -24,6 +24,13 @@ def test_decode_gives_world_shapes_at_the_pose_in_the_latent(model):
     # (the untrained generator's output is not exactly centred, so allow its offset).
     offset = np.linalg.norm(shapes.mean(axis=1) - z[:, 5:7], axis=1)
     assert offset.max() < 0.6
+
+
+def test_decode_in_chunks_equals_one_batch_and_accepts_no_latents(model):
+    z = model.sample_latent(DECODE_CHUNK + 7, seed=2)
+    whole = model.decode_torch(torch.from_numpy(z)).detach().numpy()
+    np.testing.assert_allclose(model.decode(z), whole, atol=1e-6)
+    assert model.decode(z[:0]).shape == (0, 20, 2)
 
 
 def test_single_latents_and_shapes_give_unbatched_results(model):
