@@ -8,7 +8,10 @@ Recipes:
   paper-world      the paper: world coordinates, point output, spacing loss, 5 D-steps, lr 2e-4
   paper-canonical  the same generator in the canonical frame (pose handled analytically)
   default          what ships: canonical frame, angle output, joint reconstruction + prior,
-                   batch 256, 2 D-steps, lr 5e-4
+                   batch 256, 2 D-steps, lr 5e-4 with a cosine decay to 0 over the budget
+  default-constant-lr  the same with a constant learning rate
+
+A "best" row is the evaluation the GAN stage ends with (it restores its best one).
 
     python benchmarks/train_quality.py --data data/train.npz --heldout data/heldout.npz \\
         --minutes 4 [--recipes paper-world,paper-canonical,default] [--out runs/train_quality]
@@ -31,6 +34,7 @@ RECIPES = {
     "paper-world": (replace(PAPER_MODEL, representation="world"), PAPER_TRAIN),
     "paper-canonical": (PAPER_MODEL, PAPER_TRAIN),
     "default": (ModelConfig(), TrainConfig()),
+    "default-constant-lr": (ModelConfig(), replace(TrainConfig(), lr_schedule="constant")),
 }
 
 
@@ -51,7 +55,7 @@ def main() -> None:
     unknown = sorted(set(names) - set(RECIPES))
     if unknown:
         raise SystemExit(f"--recipes: unknown {unknown}; expected names from {sorted(RECIPES)}")
-    print(f"{'recipe':<16}{'minutes':>8}{'step':>7}{'COV':>7}{'MMD cm':>8}{'1-NNA':>7}"
+    print(f"{'recipe':<25}{'minutes':>8}{'step':>7}{'COV':>7}{'MMD cm':>8}{'1-NNA':>7}"
           f"{'spCV':>8}{'length':>8}{'inv enc':>8}{'inv':>6}")
     for name in names:
         mc, tc = RECIPES[name]
@@ -61,7 +65,8 @@ def main() -> None:
               progress_bar=False)
         with open(out / "metrics.csv") as f:
             for r in csv.DictReader(f):
-                print(f"{name:<16}{float(r['train_minutes']):8.2f}{int(r['step']):7d}"
+                label = name if r["stage"] == "gan" else f"{name} best"
+                print(f"{label:<25}{float(r['train_minutes']):8.2f}{int(r['step']):7d}"
                       f"{float(r['cov']):7.3f}{100 * float(r['mmd']):8.2f}{float(r['nna']):7.3f}"
                       f"{float(r['spacing_cv']):8.4f}{float(r['length']):8.3f}"
                       f"{float(r['inversion_encoder']):8.3f}{float(r['inversion_refined']):6.3f}")

@@ -45,6 +45,7 @@ def run(args: argparse.Namespace) -> int:
     from dataclasses import replace
     from pathlib import Path
 
+    from dlo_env.atomic import write_text_atomic
     from latent_model.config import PAPER_MODEL, PAPER_TRAIN, ModelConfig, TrainConfig
     from latent_model.dataset import load_shapes, split_heldout
     from latent_model.evaluation import quality_report
@@ -85,5 +86,5 @@ def run(args: argparse.Namespace) -> int:
     report = quality_report(model, heldout, n_reference=size, n_inversion=min(size, 1000),
                             seed=args.seed)
     print(report.format())
-    (out / "report.json").write_text(json.dumps(report.as_dict(), indent=2))
+    write_text_atomic(out / "report.json", json.dumps(report.as_dict(), indent=2))
     return 0

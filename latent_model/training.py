@@ -132,6 +132,18 @@ class Trainer:
         self.best_state: dict[str, Any] | None = None  # networks at progress.best_step
         self.last = {"loss_d": math.nan, "loss_g": math.nan, "loss_e": math.nan}
 
+    # ---------------------------------------------------------- learning rate
+    def set_lr_fraction(self, fraction: float) -> None:
+        """Set every learning rate for a stage that is ``fraction`` (0..1) through its budget."""
+        tc = self.tc
+        factor = 1.0
+        if tc.lr_schedule == "cosine":
+            factor = 0.5 * (1 + math.cos(math.pi * min(max(fraction, 0.0), 1.0)))
+        for opt, base in ((self.opt_g, tc.lr_generator), (self.opt_d, tc.lr_discriminator),
+                          (self.opt_e, tc.lr_encoder)):
+            for group in opt.param_groups:
+                group["lr"] = base * factor
+
     # ---------------------------------------------------------------- batches
     def _real(self, size: int) -> torch.Tensor:
         idx = torch.randint(len(self.data), (size,), generator=self.rng, device=self.device)
@@ -286,9 +298,15 @@ def plot_curves(
               ("inversion_refined", "inversion success", 1)]
     floors = floors or {}
     fig, axes = plt.subplots(2, 3, figsize=(12, 6.5))
+    best = [r for r in rows if r["stage"] == "gan-best"]  # a copy of an earlier evaluation
+    rows = [r for r in rows if r["stage"] != "gan-best"]
     minutes = [r["train_minutes"] for r in rows]
     for ax, (key, label, factor) in zip(axes.flat, panels):
         ax.plot(minutes, [r[key] * factor for r in rows], marker=".")
+        ax.plot([r["train_minutes"] for r in best], [r[key] * factor for r in best], "*",
+                color="C3", markersize=11, label="kept GAN step" if key == "cov" else None)
+        if key == "cov" and best:
+            ax.legend(fontsize=8)
         if key == "inversion_refined":
             encoder_only = [r["inversion_encoder"] for r in rows]
             ax.plot(minutes, encoder_only, marker=".", label="encoder only")
@@ -401,6 +419,9 @@ def train(
                    else round(getattr(prog, seconds_attr)))
         last_save = time.perf_counter()
         while not done():
+            trainer.set_lr_fraction(
+                getattr(prog, step_attr) / limit_steps if limit_steps is not None
+                else getattr(prog, seconds_attr) / max(budgets[name], 1e-9))
             t0 = time.perf_counter()
             step_fn()
             dt = time.perf_counter() - t0
