@@ -12,7 +12,6 @@ from __future__ import annotations
 from dataclasses import dataclass, replace
 
 import numpy as np
-import torch
 
 from dlo_env.cord import Cord
 from dlo_env.shapes import is_cord_like, validate_shape
@@ -190,15 +189,15 @@ def finetune(
             getattr(trainer, name).load_state_dict(state[name])
         for name, steps, step_fn in (("gan", config.gan_steps, trainer.gan_step),
                                      ("encoder", config.encoder_steps, trainer.encoder_step)):
-            for _ in tqdm(range(steps), desc=f"finetune {name}", disable=not progress_bar):
+            for i in tqdm(range(steps), desc=f"finetune {name}", disable=not progress_bar):
+                trainer.set_lr_fraction(i / steps)  # the training's schedule (cosine: to 0)
                 step_fn()
         info = dict(model.info, finetuned_on=len(hard), finetune_variants=len(variants),
                     finetune_config=repr(replace(config)))
         new_model = trainer.model(info)
         for net in (new_model.generator, new_model.encoder, new_model.discriminator):
             net.eval()
-    with torch.no_grad():
-        after = quality_report(new_model, heldout_shapes, **report_kw) if use_heldout else None
+    after = quality_report(new_model, heldout_shapes, **report_kw) if use_heldout else None
     report = FinetuneReport(
         n_shapes=len(shapes), n_unrepresented=len(hard), n_variants=len(variants),
         success_before=float(np.mean(ok)) if len(ok) else 1.0,

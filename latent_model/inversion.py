@@ -50,20 +50,22 @@ def refine_latents(
     best_err = torch.full((b * k,), float("inf"), device=latent.device)
     optimiser = torch.optim.Adam([latent], lr=lr)
     rows = torch.arange(b, device=latent.device)
-    for step in range(steps + 1):
-        errors = error(decode(latent), flat_targets)  # (B*K,) at the current latents
-        with torch.no_grad():
-            better = errors < best_err
-            best_err = torch.where(better, errors, best_err)
-            best[better] = latent[better]
-            if step == steps or bool((best_err.view(b, k).min(dim=1).values <= tolerance).all()):
-                break
-        optimiser.zero_grad(set_to_none=True)
-        # Sum, not mean: each latent's gradient must not shrink with the batch size.
-        errors.sum().backward()
-        optimiser.step()
-        with torch.no_grad():
-            latent.copy_(torch.maximum(torch.minimum(latent, high), low))
+    with torch.enable_grad():  # the descent needs gradients even under torch.no_grad()
+        for step in range(steps + 1):
+            errors = error(decode(latent), flat_targets)  # (B*K,) at the current latents
+            with torch.no_grad():
+                better = errors < best_err
+                best_err = torch.where(better, errors, best_err)
+                best[better] = latent[better]
+                done = best_err.view(b, k).min(dim=1).values <= tolerance
+                if step == steps or bool(done.all()):
+                    break
+            optimiser.zero_grad(set_to_none=True)
+            # Sum, not mean: each latent's gradient must not shrink with the batch size.
+            errors.sum().backward()
+            optimiser.step()
+            with torch.no_grad():
+                latent.copy_(torch.maximum(torch.minimum(latent, high), low))
     per_target = best_err.view(b, k)  # (B, K)
     choice = per_target.argmin(dim=1)  # (B,)
     return best.view(b, k, dim)[rows, choice], per_target[rows, choice].detach()

@@ -33,6 +33,16 @@ def test_decode_in_chunks_equals_one_batch_and_accepts_no_latents(model):
     assert model.decode(z[:0]).shape == (0, 20, 2)
 
 
+def test_inversion_refines_also_under_no_grad(model):
+    shapes = model.sample(8, seed=4)
+    _, plain, _ = model.invert(shapes, restarts=2, steps=20, tolerance=0.0)
+    with torch.no_grad():  # a caller's no_grad (evaluation code) must not disable the refinement
+        _, inside, _ = model.invert(shapes, restarts=2, steps=20, tolerance=0.0)
+    _, encoder_only, _ = model.invert(shapes, refine=False)
+    np.testing.assert_allclose(inside, plain, rtol=1e-5, atol=1e-7)
+    assert inside.mean() < encoder_only.mean()
+
+
 def test_single_latents_and_shapes_give_unbatched_results(model):
     z = model.sample_latent(1, seed=1)[0]
     shape = model.decode(z)
