@@ -109,8 +109,10 @@ class TrainConfig:
         prior_weight: Weight of the sliced Wasserstein distance between the Encoder's latents
             of real shapes and ``U[-1, 1]^k`` (only with ``reconstruction_weight > 0``).
         lr_schedule: ``"cosine"``: every learning rate follows half a cosine from its value to 0
-            over its stage's budget (steps or minutes), which ends the oscillation of GAN
-            quality that a constant rate leaves (README "model"). ``"constant"``: the paper.
+            over its stage's budget (steps or minutes), so a run ends at a settled quality
+            instead of wherever the GAN's oscillation happens to be (README "model").
+            ``"constant"``: the paper. Extending a finished run's budget restarts the
+            decay part-way (at the old budget's share of the new one).
         eval_every: Generator steps between evaluations on the held-out split.
         eval_reference: Held-out shapes used by the evaluation during training.
         eval_inversion: Held-out shapes inverted by the evaluation during training.
