@@ -65,7 +65,7 @@ def main() -> None:
               progress_bar=False)
         with open(out / "metrics.csv") as f:
             for r in csv.DictReader(f):
-                label = name if r["stage"] == "gan" else f"{name} best"
+                label = f"{name} best" if r["stage"] == "gan-best" else name
                 print(f"{label:<25}{float(r['train_minutes']):8.2f}{int(r['step']):7d}"
                       f"{float(r['cov']):7.3f}{100 * float(r['mmd']):8.2f}{float(r['nna']):7.3f}"
                       f"{float(r['spacing_cv']):8.4f}{float(r['length']):8.3f}"

@@ -109,8 +109,8 @@ class TrainConfig:
         prior_weight: Weight of the sliced Wasserstein distance between the Encoder's latents
             of real shapes and ``U[-1, 1]^k`` (only with ``reconstruction_weight > 0``).
         lr_schedule: ``"cosine"``: every learning rate follows half a cosine from its value to 0
-            over its stage's budget (steps or minutes), so a run ends at a settled quality
-            instead of wherever the GAN's oscillation happens to be (README "model").
+            over its stage's budget (steps or minutes); the later part of a run swings less
+            (a small effect, README "model"). The GAN stage still keeps its best evaluation.
             ``"constant"``: the paper. Extending a finished run's budget restarts the
             decay part-way (at the old budget's share of the new one).
         eval_every: Generator steps between evaluations on the held-out split.

@@ -190,7 +190,7 @@ def finetune(
         for name, steps, step_fn in (("gan", config.gan_steps, trainer.gan_step),
                                      ("encoder", config.encoder_steps, trainer.encoder_step)):
             for i in tqdm(range(steps), desc=f"finetune {name}", disable=not progress_bar):
-                trainer.set_lr_fraction(i / steps)  # the training's schedule (cosine: to 0)
+                trainer.set_lr_fraction(i / steps)  # FinetuneConfig.train's schedule
                 step_fn()
         info = dict(model.info, finetuned_on=len(hard), finetune_variants=len(variants),
                     finetune_config=repr(replace(config)))

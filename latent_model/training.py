@@ -255,9 +255,12 @@ class Trainer:
     def load_state(self, data: dict[str, Any]) -> None:
         """Continue from a checkpoint written by ``state`` (same configs required)."""
         for key, current in (("model_config", asdict(self.mc)), ("train_config", asdict(self.tc))):
-            if data[key] != current:
+            saved = dict(data[key])
+            if key == "train_config":  # runs from before lr_schedule existed used a constant rate
+                saved.setdefault("lr_schedule", "constant")
+            if saved != current:
                 raise ValueError(
-                    f"the checkpoint was written with a different {key}: {data[key]} "
+                    f"the checkpoint was written with a different {key}: {saved} "
                     f"(now {current}); use another --out folder or the same settings"
                 )
         self.norm = config_from_dict(Normalisation, data["normalisation"], "normalisation")
@@ -452,6 +455,7 @@ def train(
                             if r["stage"] == "gan" and r["step"] == prog.best_step)
             prog.rows.append(dict(best_row, stage="gan-best"))
             write_csv(prog.rows, out / METRICS_CSV)
+            plot_curves(prog.rows, out / METRICS_PNG, FLOORS)
         save()
     return trainer.model(dict(info, gan_step=prog.gan_step, encoder_step=prog.encoder_step,
                               last_metrics=prog.rows[-1] if prog.rows else None))

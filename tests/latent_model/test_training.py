@@ -1,6 +1,7 @@
 from __future__ import annotations
 
 import csv
+import math
 from dataclasses import replace
 
 import numpy as np
@@ -102,16 +103,48 @@ def test_train_writes_logs_checkpoints_and_resumes(cord_shapes, tiny_config, tin
     assert state["progress"]["gan_step"] == 6
     with open(tmp_path / "metrics.csv") as f:
         rows = list(csv.DictReader(f))
-    # The GAN stage may end by restoring its best evaluation (a "gan-best" row copying it).
     assert [(r["stage"], r["step"]) for r in rows if r["stage"] != "gan-best"] == [
         ("gan", "3"), ("encoder", "2"), ("gan", "6"), ("encoder", "2")
     ]
-    assert all(r["step"] in ("3", "6") for r in rows if r["stage"] == "gan-best")
+    # The GAN stage ends with the networks of its best evaluation (COV - 1-NNA); when that is
+    # not the last one, a "gan-best" row repeats it.
+    scores = {r["step"]: float(r["cov"]) - float(r["nna"]) for r in rows if r["stage"] == "gan"}
+    best_step = state["progress"]["best_step"]
+    assert str(best_step) == max(scores, key=scores.get)
+    best_rows = [(r["stage"], r["step"]) for r in rows if r["stage"] == "gan-best"]
+    assert best_rows == ([] if best_step == 6 else [("gan-best", str(best_step))])
+    for name, value in state["best"]["generator"].items():
+        assert torch.equal(value, state["generator"][name])
     minutes = [float(r["train_minutes"]) for r in rows if r["stage"] != "gan-best"]
     assert minutes == sorted(minutes)
     loaded = ShapeModel.load(tmp_path, device="cpu")
     z = model.sample_latent(3, seed=0)
     assert np.array_equal(loaded.decode(z), model.decode(z))
+
+
+def test_train_follows_the_cosine_schedule(cord_shapes, tiny_config, tiny_train_config,
+                                           tmp_path):
+    train(cord_shapes, cord_shapes, tmp_path, tiny_config, tiny_train_config, stage="gan",
+          gan_steps=4, device="cpu", seed=0, progress_bar=False)
+    state = load_checkpoint(tmp_path / "checkpoint.pt")
+    last = state["opt_g"]["param_groups"][0]["lr"]  # the rate of the 4th (last) step
+    expected = tiny_train_config.lr_generator * 0.5 * (1 + math.cos(0.75 * math.pi))
+    assert last == pytest.approx(expected)
+
+
+def test_checkpoints_from_before_the_schedule_resume_as_constant(
+        cord_shapes, tiny_config, tiny_train_config, tmp_path):
+    constant = replace(tiny_train_config, lr_schedule="constant")
+    kw = dict(device="cpu", seed=0, progress_bar=False, encoder_steps=1)
+    train(cord_shapes, cord_shapes, tmp_path, tiny_config, constant, gan_steps=1, **kw)
+    state = load_checkpoint(tmp_path / "checkpoint.pt")
+    del state["train_config"]["lr_schedule"]  # as written before the field existed
+    torch.save(state, tmp_path / "checkpoint.pt")
+    train(cord_shapes, cord_shapes, tmp_path, tiny_config, constant, gan_steps=2, **kw)
+    assert load_checkpoint(tmp_path / "checkpoint.pt")["progress"]["gan_step"] == 2
+    with pytest.raises(ValueError, match="different train_config"):
+        train(cord_shapes, cord_shapes, tmp_path, tiny_config, tiny_train_config, gan_steps=3,
+              **kw)
 
 
 def test_resuming_with_other_settings_is_refused(cord_shapes, tiny_config, tiny_train_config,
