@@ -30,7 +30,9 @@ class FinetuneConfig:
         max_move: Longest end displacement of a variant move, metres.
         record_every: Physics substeps between recorded shapes along a move.
         new_fraction: Share of the variants in the mixed training data.
-        gan_steps: Generator steps of additional GAN training.
+        gan_steps: Generator steps of additional GAN training (200: enough to represent the
+            new shapes without moving the generator far from the step training kept;
+            README "model" has the measurement).
         encoder_steps: Encoder steps afterwards.
         train: Optimisation settings (the model's training defaults).
     """
@@ -39,7 +41,7 @@ class FinetuneConfig:
     max_move: float = 0.05
     record_every: int = 5
     new_fraction: float = 0.25
-    gan_steps: int = 1500
+    gan_steps: int = 200
     encoder_steps: int = 1500
     train: TrainConfig = TrainConfig()
 
