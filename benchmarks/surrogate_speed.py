@@ -94,8 +94,7 @@ def main() -> None:
     args = parser.parse_args()
     load = os.getloadavg()[0]
     torch.set_num_threads(args.threads)
-    model = (ShapeModel.load(args.model, device=args.device) if args.model
-             else ShapeModel.load_pretrained(device=args.device))
+    model = ShapeModel.load_or_pretrained(args.model, device=args.device)
     n, k = args.transitions, args.length
     model.decode(model.sample_latent(16, seed=args.seed))  # import-time and first-call costs
     cold, t_model = surrogate_transitions(model, n, k, args.seed, args.repeats)

@@ -54,8 +54,7 @@ def run(args: argparse.Namespace) -> int:
         return 2
     torch.set_num_threads(args.threads)
     try:
-        model = (ShapeModel.load(args.model, device="cpu") if args.model
-                 else ShapeModel.load_pretrained(device="cpu"))
+        model = ShapeModel.load_or_pretrained(args.model, device="cpu")
     except FileNotFoundError as exc:
         print(f"dlo demo: no shape model: {exc}. Train one with `dlo train` or pass --model.",
               file=sys.stderr)

@@ -78,8 +78,7 @@ def run(args: argparse.Namespace) -> int:
         torch.set_num_threads(max(1, args.threads))
 
         try:
-            model = (ShapeModel.load(args.model, device="cpu") if args.model
-                     else ShapeModel.load_pretrained(device="cpu"))
+            model = ShapeModel.load_or_pretrained(args.model, device="cpu")
         except FileNotFoundError as exc:
             print(f"dlo evaluate: no shape model: {exc}. Train one with `dlo train` or pass "
                   "--model.", file=sys.stderr)

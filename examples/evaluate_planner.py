@@ -40,8 +40,7 @@ if __name__ == "__main__":
     args = parse_args()
     torch.set_num_threads(1)  # a small model: more threads only contend
 
-    model = (ShapeModel.load(args.model, device="cpu") if args.model
-             else ShapeModel.load_pretrained(device="cpu"))
+    model = ShapeModel.load_or_pretrained(args.model, device="cpu")
     agents = {
         "straight-line": StraightLinePolicy(),
         "latent-tree": PlannerPolicy(model),

@@ -47,8 +47,7 @@ if __name__ == "__main__":
     obs, _ = env.reset(seed=args.seed, options={"difficulty": args.difficulty})
     start, goal = obs["achieved_goal"].reshape(-1, 2), obs["desired_goal"].reshape(-1, 2)
 
-    model = (ShapeModel.load(args.model, device="cpu") if args.model
-             else ShapeModel.load_pretrained(device="cpu"))
+    model = ShapeModel.load_or_pretrained(args.model, device="cpu")
     shapes = interpolate(model, start, goal, steps=args.steps)  # (steps, n, 2), metres
 
     print(f"start -> goal: {100 * error(start, goal):.1f} cm apart")

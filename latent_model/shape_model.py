@@ -349,6 +349,13 @@ class ShapeModel:
         with resources.as_file(resources.files("latent_model") / "pretrained" / MODEL_FILE) as p:
             return cls.load(p, device)
 
+    @classmethod
+    def load_or_pretrained(
+        cls, path: str | os.PathLike | None, device: str | torch.device = "auto"
+    ) -> ShapeModel:
+        """``load(path)`` when a path is given (not ``None`` or ""), else ``load_pretrained``."""
+        return cls.load(path, device) if path else cls.load_pretrained(device)
+
     def __repr__(self) -> str:
         c = self.config
         return (f"ShapeModel(representation={c.representation!r}, latent_dim={self.latent_dim}, "

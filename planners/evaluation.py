@@ -415,10 +415,7 @@ def json_ready(value: Any) -> Any:
 
 def write_summaries(summaries: list[dict[str, Any]], path: str | os.PathLike) -> Path:
     """Write a list of summaries to a JSON file atomically (NaN becomes ``null``)."""
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    write_text_atomic(path, json.dumps(json_ready(summaries), indent=2) + "\n")
-    return path
+    return write_text_atomic(path, json.dumps(json_ready(summaries), indent=2) + "\n")
 
 
 def write_evaluation(

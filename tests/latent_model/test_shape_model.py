@@ -75,6 +75,19 @@ def test_world_representation_latent_is_just_z():
     assert model.decode(np.zeros((2, 5))).shape == (2, 20, 2)
 
 
+def test_load_or_pretrained_loads_the_given_file_else_the_shipped_model(model, tmp_path):
+    model.save(tmp_path / "model.pt")
+    z = model.sample_latent(2, seed=0)
+    given = ShapeModel.load_or_pretrained(tmp_path, device="cpu")
+    np.testing.assert_array_equal(given.decode(z), model.decode(z))
+    shipped = ShapeModel.load_pretrained(device="cpu")
+    for default in (None, ""):
+        loaded = ShapeModel.load_or_pretrained(default, device="cpu")
+        assert loaded.config == shipped.config
+        zs = shipped.sample_latent(2, seed=0)
+        np.testing.assert_array_equal(loaded.decode(zs), shipped.decode(zs))
+
+
 def test_save_and_load_round_trip(model, tmp_path):
     path = model.save(tmp_path / "m.pt")
     loaded = ShapeModel.load(path, device="cpu")
