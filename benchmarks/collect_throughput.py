@@ -8,8 +8,8 @@ Every number is measured in this run:
    and the share of its time spent in physics (the rest is recording, filtering, bookkeeping);
 2. ``collect`` with ``--workers`` processes writes a dataset to a temporary folder; its wall
    time (process start-up and the final file included) gives the parallel rate;
-3. the diversity measures of ``dlo_env.diversity`` (the ones ``dlo collect`` prints) are taken
-   on that dataset.
+3. the diversity measures of ``dlo_env.dataset.diversity`` (the ones ``dlo collect``
+   prints) are taken on that dataset.
 
 The machine is shared: the load average at the start is printed, since other processes on the
 two cores lower the parallel rate. To separate the code's speed from the machine's load, the
@@ -34,8 +34,8 @@ from dataclasses import dataclass
 
 import pymunk
 
-from dlo_env.collect import CollectConfig, collect, collect_chunk
-from dlo_env.diversity import diversity_report
+from dlo_env.dataset.collect import CollectConfig, collect, collect_chunk
+from dlo_env.dataset.diversity import diversity_report
 
 RATE_FLOOR = 2000.0
 COVERAGE_FLOOR = 0.60

@@ -69,8 +69,8 @@ def run(args: argparse.Namespace) -> int:
 
     from tqdm import tqdm
 
-    from dlo_env.collect import CollectConfig, collect, parts_dir
-    from dlo_env.diversity import diversity_report
+    from dlo_env.dataset.collect import CollectConfig, collect, parts_dir
+    from dlo_env.dataset.diversity import diversity_report
 
     config = CollectConfig(seed=args.seed, cosine_threshold=args.cosine_threshold,
                            record_every=args.record_every)

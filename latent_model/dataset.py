@@ -13,8 +13,8 @@ def load_shapes(path: str | os.PathLike, name: str = "path") -> np.ndarray:
     """The ``shapes`` array ``(N, n, 2)`` float32 of a dataset file.
 
     Files written by ``dlo collect`` (they carry ``metadata``) are read and validated by
-    ``dlo_env.data.load_shapes``; any other ``.npz`` with a ``shapes`` array is read with
-    ``allow_pickle=False`` (e.g. a set of shapes to fine-tune on).
+    ``dlo_env.dataset.shape_file.load_shapes``; any other ``.npz`` with a ``shapes`` array is
+    read with ``allow_pickle=False`` (e.g. a set of shapes to fine-tune on).
 
     Raises:
         FileNotFoundError: If the file does not exist.
@@ -35,7 +35,7 @@ def load_shapes(path: str | os.PathLike, name: str = "path") -> np.ndarray:
     except (OSError, EOFError, zipfile.BadZipFile) as exc:
         raise ValueError(f"{name}: {str(path)!r} is not a readable .npz file ({exc})") from exc
     if "metadata" in files:  # written by `dlo collect`: its loader checks the format
-        from dlo_env.data import load_shapes as collector_load
+        from dlo_env.dataset.shape_file import load_shapes as collector_load
 
         try:
             shapes = collector_load(path).shapes

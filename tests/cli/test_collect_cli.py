@@ -5,9 +5,9 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-import dlo_env.collect
+import dlo_env.dataset.collect
 from dlo_cli.main import main
-from dlo_env.data import load_shapes
+from dlo_env.dataset.shape_file import load_shapes
 from dlo_env.shapes import is_cord_like
 
 
@@ -73,7 +73,7 @@ def test_an_existing_output_is_an_error_not_an_overwrite(tmp_path, capsys):
 
 def test_interrupt_says_how_to_resume_and_resume_finishes(tmp_path, capsys, monkeypatch):
     out = tmp_path / "d.npz"
-    real = dlo_env.collect.collect
+    real = dlo_env.dataset.collect.collect
 
     def interrupted(*args, **kwargs):
         def stop(accepted: int, rejected: int) -> None:
@@ -81,11 +81,11 @@ def test_interrupt_says_how_to_resume_and_resume_finishes(tmp_path, capsys, monk
 
         return real(*args, **{**kwargs, "progress": stop})
 
-    monkeypatch.setattr(dlo_env.collect, "collect", interrupted)
+    monkeypatch.setattr(dlo_env.dataset.collect, "collect", interrupted)
     assert main(["collect", "--num-shapes", "30", "--out", str(out)]) == 130
     assert "--resume" in capsys.readouterr().err
     assert not out.exists()
-    monkeypatch.setattr(dlo_env.collect, "collect", real)
+    monkeypatch.setattr(dlo_env.dataset.collect, "collect", real)
     assert main(["collect", "--num-shapes", "30", "--out", str(out), "--resume"]) == 0
     assert load_shapes(out).num_shapes == 30
     fresh = tmp_path / "fresh.npz"

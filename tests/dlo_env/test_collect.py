@@ -1,12 +1,12 @@
-"""Specification of shape dataset collection (dlo_env.collect)."""
+"""Specification of shape dataset collection (dlo_env.dataset.collect)."""
 
 from __future__ import annotations
 
 import numpy as np
 import pytest
 
-from dlo_env.collect import CollectConfig, chunk_plan, collect, collect_chunk, parts_dir
-from dlo_env.data import GRASP_NAMES, load_shapes
+from dlo_env.dataset.collect import CollectConfig, chunk_plan, collect, collect_chunk, parts_dir
+from dlo_env.dataset.shape_file import GRASP_NAMES, load_shapes
 from dlo_env.shapes import is_cord_like, on_table, segment_lengths
 
 SMALL = CollectConfig(chunk_size=200)

@@ -1,11 +1,11 @@
-"""Specification of the dataset diversity measures (dlo_env.diversity)."""
+"""Specification of the dataset diversity measures (dlo_env.dataset.diversity)."""
 
 from __future__ import annotations
 
 import numpy as np
 import pytest
 
-from dlo_env.diversity import (
+from dlo_env.dataset.diversity import (
     distinct_count,
     diversity_report,
     grid_coverage,

@@ -1,4 +1,4 @@
-"""Specification of the shape dataset file format (dlo_env.data)."""
+"""Specification of the shape dataset file format (dlo_env.dataset.shape_file)."""
 
 from __future__ import annotations
 
@@ -8,7 +8,7 @@ import zipfile
 import numpy as np
 import pytest
 
-from dlo_env.data import (
+from dlo_env.dataset.shape_file import (
     ARRAY_NAMES,
     FORMAT_VERSION,
     ShapeDataset,

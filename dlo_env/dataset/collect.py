@@ -37,7 +37,7 @@ import numpy as np
 
 from dlo_env.atomic import write_text_atomic
 from dlo_env.cord import Cord, CordParams
-from dlo_env.data import (
+from dlo_env.dataset.shape_file import (
     FORMAT_VERSION,
     GRASP_NAMES,
     ShapeDataset,
