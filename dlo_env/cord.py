@@ -6,8 +6,9 @@ top-down idiom: every segment is tied to the static body by a pivot joint and a 
 with ``max_bias = 0`` and a ``max_force`` equal to the Coulomb friction force (torque), so a
 segment sticks until the net force exceeds friction and slides against a bounded force
 otherwise. Grippers are kinematic bodies pinned to the head and/or the tail; they move at a
-bounded speed and are kept on the table. The table has a rim (static walls) so no point ever
-leaves it. The cord may cross over itself: self-contact is not modelled.
+bounded speed and are kept on the table. The table has a hard rim: static walls stop the
+cord, and a link the grippers force into a wall is shifted back, so no point ever leaves it.
+The cord may cross over itself: self-contact is not modelled.
 
 Time advances in control periods of ``dt`` seconds, each split into ``substeps`` equal
 physics steps; the solver is single-threaded, so the same inputs give the same numbers.
@@ -27,6 +28,15 @@ from dlo_env.shapes import TABLE_HALF, validate_shape
 
 Grasp = Literal["head", "tail", "both", "none"]
 _GRASPS = ("head", "tail", "both", "none")
+#: Collision radius of a link around its centre line, metres.
+LINK_RADIUS = 0.005
+#: Half-thickness of the rim walls, metres (thick, so no fast link passes through one).
+RIM_THICKNESS = 0.05
+#: Overlap the contact solver tolerates before pushing apart, metres (pymunk's default, 0.1,
+#: is scaled for pixels: on a metre-scale table it let the cord sink 5 mm into the rim).
+COLLISION_SLOP = 5e-4
+#: Points are kept this far inside the edge (float32 rounding of a point on the edge).
+RIM_GUARD = 1e-6
 
 
 @dataclass(frozen=True)
@@ -153,7 +163,7 @@ class Cord:
             body.position = (float(centre[0]), float(centre[1]))
             body.angle = float(heading)
             start = centre + half * direction
-            link = pymunk.Segment(body, (-half, 0.0), (half, 0.0), 0.005)
+            link = pymunk.Segment(body, (-half, 0.0), (half, 0.0), LINK_RADIUS)
             link.filter = shape_filter
             space.add(body, link)
             slide = pymunk.PivotJoint(static, body, (0.0, 0.0), (0.0, 0.0))
@@ -169,10 +179,16 @@ class Cord:
             link = pymunk.PivotJoint(a, b, (half, 0.0), (-half, 0.0))
             link.error_bias = p.joint_error_bias
             space.add(link, pymunk.DampedRotarySpring(a, b, 0.0, k, p.bending_damping))
-        h = TABLE_HALF
-        corners = [(-h, -h), (h, -h), (h, h), (-h, h)]
-        for c0, c1 in zip(corners, corners[1:] + corners[:1]):
-            space.add(pymunk.Segment(static, c0, c1, 0.0))
+        # The rim: four thick static walls whose inner faces are the table's edges. A link is a
+        # capsule of radius LINK_RADIUS around its centre line, so a point touching a wall still
+        # lies LINK_RADIUS inside the table; a small collision slop keeps the solver's tolerated
+        # overlap well below that, and `_keep_on_table` removes whatever overlap is left.
+        h, w = TABLE_HALF, RIM_THICKNESS
+        outer = h + w
+        for c0, c1 in (((-outer, -outer), (outer, -outer)), ((outer, -outer), (outer, outer)),
+                       ((outer, outer), (-outer, outer)), ((-outer, outer), (-outer, -outer))):
+            space.add(pymunk.Segment(static, c0, c1, w))
+        space.collision_slop = COLLISION_SLOP
         self.space = space
         self.segments = bodies
         self._make_buffer()
@@ -378,6 +394,7 @@ class Cord:
             steps += 1
             if np.linalg.norm(self.point_velocities(), axis=1).max() < tolerance:
                 break
+        self._keep_on_table()
         return steps * h
 
     def _run(self, steps: int, record_every: int) -> np.ndarray:
@@ -388,6 +405,7 @@ class Cord:
         if record_every <= 0:
             for _ in range(steps):
                 space.step(h)
+            self._keep_on_table()
             return np.empty((0, p.n_points, 2), dtype=np.float32)
         # Copy the raw poses while stepping and turn them into points once per move: a
         # recorded shape then costs one batch read instead of a full ``shape`` conversion.
@@ -396,6 +414,31 @@ class Cord:
         for i in range(1, steps + 1):
             space.step(h)
             if i % record_every == 0:
-                poses[k] = self._read(self._POSE, 3)
+                poses[k] = self._keep_on_table()
                 k += 1
+        if steps % record_every:
+            self._keep_on_table()
         return self._points(poses[..., 0:2], poses[..., 2]).astype(np.float32)
+
+    def _keep_on_table(self) -> np.ndarray:
+        """Push any link that overlaps the rim back onto the table; return the poses.
+
+        The walls stop the cord LINK_RADIUS inside the edge; only a link forced against a
+        wall harder than the contact solver resolves in one step overlaps it further. Shifting
+        that link back (its angle kept) makes the rim hard: no point ever leaves the table.
+
+        Returns:
+            ``(n - 1, 3)`` poses (x, y, angle) of the links after the correction.
+        """
+        rows = self._read(self._POSE, 3).copy()
+        offset = 0.5 * self.params.segment * np.stack([np.cos(rows[:, 2]), np.sin(rows[:, 2])], 1)
+        ends = np.stack([rows[:, 0:2] - offset, rows[:, 0:2] + offset], axis=1)  # (n-1, 2, 2)
+        lim = TABLE_HALF - RIM_GUARD
+        shift = (np.clip(-lim - ends, 0.0, None).max(axis=1)
+                 - np.clip(ends - lim, 0.0, None).max(axis=1))  # (n-1, 2)
+        for i in np.flatnonzero(np.abs(shift).sum(axis=1)):
+            body = self.segments[i]
+            x, y = body.position
+            body.position = (x + float(shift[i, 0]), y + float(shift[i, 1]))
+            rows[i, 0:2] += shift[i]
+        return rows

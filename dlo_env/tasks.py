@@ -217,8 +217,8 @@ def _random_start(rng: np.random.Generator, cord: Cord) -> np.ndarray:
         cord.reset(shape)
         cord.settle(tolerance=REST_SPEED, max_time=3.0)
         settled = cord.shape
-        # A strongly bent shape can sweep far while it relaxes and end pressed into the table's
-        # rim (the rim yields a few millimetres), i.e. off the table: not a valid start.
+        # A strongly bent shape can sweep far while it relaxes and end up pressed against the
+        # rim (still on the table, which the check guards): not a valid start.
         if not _rest(cord) or not is_cord_like(settled) or not on_table(settled):
             continue
         if cord.grasp == "both" and np.linalg.norm(settled[-1] - settled[0]) >= span:

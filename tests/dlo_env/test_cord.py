@@ -174,6 +174,32 @@ def test_ten_thousand_random_actions_stay_finite_and_on_the_table():
     assert worst <= TABLE_HALF
 
 
+@pytest.mark.slow
+def test_the_rim_is_hard_under_ten_thousand_actions_driven_into_every_edge_and_corner():
+    # Each grasp drives its ends at full speed towards an edge or a corner (all eight in turn,
+    # with noise), so the cord is dragged along the walls and pushed into the corners.
+    rng = np.random.default_rng(11)
+    headings = [np.array(v, dtype=float) for v in
+                ((1, 0), (1, 1), (0, 1), (-1, 1), (-1, 0), (-1, -1), (0, -1), (1, -1))]
+    worst, near_rim, actions = 0.0, 0, 0
+    for grasp, ends in (("head", 1), ("tail", 1), ("both", 2)):
+        cord = Cord(grasp=grasp)
+        for episode in range(16):
+            cord.reset(random_cord_shape(rng, margin=0.0))
+            for k in range(210):
+                if k % 70 == 0:
+                    aim = [headings[(episode + k // 70 + 3 * e) % 8] for e in range(ends)]
+                moves = [STEP * (a / np.linalg.norm(a) + 0.3 * rng.normal(size=2)) for a in aim]
+                recorded = cord.move(*moves, record_every=5)
+                shapes = np.concatenate([recorded, cord.shape[None]])
+                worst = max(worst, float(np.abs(shapes).max()))
+                near_rim += int((np.abs(shapes[-1]) > TABLE_HALF - 0.03).any())
+                actions += 1
+    assert actions >= 10_000
+    assert near_rim > 3000  # the cord really was pressed against the rim
+    assert worst <= TABLE_HALF
+
+
 def test_path_dependence_two_paths_to_the_same_end_position_leave_different_shapes():
     # Friction makes the shape depend on the path: pulling the head straight to a point
     # and going there via a detour end with the gripper at the same place, shapes different.
