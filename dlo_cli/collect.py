@@ -47,8 +47,13 @@ def _npz_path(text: str) -> str:
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     """Flags of ``dlo collect``."""
-    parser.add_argument("--num-shapes", type=_positive_int, required=True,
-                        help="cord-like shapes to collect")
+    parser.add_argument("--kind", choices=("shapes", "transitions"), default="shapes",
+                        help="what to collect: cord-like shapes (GAN data) or one-move "
+                             "transitions (transition-model data) (default: shapes)")
+    parser.add_argument("--num-shapes", type=_positive_int,
+                        help="cord-like shapes to collect (--kind shapes)")
+    parser.add_argument("--num-transitions", type=_positive_int,
+                        help="transitions to collect (--kind transitions)")
     parser.add_argument("--out", type=_npz_path, required=True, help="dataset file (.npz)")
     parser.add_argument("--seed", type=_seed, default=0, help="root seed (default 0)")
     parser.add_argument("--workers", type=_positive_int, default=1,
@@ -63,15 +68,23 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 def run(args: argparse.Namespace) -> int:
     """Collect the dataset with a progress bar, then print a summary."""
+    if args.kind == "transitions":
+        from dlo_cli.collect_transitions import run as run_transitions
+
+        return run_transitions(args)
     import os
     import sys
     import time
 
     from tqdm import tqdm
 
-    from dlo_env.dataset.collect import CollectConfig, collect, parts_dir
+    from dlo_env.dataset.chunks import parts_dir
+    from dlo_env.dataset.collect import CollectConfig, collect
     from dlo_env.dataset.diversity import diversity_report
 
+    if args.num_shapes is None:
+        print("dlo collect: error: --num-shapes is required with --kind shapes", file=sys.stderr)
+        return 2
     config = CollectConfig(seed=args.seed, cosine_threshold=args.cosine_threshold,
                            record_every=args.record_every)
     counts = {"accepted": 0, "rejected": 0}

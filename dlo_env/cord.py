@@ -108,6 +108,36 @@ class CordParams:
         return self.length / (self.n_points - 1)
 
 
+def reachable_targets(targets: np.ndarray, params: CordParams | None = None) -> np.ndarray:
+    """Where the grippers really go when sent to ``targets``: the rule of ``Cord.move``.
+
+    Targets are clipped to the table less ``rim_margin``; with two ends (head, tail) held,
+    a pair farther apart than ``max_span * length`` is pulled in symmetrically about its
+    middle. Batched, so a learned model applies exactly the simulator's rule.
+
+    Args:
+        targets: ``(..., k, 2)`` target positions of the ``k`` held ends (1, or 2: head, tail).
+        params: Cord parameters (default cord if None).
+
+    Returns:
+        float64 ``(..., k, 2)`` reachable targets.
+    """
+    p = params if params is not None else CordParams()
+    lim = TABLE_HALF - p.rim_margin
+    out = np.clip(np.asarray(targets, dtype=np.float64), -lim, lim)
+    if out.shape[-2] == 2:
+        gap = out[..., 1, :] - out[..., 0, :]
+        dist = np.linalg.norm(gap, axis=-1, keepdims=True)
+        span = p.max_span * p.length
+        too_far = dist > span
+        if too_far.any():
+            mid = 0.5 * (out[..., 0, :] + out[..., 1, :])
+            half_gap = 0.5 * span * gap / np.where(too_far, dist, 1.0)
+            out[..., 0, :] = np.where(too_far, mid - half_gap, out[..., 0, :])
+            out[..., 1, :] = np.where(too_far, mid + half_gap, out[..., 1, :])
+    return out
+
+
 class Cord:
     """A simulated cord; read its shape, move its grasped ends.
 
@@ -311,25 +341,19 @@ class Cord:
 
     # ----------------------------------------------------------------- motion
     def _targets(self, head: np.ndarray | None, tail: np.ndarray | None) -> dict[str, np.ndarray]:
-        p = self.params
-        lim = TABLE_HALF - p.rim_margin
-        targets = {}
-        for name, d in (("head", head), ("tail", tail)):
-            if name not in self.grippers:
-                continue
+        names = [name for name in ("head", "tail") if name in self.grippers]
+        starts, moves = [], []
+        for name in names:
+            d = {"head": head, "tail": tail}[name]
             d = np.zeros(2) if d is None else np.asarray(d, dtype=np.float64).reshape(2)
             if not np.isfinite(d).all():
                 raise ValueError(f"{name} displacement must be finite, got {d.tolist()}")
-            targets[name] = np.clip(np.array(self.grippers[name].position) + d, -lim, lim)
-        if len(targets) == 2:
-            gap = targets["tail"] - targets["head"]
-            dist = float(np.linalg.norm(gap))
-            span = p.max_span * p.length
-            if dist > span:
-                mid = 0.5 * (targets["head"] + targets["tail"])
-                targets["head"] = mid - 0.5 * span * gap / dist
-                targets["tail"] = mid + 0.5 * span * gap / dist
-        return targets
+            starts.append(np.array(self.grippers[name].position))
+            moves.append(d)
+        if not names:
+            return {}
+        targets = reachable_targets(np.stack(starts) + np.stack(moves), self.params)
+        return dict(zip(names, targets))
 
     def move(
         self,
@@ -431,6 +455,8 @@ class Cord:
             ``(n - 1, 3)`` poses (x, y, angle) of the links after the correction.
         """
         rows = self._read(self._POSE, 3).copy()
+        if np.abs(rows[:, 0:2]).max() < TABLE_HALF - 0.5 * self.params.segment:
+            return rows  # no link reaches the rim: the common case, checked cheaply
         offset = 0.5 * self.params.segment * np.stack([np.cos(rows[:, 2]), np.sin(rows[:, 2])], 1)
         ends = np.stack([rows[:, 0:2] - offset, rows[:, 0:2] + offset], axis=1)  # (n-1, 2, 2)
         lim = TABLE_HALF - RIM_GUARD

@@ -186,8 +186,24 @@ def _rest(cord: Cord) -> bool:
     return float(np.linalg.norm(cord.point_velocities(), axis=1).max()) < REST_SPEED
 
 
+def wait_for_rest(cord: Cord, max_step: float = DEFAULT_MAX_STEP) -> int:
+    """Zero actions until the cord is at rest, at most ``MAX_SETTLE_ACTIONS``: the rule that
+    ends every task goal and every recorded transition.
+
+    Returns:
+        The number of zero actions taken (``MAX_SETTLE_ACTIONS`` and still moving is possible).
+    """
+    zero = np.zeros(action_dim(cord.grasp), dtype=np.float32)
+    for taken in range(MAX_SETTLE_ACTIONS):
+        if _rest(cord):
+            return taken
+        apply_action(cord, zero, max_step)
+    return MAX_SETTLE_ACTIONS
+
+
 def random_start(
-    seed: int | np.random.Generator, grasp: Grasp = "head", *, params: CordParams | None = None
+    seed: int | np.random.Generator, grasp: Grasp = "head", *, params: CordParams | None = None,
+    cord: Cord | None = None,
 ) -> np.ndarray:
     """A random cord-like start shape at rest: ``random_cord_shape`` settled in the simulator.
 
@@ -199,12 +215,16 @@ def random_start(
         seed: Seed or generator.
         grasp: Held ends while settling, ``"head"``, ``"tail"`` or ``"both"``.
         params: Cord parameters (default cord if None).
+        cord: Settle on this cord (its params and grasp are used; it is left in some
+            simulated state, so reset it before use) instead of a new one.
 
     Returns:
         float32 ``(n, 2)``.
     """
-    action_dim(grasp)
-    return _random_start(np.random.default_rng(seed), Cord(params, grasp=grasp))
+    if cord is None:
+        action_dim(grasp)
+        cord = Cord(params, grasp=grasp)
+    return _random_start(np.random.default_rng(seed), cord)
 
 
 def _random_start(rng: np.random.Generator, cord: Cord) -> np.ndarray:
@@ -288,7 +308,6 @@ def make_task(
         start = cord.shape
     else:
         start = validate_shape(start, n_points=p.n_points, length=p.length, name="start")
-    zero = np.zeros(dim, dtype=np.float32)
     for _ in range(100):
         cord.reset(start)  # fresh, exactly as env.reset does: the replay is bitwise
         actions, moves = [], []
@@ -301,11 +320,7 @@ def make_task(
                 apply_action(cord, action, max_step)
             actions.append(steps)
             moves.append(steps.astype(np.float64).sum(axis=0) * max_step)
-        for _ in range(MAX_SETTLE_ACTIONS):
-            if _rest(cord):
-                break
-            apply_action(cord, zero, max_step)
-            actions.append(zero[None])
+        actions.append(np.zeros((wait_for_rest(cord, max_step), dim), dtype=np.float32))
         goal = cord.shape
         if error(start, goal) > min_error and on_table(goal):
             return Task(

@@ -10,33 +10,35 @@ kept when it passes the paper's cord-like filter (:func:`dlo_env.shapes.is_cord_
 segment is stretched more than ``max_stretch``. Every move is also stored as a transition
 (shape before, ends, gripper displacement, shape after).
 
-Work is cut into chunks of ``chunk_size`` shapes. Chunk ``i`` draws its randomness from
-``SeedSequence(seed, spawn_key=(i,))`` (the ``i``-th child of ``SeedSequence(seed)``), so its
-content does not depend on timing or on the number of worker processes. Chunks are written
-atomically to ``OUT.parts/`` as they finish; an interrupted run keeps them and ``resume=True``
-generates only the missing ones. The final file is assembled in chunk order and the folder is
-removed.
+Work is cut into chunks of ``chunk_size`` shapes and run by :mod:`dlo_env.dataset.chunks`
+(deterministic for a seed whatever the number of workers; resumable). The final file is
+assembled in chunk order and the ``OUT.parts/`` folder is removed.
 """
 
 from __future__ import annotations
 
 import json
 import math
-import multiprocessing
 import os
 import shutil
-import signal
 import time
-from collections.abc import Callable
-from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
 from dataclasses import asdict, dataclass, field
+from functools import partial
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
-from dlo_env.atomic import write_text_atomic
 from dlo_env.cord import Cord, CordParams
+from dlo_env.dataset.chunks import (
+    ChunkJob,
+    Progress,
+    check_out,
+    chunk_path,
+    chunk_plan,
+    chunk_rng,
+    run_chunks,
+)
 from dlo_env.dataset.shape_file import (
     FORMAT_VERSION,
     GRASP_NAMES,
@@ -51,9 +53,6 @@ from dlo_env.shapes import (
     random_cord_shape,
     segment_lengths,
 )
-
-#: ``progress(accepted, rejected)`` receives increments of accepted and rejected shapes.
-Progress = Callable[[int, int], None]
 
 
 @dataclass(frozen=True)
@@ -123,17 +122,6 @@ class CollectConfig:
     def to_json(self) -> dict[str, Any]:
         """The configuration as JSON-compatible values (tuples become lists)."""
         return json.loads(json.dumps(asdict(self)))
-
-
-def chunk_plan(num_shapes: int, chunk_size: int) -> list[tuple[int, int]]:
-    """``(chunk index, shapes in it)`` for every chunk of a dataset of ``num_shapes``."""
-    return [(i, min(chunk_size, num_shapes - i * chunk_size))
-            for i in range(math.ceil(num_shapes / chunk_size))]
-
-
-def chunk_rng(seed: int, index: int) -> np.random.Generator:
-    """The generator of chunk ``index``: child ``index`` of ``SeedSequence(seed)``."""
-    return np.random.default_rng(np.random.SeedSequence(seed, spawn_key=(index,)))
 
 
 def _draw_displacements(
@@ -279,114 +267,23 @@ def collect_chunk(
     )
 
 
-# ---------------------------------------------------------------- chunk files and workers
-def parts_dir(out: str | os.PathLike[str]) -> Path:
-    """Folder holding the finished chunks of an unfinished ``out`` file."""
-    out = Path(out)
-    return out.with_name(out.name + ".parts")
-
-
-def _chunk_path(parts: Path, index: int) -> Path:
-    return parts / f"chunk-{index:06d}.npz"
-
-
-def _chunk_ready(parts: Path, index: int, num_shapes: int) -> bool:
-    path = _chunk_path(parts, index)
-    if not path.is_file():
-        return False
-    try:
-        return load_shapes(path).num_shapes >= num_shapes
-    except ValueError:  # unreadable: generate it again
-        return False
-
-
-def _write_chunk(config: CollectConfig, index: int, num_shapes: int, parts: Path,
+# ---------------------------------------------------------------- chunk files
+def _write_chunk(config: CollectConfig, index: int, num_shapes: int, path: Path,
                  progress: Progress | None) -> None:
-    save_shapes(_chunk_path(parts, index), collect_chunk(config, index, num_shapes, progress))
+    save_shapes(path, collect_chunk(config, index, num_shapes, progress))
 
 
-_worker_queue: Any = None
+def _chunk_size(path: Path) -> int:
+    return load_shapes(path).num_shapes
 
 
-def _init_worker(queue: Any) -> None:
-    global _worker_queue
-    _worker_queue = queue
-    # Ctrl-C reaches the whole process group: let the parent decide, so running chunks finish
-    # and are saved instead of being lost half-way.
-    signal.signal(signal.SIGINT, signal.SIG_IGN)
-
-
-def _worker_chunk(config: CollectConfig, index: int, num_shapes: int, parts: str) -> int:
-    pending = [0, 0]
-    last = [time.monotonic()]
-
-    def report(accepted: int, rejected: int) -> None:
-        pending[0] += accepted
-        pending[1] += rejected
-        now = time.monotonic()
-        if now - last[0] > 0.2:
-            _worker_queue.put((pending[0], pending[1]))
-            pending[0] = pending[1] = 0
-            last[0] = now
-
-    _write_chunk(config, index, num_shapes, Path(parts), report)
-    _worker_queue.put((pending[0], pending[1]))
-    return index
-
-
-def _drain(queue: Any, progress: Progress | None) -> None:
-    while True:
-        try:
-            accepted, rejected = queue.get_nowait()
-        except Exception:  # queue.Empty, raised under another name by multiprocessing
-            return
-        if progress is not None:
-            progress(accepted, rejected)
-
-
-def _run_pool(config: CollectConfig, todo: list[tuple[int, int]], parts: Path, workers: int,
-              progress: Progress | None) -> None:
-    # spawn: the parent may run threads (progress bar), which fork does not copy safely.
-    ctx = multiprocessing.get_context("spawn")
-    queue = ctx.Queue()
-    executor = ProcessPoolExecutor(max_workers=workers, mp_context=ctx,
-                                   initializer=_init_worker, initargs=(queue,))
-    try:
-        pending = {executor.submit(_worker_chunk, config, i, n, str(parts)) for i, n in todo}
-        while pending:
-            done, pending = wait(pending, timeout=0.2, return_when=FIRST_COMPLETED)
-            _drain(queue, progress)
-            for future in done:
-                future.result()
-        _drain(queue, progress)
-    finally:
-        # On an interrupt or error, chunks already running finish and are kept.
-        executor.shutdown(wait=True, cancel_futures=True)
-        queue.close()
+def shape_job(config: CollectConfig) -> ChunkJob:
+    """The chunked job that collects shapes with ``config``."""
+    return ChunkJob(kind="shapes", format_version=FORMAT_VERSION, settings=config.to_json(),
+                    write=partial(_write_chunk, config), size_of=_chunk_size)
 
 
 # ---------------------------------------------------------------- the collection job
-def _check_resumable(parts: Path, config: CollectConfig) -> None:
-    manifest = parts / "manifest.json"
-    if not manifest.is_file():
-        return
-    saved = json.loads(manifest.read_text())
-    if saved.get("format_version") != FORMAT_VERSION:
-        raise ValueError(f"resume: {parts} was written by another format version "
-                         f"({saved.get('format_version')!r}); delete it to start again")
-    old, new = saved.get("collect", {}), config.to_json()
-    differ = sorted(k for k in set(old) | set(new) if old.get(k) != new.get(k))
-    if differ:
-        detail = ", ".join(f"{k}: {old.get(k)!r} -> {new.get(k)!r}" for k in differ)
-        raise ValueError(f"resume: the settings differ from the interrupted run in {parts} "
-                         f"({detail}); use the same settings or delete the folder")
-
-
-def _write_manifest(parts: Path, config: CollectConfig) -> None:
-    write_text_atomic(parts / "manifest.json", json.dumps(
-        {"format_version": FORMAT_VERSION, "collect": config.to_json()}, indent=1, sort_keys=True))
-
-
 def assemble(parts: Path, plan: list[tuple[int, int]]) -> tuple[ShapeDataset, dict[str, Any]]:
     """Concatenate the chunk files of ``plan`` in order into one dataset.
 
@@ -397,7 +294,7 @@ def assemble(parts: Path, plan: list[tuple[int, int]]) -> tuple[ShapeDataset, di
     t_offset = e_offset = 0
     totals = {"rejected_cosine": 0, "rejected_stretch": 0, "compute_time_s": 0.0}
     for index, n in plan:
-        chunk = load_shapes(_chunk_path(parts, index))
+        chunk = load_shapes(chunk_path(parts, index))
         if chunk.num_shapes > n:  # made for a larger run; its prefix is this run's chunk
             last = int(chunk.shape_transition[n - 1])
             transitions = np.arange(chunk.num_transitions) <= last
@@ -457,33 +354,11 @@ def collect(
     config = config if config is not None else CollectConfig()
     if not isinstance(num_shapes, (int, np.integer)) or num_shapes < 1:
         raise ValueError(f"num_shapes must be an integer >= 1, got {num_shapes!r}")
-    if not isinstance(workers, (int, np.integer)) or workers < 1:
-        raise ValueError(f"workers must be an integer >= 1, got {workers!r}")
-    out = Path(out)
-    if out.suffix != ".npz":
-        raise ValueError(f"out must be a .npz file name, got {str(out)!r}")
-    if out.exists():
-        raise ValueError(f"out {str(out)!r} already exists; delete it or choose another file")
-    parts = parts_dir(out)
-    if parts.exists():
-        if not resume:
-            raise ValueError(f"an interrupted run left {str(parts)!r}; pass resume=True "
-                             "(--resume) to continue it, or delete the folder")
-        _check_resumable(parts, config)
+    out = check_out(out, resume=resume, workers=workers)
     started = time.perf_counter()
-    parts.mkdir(parents=True, exist_ok=True)
-    _write_manifest(parts, config)
     plan = chunk_plan(int(num_shapes), config.chunk_size)
-    todo = [(i, n) for i, n in plan if not _chunk_ready(parts, i, n)]
-    reused = len(plan) - len(todo)
-    reused_shapes = sum(n for i, n in plan if (i, n) not in todo)
-    if progress is not None and reused:
-        progress(reused_shapes, 0)
-    if workers == 1 or len(todo) <= 1:
-        for i, n in todo:
-            _write_chunk(config, i, n, parts, progress)
-    else:
-        _run_pool(config, todo, parts, min(workers, len(todo)), progress)
+    parts, reused, reused_shapes = run_chunks(shape_job(config), out, plan, workers=int(workers),
+                                              progress=progress)
     dataset, totals = assemble(parts, plan)
     rejected = totals["rejected_cosine"] + totals["rejected_stretch"]
     metadata = {

@@ -29,16 +29,14 @@ Example:
 
 from __future__ import annotations
 
-import json
 import os
-import zipfile
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
-from dlo_env.atomic import atomic_path
+from dlo_env.dataset.npz_file import check_arrays, load_npz, save_npz
 
 #: Name stored in every file's metadata, so other ``.npz`` files are recognised as such.
 FORMAT_NAME = "dlo-shapes"
@@ -88,25 +86,7 @@ class ShapeDataset:
     metadata: dict[str, Any] = field(default_factory=dict)
 
     def __post_init__(self) -> None:
-        sizes: dict[str, int] = {}
-        for name, (dtype, dims) in _ARRAYS.items():
-            arr = getattr(self, name)
-            if not isinstance(arr, np.ndarray) or arr.dtype != dtype or arr.ndim != len(dims):
-                got = (f"{arr.dtype} {arr.shape}" if isinstance(arr, np.ndarray)
-                       else type(arr).__name__)
-                raise ValueError(
-                    f"{name} must be a {dtype} array of shape {_dims(dims)}, got {got}"
-                )
-            for dim, size in zip(dims, arr.shape):
-                if isinstance(dim, int):
-                    ok = size == dim
-                else:
-                    ok = sizes.setdefault(dim, size) == size
-                if not ok:
-                    raise ValueError(
-                        f"{name} must have shape {_dims(dims)} consistent with the other "
-                        f"arrays ({_sizes(sizes)}), got {arr.shape}"
-                    )
+        check_arrays(_ARRAYS, self.arrays())
         t = len(self.transition_grasp)
         if len(self.shape_transition) and (
             self.shape_transition.min() < 0 or self.shape_transition.max() >= t
@@ -152,14 +132,6 @@ class ShapeDataset:
         )
 
 
-def _dims(dims: tuple[object, ...]) -> str:
-    return "(" + ", ".join(str(d) for d in dims) + ")"
-
-
-def _sizes(sizes: dict[str, int]) -> str:
-    return ", ".join(f"{k}={v}" for k, v in sizes.items()) or "none yet"
-
-
 def save_shapes(path: str | os.PathLike[str], dataset: ShapeDataset) -> Path:
     """Write ``dataset`` to ``path`` atomically, as a ``.npz`` with a JSON metadata string.
 
@@ -168,16 +140,7 @@ def save_shapes(path: str | os.PathLike[str], dataset: ShapeDataset) -> Path:
     Returns:
         The path written.
     """
-    path = Path(path)
-    meta = {"format": FORMAT_NAME, "format_version": FORMAT_VERSION, **dataset.metadata}
-    arrays = {**dataset.arrays(), "metadata": np.array(json.dumps(meta, sort_keys=True))}
-    with atomic_path(path) as tmp:
-        with zipfile.ZipFile(tmp, "w", compression=zipfile.ZIP_STORED, allowZip64=True) as zf:
-            for name, arr in arrays.items():
-                info = zipfile.ZipInfo(f"{name}.npy", date_time=(1980, 1, 1, 0, 0, 0))
-                with zf.open(info, "w", force_zip64=True) as f:
-                    np.lib.format.write_array(f, np.asarray(arr), allow_pickle=False)
-    return path
+    return save_npz(path, dataset.arrays(), dataset.metadata, FORMAT_NAME, FORMAT_VERSION)
 
 
 def load_shapes(path: str | os.PathLike[str]) -> ShapeDataset:
@@ -194,41 +157,10 @@ def load_shapes(path: str | os.PathLike[str]) -> ShapeDataset:
         ValueError: The file is not a shape dataset, has another format version, or an array
             is missing or of the wrong dtype or shape (the message names it).
     """
-    path = Path(path)
-    if not path.is_file():
-        raise FileNotFoundError(
-            f"no shape dataset at {str(path)!r}; make one with "
-            f"`dlo collect --num-shapes N --out {path.name}`"
-        )
-    try:
-        loaded = np.load(path, allow_pickle=False)
-        if not isinstance(loaded, np.lib.npyio.NpzFile):
-            raise ValueError(f"{str(path)!r} is not a shape dataset: it holds one array, "
-                             "not an .npz archive")
-        with loaded as npz:
-            names = set(npz.files)
-            if "metadata" not in names:
-                raise ValueError(f"{str(path)!r} is not a shape dataset: no 'metadata' array")
-            meta = json.loads(str(npz["metadata"][()]))
-            if not isinstance(meta, dict) or meta.get("format") != FORMAT_NAME:
-                raise ValueError(f"{str(path)!r} is not a shape dataset: metadata 'format' is "
-                                 f"not {FORMAT_NAME!r}")
-            version = meta.get("format_version")
-            if version != FORMAT_VERSION:
-                raise ValueError(
-                    f"{str(path)!r} has format_version {version!r}; this version of dlo reads "
-                    f"format_version {FORMAT_VERSION} (collect the dataset again)"
-                )
-            missing = [name for name in ARRAY_NAMES if name not in names]
-            if missing:
-                raise ValueError(f"{str(path)!r} lacks the array(s) {', '.join(missing)}")
-            arrays = {name: npz[name] for name in ARRAY_NAMES}
-    except (OSError, zipfile.BadZipFile, json.JSONDecodeError, EOFError) as exc:
-        raise ValueError(f"{str(path)!r} is not a readable .npz shape dataset: {exc}") from exc
-    except ValueError as exc:
-        if str(path) in str(exc):
-            raise
-        raise ValueError(f"{str(path)!r} is not a readable .npz shape dataset: {exc}") from exc
+    arrays, meta = load_npz(
+        path, format_name=FORMAT_NAME, format_version=FORMAT_VERSION, names=ARRAY_NAMES,
+        what="shape dataset",
+        missing_hint=f"make one with `dlo collect --num-shapes N --out {Path(path).name}`")
     try:
         return ShapeDataset(**arrays, metadata=meta)
     except ValueError as exc:

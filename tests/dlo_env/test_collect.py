@@ -5,7 +5,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from dlo_env.dataset.collect import CollectConfig, chunk_plan, collect, collect_chunk, parts_dir
+from dlo_env.dataset.chunks import chunk_plan, parts_dir
+from dlo_env.dataset.collect import CollectConfig, collect, collect_chunk
 from dlo_env.dataset.shape_file import GRASP_NAMES, load_shapes
 from dlo_env.shapes import is_cord_like, on_table, segment_lengths
 

@@ -1,0 +1,397 @@
+"""One-move transitions: a cord at rest, one straight move of the held end(s), the cord at rest.
+
+A transition is carried out exactly as tasks do it: the displacement is split into equal
+actions (:func:`dlo_env.tasks.split_move`) run through :func:`dlo_env.tasks.apply_action`, then
+zero actions follow until the cord is at rest (:func:`dlo_env.tasks.wait_for_rest`). Chaining
+transitions therefore reproduces task goals.
+
+One *episode* draws a grasp (head, tail or both), a random start at rest
+(:func:`dlo_env.tasks.random_start`) and applies ``moves_per_episode`` moves to the same cord, so
+the starts of later moves are shapes reached after one to four earlier moves. Each end's move
+has a length uniform in ``[min_move, max_move]`` and a direction that is uniform, or aims at the
+cord's middle (``push_fraction``: pushes buckle the cord and fold it onto itself), or at the
+nearest table edge (``rim_fraction``: moves that press the cord on the rim); half the lengths
+are drawn log-uniformly so short corrective moves are well represented.
+
+The ``.npz`` layout (format ``dlo-transitions``, version 1; no pickles):
+
+================ ============== ==============================================================
+array            dtype, shape   meaning
+================ ============== ==============================================================
+``start``        f4 (T, n, 2)   shape at rest before the move, metres
+``next``         f4 (T, n, 2)   shape at rest after the move
+``grasp``        i1 (T,)        ends moved: 0 head, 1 tail, 2 both (``GRASP_NAMES``)
+``displacement`` f4 (T, 2, 2)   commanded displacement of [head, tail]; zero for an end not held
+``moved``        f4 (T, 2, 2)   where the grippers really went (targets clipped to the table)
+``episode``      i8 (T,)        episode of the move; moves of one episode follow each other
+``step``         i8 (T,)        earlier moves in the episode (0: from a random start)
+``settle``       i1 (T,)        zero actions it took to come to rest
+``at_rest``      ?  (T,)        whether ``next`` is at rest (else ``MAX_SETTLE_ACTIONS`` ran out)
+``metadata``     str ()         JSON: format, version, cord, settings, counts, times
+================ ============== ==============================================================
+
+Example:
+    >>> data = collect_transitions("runs/transitions.npz", 20_000, workers=2)
+    >>> data = load_transitions("runs/transitions.npz")
+    >>> train, validation = split_transitions(data, validation_fraction=0.1)
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import os
+import shutil
+import time
+from dataclasses import asdict, dataclass, field
+from functools import partial
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from dlo_env.cord import Cord, CordParams
+from dlo_env.dataset.chunks import (
+    ChunkJob,
+    Progress,
+    check_out,
+    chunk_path,
+    chunk_plan,
+    chunk_rng,
+    run_chunks,
+)
+from dlo_env.dataset.npz_file import check_arrays, load_npz, save_npz
+from dlo_env.shapes import TABLE_HALF
+from dlo_env.tasks import (
+    DEFAULT_MAX_STEP,
+    GRASP_ENDS,
+    MAX_SETTLE_ACTIONS,
+    apply_action,
+    random_start,
+    split_move,
+    wait_for_rest,
+)
+
+#: Name stored in every file's metadata.
+FORMAT_NAME = "dlo-transitions"
+#: Version of the file layout; bumped on any incompatible change.
+FORMAT_VERSION = 1
+#: Names of the grasp codes in ``grasp``.
+GRASP_NAMES = ("head", "tail", "both")
+
+_ARRAYS = {
+    "start": (np.dtype(np.float32), ("T", "n", 2)),
+    "next": (np.dtype(np.float32), ("T", "n", 2)),
+    "grasp": (np.dtype(np.int8), ("T",)),
+    "displacement": (np.dtype(np.float32), ("T", 2, 2)),
+    "moved": (np.dtype(np.float32), ("T", 2, 2)),
+    "episode": (np.dtype(np.int64), ("T",)),
+    "step": (np.dtype(np.int64), ("T",)),
+    "settle": (np.dtype(np.int8), ("T",)),
+    "at_rest": (np.dtype(np.bool_), ("T",)),
+}
+ARRAY_NAMES = tuple(_ARRAYS)
+
+
+@dataclass(frozen=True)
+class TransitionConfig:
+    """What to collect; the defaults produce the documented transition data.
+
+    Attributes:
+        seed: Root seed; chunk ``i`` uses the ``i``-th child of ``SeedSequence(seed)``.
+        moves_per_episode: Moves applied to one cord after its random start.
+        grasp_weights: Probabilities of an episode holding the head, the tail, or both ends.
+        min_move: Shortest move of an end, metres.
+        max_move: Longest move of an end, metres.
+        push_fraction: Share of moves aimed at the cord's middle (within +-60 degrees).
+        rim_fraction: Share of moves aimed at the nearest table edge (within +-45 degrees).
+        log_fraction: Share of move lengths drawn log-uniformly (the rest uniformly) from
+            ``[min_move, max_move]``: planners end with short corrective moves, and a
+            uniform draw alone gives few of them (4 % under 2.5 cm).
+        max_step: Gripper displacement of an action of 1.0 (the environments' ``max_step``).
+        chunk_size: Transitions per chunk (the unit of parallel work, saving and resuming).
+        cord: The cord simulated.
+    """
+
+    seed: int = 0
+    moves_per_episode: int = 5
+    grasp_weights: tuple[float, float, float] = (0.3, 0.3, 0.4)
+    min_move: float = 0.01
+    max_move: float = 0.35
+    push_fraction: float = 0.25
+    rim_fraction: float = 0.1
+    log_fraction: float = 0.5
+    max_step: float = DEFAULT_MAX_STEP
+    chunk_size: int = 500
+    cord: CordParams = field(default_factory=CordParams)
+
+    def __post_init__(self) -> None:
+        if not isinstance(self.seed, (int, np.integer)) or self.seed < 0:
+            raise ValueError(f"seed must be an integer >= 0, got {self.seed!r}")
+        for name in ("moves_per_episode", "chunk_size"):
+            value = getattr(self, name)
+            if not isinstance(value, (int, np.integer)) or value < 1:
+                raise ValueError(f"{name} must be an integer >= 1, got {value!r}")
+        weights = np.asarray(self.grasp_weights, dtype=np.float64)
+        if weights.shape != (3,) or (weights < 0).any() or weights.sum() <= 0:
+            raise ValueError("grasp_weights must be 3 non-negative weights (head, tail, both) "
+                             f"with a positive sum, got {self.grasp_weights!r}")
+        if not 0.0 < self.min_move <= self.max_move:
+            raise ValueError("min_move and max_move must satisfy 0 < min_move <= max_move, "
+                             f"got {self.min_move!r} and {self.max_move!r}")
+        fractions = (self.push_fraction, self.rim_fraction)
+        if min(fractions) < 0 or sum(fractions) > 1:
+            raise ValueError("push_fraction and rim_fraction must be >= 0 with a sum <= 1, "
+                             f"got {self.push_fraction!r} and {self.rim_fraction!r}")
+        if not 0.0 <= self.log_fraction <= 1.0:
+            raise ValueError(f"log_fraction must be in [0, 1], got {self.log_fraction!r}")
+        if not self.max_step > 0:
+            raise ValueError(f"max_step must be > 0, got {self.max_step!r}")
+
+    def to_json(self) -> dict[str, Any]:
+        """The configuration as JSON-compatible values (tuples become lists)."""
+        return json.loads(json.dumps(asdict(self)))
+
+
+@dataclass(frozen=True, eq=False)
+class TransitionDataset:
+    """Transitions in memory; see the module docstring for every array."""
+
+    start: np.ndarray
+    next: np.ndarray
+    grasp: np.ndarray
+    displacement: np.ndarray
+    moved: np.ndarray
+    episode: np.ndarray
+    step: np.ndarray
+    settle: np.ndarray
+    at_rest: np.ndarray
+    metadata: dict[str, Any] = field(default_factory=dict)
+
+    def __post_init__(self) -> None:
+        check_arrays(_ARRAYS, self.arrays())
+        if len(self.grasp) and (self.grasp.min() < 0 or self.grasp.max() > 2):
+            raise ValueError("grasp must hold codes 0 (head), 1 (tail), 2 (both)")
+        if not isinstance(self.metadata, dict):
+            raise ValueError(f"metadata must be a dict, got {type(self.metadata).__name__}")
+
+    def __len__(self) -> int:
+        return len(self.grasp)
+
+    def arrays(self) -> dict[str, np.ndarray]:
+        """The arrays by file name (without ``metadata``)."""
+        return {name: getattr(self, name) for name in ARRAY_NAMES}
+
+    def subset(self, mask: np.ndarray) -> TransitionDataset:
+        """The transitions where ``mask`` (bool or indices) selects."""
+        return TransitionDataset(**{k: v[mask] for k, v in self.arrays().items()},
+                                 metadata=dict(self.metadata))
+
+    def end_displacement(self, index: np.ndarray | slice = slice(None)) -> np.ndarray:
+        """Commanded displacement as the model takes it: ``(T, 2)`` for one end, head dx, dy
+        then tail dx, dy ``(T, 4)`` for both; only valid for transitions of one grasp."""
+        grasp = np.unique(self.grasp[index])
+        if len(grasp) != 1:
+            raise ValueError("end_displacement needs transitions of a single grasp")
+        d = self.displacement[index]
+        return {0: d[:, 0], 1: d[:, 1], 2: d.reshape(-1, 4)}[int(grasp[0])]
+
+    @staticmethod
+    def concatenate(parts: list[TransitionDataset]) -> TransitionDataset:
+        """One dataset of ``parts`` in order; episodes are renumbered to stay distinct."""
+        arrays: dict[str, list[np.ndarray]] = {k: [] for k in ARRAY_NAMES}
+        offset = 0
+        for part in parts:
+            for name, arr in part.arrays().items():
+                arrays[name].append(arr + offset if name == "episode" else arr)
+            offset += int(part.episode.max()) + 1 if len(part) else 0
+        return TransitionDataset(**{k: np.concatenate(v) for k, v in arrays.items()})
+
+
+# ---------------------------------------------------------------- one chunk
+def _draw_move(rng: np.random.Generator, cord: Cord, config: TransitionConfig) -> np.ndarray:
+    """``(2 * ends,)`` commanded displacement of the held ends."""
+    shape = cord.shape
+    centre = shape.mean(axis=0)
+    grippers = cord.gripper_positions()
+    moves = []
+    for end in GRASP_ENDS[cord.grasp]:
+        pos = grippers[end]
+        u = rng.uniform()
+        if u < config.push_fraction:
+            towards = centre - pos
+            angle = math.atan2(towards[1], towards[0]) + rng.uniform(-1.0, 1.0) * np.pi / 3
+        elif u < config.push_fraction + config.rim_fraction:
+            axis = int(np.argmax(np.abs(pos)))
+            edge = np.zeros(2)
+            edge[axis] = 1.0 if pos[axis] >= 0 else -1.0
+            angle = math.atan2(edge[1], edge[0]) + rng.uniform(-1.0, 1.0) * np.pi / 4
+        else:
+            angle = rng.uniform(-np.pi, np.pi)
+        if rng.uniform() < config.log_fraction:  # short corrections as often as long moves
+            length = math.exp(rng.uniform(math.log(config.min_move), math.log(config.max_move)))
+        else:
+            length = rng.uniform(config.min_move, config.max_move)
+        moves.append(length * np.array([math.cos(angle), math.sin(angle)]))
+    return np.concatenate(moves)
+
+
+def collect_transition_chunk(config: TransitionConfig, index: int, size: int,
+                             progress: Progress | None = None) -> TransitionDataset:
+    """Generate chunk ``index``: exactly ``size`` transitions (a prefix of a larger chunk)."""
+    if size < 1:
+        raise ValueError(f"size must be >= 1, got {size!r}")
+    rng = chunk_rng(config.seed, index)
+    weights = np.asarray(config.grasp_weights, dtype=np.float64)
+    weights = weights / weights.sum()
+    rows: dict[str, list[Any]] = {k: [] for k in ARRAY_NAMES}
+    started = time.perf_counter()
+    episode = -1
+    while len(rows["grasp"]) < size:
+        episode += 1
+        grasp = int(rng.choice(3, p=weights))
+        cord = Cord(config.cord, grasp=GRASP_NAMES[grasp])
+        cord.reset(random_start(rng, cord=cord))  # fresh, as an environment's reset
+        start = cord.shape
+        for step in range(config.moves_per_episode):
+            if len(rows["grasp"]) == size:
+                break
+            move = _draw_move(rng, cord, config)
+            before = cord.gripper_positions()
+            for action in split_move(move, config.max_step):
+                apply_action(cord, action, config.max_step)
+            settle = wait_for_rest(cord, config.max_step)
+            after = cord.gripper_positions()
+            nxt = cord.shape
+            commanded = np.zeros((2, 2), dtype=np.float32)
+            moved = np.zeros((2, 2), dtype=np.float32)
+            for k, end in enumerate(GRASP_ENDS[GRASP_NAMES[grasp]]):
+                row = 0 if end == "head" else 1
+                commanded[row] = move[2 * k: 2 * k + 2]
+                moved[row] = after[end] - before[end]
+            for name, value in (("start", start), ("next", nxt), ("grasp", grasp),
+                                ("displacement", commanded), ("moved", moved),
+                                ("episode", episode), ("step", step), ("settle", settle),
+                                ("at_rest", settle < MAX_SETTLE_ACTIONS)):
+                rows[name].append(value)
+            start = nxt
+            if progress is not None:
+                progress(1, 0)
+    meta = {"chunk": index, "episodes": episode + 1,
+            "compute_time_s": time.perf_counter() - started, "collect": config.to_json()}
+    return TransitionDataset(
+        **{name: np.asarray(rows[name], dtype=dtype) for name, (dtype, _) in _ARRAYS.items()},
+        metadata=meta)
+
+
+# ---------------------------------------------------------------- files
+def save_transitions(path: str | os.PathLike[str], data: TransitionDataset) -> Path:
+    """Write ``data`` to ``path`` atomically (byte-identical for equal data)."""
+    return save_npz(path, data.arrays(), data.metadata, FORMAT_NAME, FORMAT_VERSION)
+
+
+def load_transitions(path: str | os.PathLike[str]) -> TransitionDataset:
+    """Read and validate a transition dataset written by ``dlo collect --kind transitions``.
+
+    Raises:
+        FileNotFoundError: No file at ``path``.
+        ValueError: One line: not a transition dataset, another version, a bad array.
+    """
+    arrays, meta = load_npz(
+        path, format_name=FORMAT_NAME, format_version=FORMAT_VERSION, names=ARRAY_NAMES,
+        what="transition dataset",
+        missing_hint=("make one with `dlo collect --kind transitions --num N "
+                      f"--out {Path(path).name}`"))
+    try:
+        return TransitionDataset(**arrays, metadata=meta)
+    except ValueError as exc:
+        raise ValueError(f"{str(path)!r}: {exc}") from exc
+
+
+def split_transitions(data: TransitionDataset, validation_fraction: float = 0.1,
+                      seed: int = 0) -> tuple[TransitionDataset, TransitionDataset]:
+    """Split by whole episodes (moves of one cord stay on one side): ``(train, validation)``."""
+    if not 0.0 < validation_fraction < 1.0:
+        raise ValueError(f"validation_fraction must be in (0, 1), got {validation_fraction!r}")
+    episodes = np.unique(data.episode)
+    if len(episodes) < 2:
+        raise ValueError(f"data must hold at least 2 episodes to split, got {len(episodes)}")
+    order = np.random.default_rng(seed).permutation(episodes)
+    take = min(max(1, round(validation_fraction * len(episodes))), len(episodes) - 1)
+    validation = np.isin(data.episode, order[:take])
+    return data.subset(~validation), data.subset(validation)
+
+
+# ---------------------------------------------------------------- the collection job
+def _write_chunk(config: TransitionConfig, index: int, size: int, path: Path,
+                 progress: Progress | None) -> None:
+    save_transitions(path, collect_transition_chunk(config, index, size, progress))
+
+
+def _chunk_size(path: Path) -> int:
+    return len(load_transitions(path))
+
+
+def transition_job(config: TransitionConfig) -> ChunkJob:
+    """The chunked job that collects transitions with ``config``."""
+    return ChunkJob(kind="transitions", format_version=FORMAT_VERSION,
+                    settings=config.to_json(), write=partial(_write_chunk, config),
+                    size_of=_chunk_size)
+
+
+def collect_transitions(
+    out: str | os.PathLike[str],
+    num_transitions: int,
+    config: TransitionConfig | None = None,
+    *,
+    workers: int = 1,
+    resume: bool = False,
+    progress: Progress | None = None,
+) -> TransitionDataset:
+    """Collect ``num_transitions`` transitions into the ``.npz`` file ``out``.
+
+    The arrays depend only on ``config`` and ``num_transitions`` (not on ``workers``); an
+    interrupted run is continued with ``resume=True`` (nothing lost, nothing repeated).
+    Workers are spawned, so a script calling this with ``workers > 1`` needs the
+    ``if __name__ == "__main__":`` guard.
+
+    Raises:
+        ValueError: Bad arguments, an existing ``out``, or leftovers of another run.
+        KeyboardInterrupt: Re-raised after the running chunks were saved.
+    """
+    config = config if config is not None else TransitionConfig()
+    if not isinstance(num_transitions, (int, np.integer)) or num_transitions < 1:
+        raise ValueError(f"num_transitions must be an integer >= 1, got {num_transitions!r}")
+    out = check_out(out, resume=resume, workers=workers)
+    started = time.perf_counter()
+    plan = chunk_plan(int(num_transitions), config.chunk_size)
+    parts, reused, reused_items = run_chunks(transition_job(config), out, plan,
+                                             workers=int(workers), progress=progress)
+    chunks = []
+    compute = 0.0
+    for index, size in plan:
+        chunk = load_transitions(chunk_path(parts, index))
+        compute += float(chunk.metadata.get("compute_time_s", 0.0))
+        chunks.append(chunk.subset(np.arange(len(chunk)) < size))
+    data = TransitionDataset.concatenate(chunks)
+    metadata = {
+        "num_transitions": len(data),
+        "n_points": config.cord.n_points,
+        "cord": asdict(config.cord),
+        "collect": config.to_json(),
+        "seed": config.seed,
+        "workers": int(workers),
+        "episodes": int(data.episode.max()) + 1,
+        "grasp_names": list(GRASP_NAMES),
+        "grasp_counts": np.bincount(data.grasp, minlength=3).tolist(),
+        "near_rim": int((np.abs(data.next) > TABLE_HALF - 0.05).any(axis=(1, 2)).sum()),
+        "chunks": len(plan),
+        "chunks_resumed": reused,
+        "transitions_resumed": reused_items,
+        "compute_time_s": round(compute, 3),
+        "wall_time_s": round(time.perf_counter() - started, 3),
+    }
+    data = TransitionDataset(**data.arrays(), metadata=metadata)
+    save_transitions(out, data)
+    shutil.rmtree(parts)
+    return data
