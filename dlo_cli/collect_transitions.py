@@ -19,13 +19,17 @@ def run(args: argparse.Namespace) -> int:
 
     from dlo_cli.progress import progress_bar
     from dlo_env.dataset.chunks import parts_dir
-    from dlo_env.dataset.transitions import GRASP_NAMES, TransitionConfig, collect_transitions
+    from dlo_env.dataset.transitions import (
+        GRASP_NAMES,
+        TransitionCollectConfig,
+        collect_transitions,
+    )
 
     if args.num_transitions is None:
         print("dlo collect: error: --num-transitions is required with --kind transitions",
               file=sys.stderr)
         return 2
-    config = TransitionConfig(seed=args.seed)
+    config = TransitionCollectConfig(seed=args.seed)
     started = time.perf_counter()
     with progress_bar(args.num_transitions, "transition", "collect") as bar:
         try:

@@ -7,11 +7,19 @@ import argparse
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     """Flags of ``dlo train``; model and training flags map onto the config dataclasses."""
-    parser.add_argument("--data", required=True, help="training shapes (.npz from dlo collect)")
+    parser.add_argument("--data", required=True,
+                        help="training data: shapes (.npz from dlo collect), or transitions "
+                             "(dlo collect --kind transitions) for --stage transition")
     parser.add_argument("--out", required=True, help="output folder (resumes if it holds a run)")
     parser.add_argument("--heldout", default=None,
-                        help="held-out shapes collected with another seed (default: 5%% of --data)")
-    parser.add_argument("--stage", choices=("gan", "encoder", "all"), default="all")
+                        help="held-out data collected with another seed (default: 5%% of --data)")
+    parser.add_argument("--stage", choices=("gan", "encoder", "all", "transition"), default="all",
+                        help="gan, encoder, all (both: the shape model), or transition (the "
+                             "transition model) (default: all)")
+    parser.add_argument("--steps", type=int, default=None,
+                        help="--stage transition: optimiser steps (default 20000)")
+    parser.add_argument("--members", type=int, default=None,
+                        help="--stage transition: networks in the ensemble (default 5)")
     parser.add_argument("--minutes", type=float, default=30.0,
                         help="training wall time of the run, evaluations excluded (default 30)")
     parser.add_argument("--gan-steps", type=int, default=None,
@@ -40,6 +48,10 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 def run(args: argparse.Namespace) -> int:
     """Train, then print the quality report against the floors."""
+    if args.stage == "transition":
+        from dlo_cli.train_transition import run as run_transition
+
+        return run_transition(args)
     import json
     import time
     from dataclasses import replace

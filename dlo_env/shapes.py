@@ -218,3 +218,71 @@ def random_cord_shape(
         shape += rng.uniform(room_lo, room_hi)
         return shape.astype(np.float32)
     raise RuntimeError("could not draw a cord shape that fits on the table; lower margin")
+
+
+#: Families of :func:`analytic_shape`.
+ANALYTIC_KINDS = ("arc", "s-curve", "spiral", "zigzag")
+
+
+def analytic_shape(
+    kind: str,
+    rng: np.random.Generator,
+    *,
+    n_points: int = 20,
+    length: float = 1.0,
+    margin: float = 0.15,
+    max_curvature: float = 9.0,
+) -> np.ndarray:
+    """A cord shape from an analytic family, at a random pose on the table.
+
+    Unlike :func:`random_cord_shape` (a random Fourier curvature), these are the textbook
+    curves a model trained on random data has never seen as such: an ``"arc"`` (constant
+    curvature), an ``"s-curve"`` (one sine period of curvature), a ``"spiral"`` (curvature
+    growing linearly along the cord) and a ``"zigzag"`` (straight runs joined by sharp
+    alternating turns). Every curvature stays within ``max_curvature`` (1/m) and every turn
+    passes the cord-like filter, so each shape is within the cord's bending limit.
+
+    Args:
+        kind: One of ``ANALYTIC_KINDS``.
+        rng: Source of randomness (the family's parameters and the pose).
+        n_points: Number of points.
+        length: Cord length, metres.
+        margin: Distance every point keeps from the table edge, metres.
+        max_curvature: Largest curvature, 1/m.
+
+    Returns:
+        float32 ``(n_points, 2)``.
+    """
+    if kind not in ANALYTIC_KINDS:
+        raise ValueError(f"kind must be one of {ANALYTIC_KINDS}, got {kind!r}")
+    segment = length / (n_points - 1)
+    s = (np.arange(n_points - 2) + 0.5) / (n_points - 2)  # joint positions, 0..1
+    kmax = max_curvature
+    sign = rng.choice([-1.0, 1.0])
+    if kind == "arc":
+        kappa = np.full_like(s, rng.uniform(1.0, 0.8 * kmax))
+    elif kind == "s-curve":
+        kappa = rng.uniform(2.0, 0.8 * kmax) * np.sin(2 * np.pi * s)
+    elif kind == "spiral":
+        kappa = rng.uniform(0.0, 1.0) + (rng.uniform(0.6, 1.0) * kmax - 1.0) * s
+    else:  # zigzag: sharp turns (up to 70 degrees) every `run` joints, alternating
+        run = int(rng.integers(3, 6))
+        angle = np.radians(rng.uniform(30.0, 70.0))
+        joints = np.arange(n_points - 2)
+        turn_at = (joints % run) == run // 2
+        turns = np.where(turn_at, angle * (-1.0) ** (joints // run), 0.0)
+        kappa = turns / segment
+    if kind != "zigzag":  # a zigzag's kinks are single sharp joints, not a curvature
+        kappa = np.clip(kappa, -kmax, kmax)
+    turns = sign * kappa * segment
+    half = TABLE_HALF - margin
+    for _ in range(1000):
+        headings = rng.uniform(-np.pi, np.pi) + np.concatenate([[0.0], np.cumsum(turns)])
+        shape = shape_from_headings(headings, segment, np.zeros(2))
+        shape -= shape.mean(axis=0)
+        lo, hi = shape.min(axis=0), shape.max(axis=0)
+        room_lo, room_hi = -half - lo, half - hi
+        if (room_lo > room_hi).any():
+            continue
+        return (shape + rng.uniform(room_lo, room_hi)).astype(np.float32)
+    raise RuntimeError(f"a {kind} does not fit on the table with margin {margin}")

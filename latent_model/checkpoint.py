@@ -27,13 +27,20 @@ def save_atomic(obj: dict[str, Any], path: str | os.PathLike) -> Path:
     return path
 
 
-def load_checkpoint(path: str | os.PathLike, name: str = "path") -> dict[str, Any]:
+def load_checkpoint(path: str | os.PathLike, name: str = "path", *, kind: str = FORMAT,
+                    version: int = FORMAT_VERSION) -> dict[str, Any]:
     """Load a checkpoint written by ``save_atomic`` with ``weights_only=True`` and check its format.
+
+    Args:
+        path: The file.
+        name: What to call it in messages (the argument or flag it came from).
+        kind: The ``format`` the file must carry (a shape model by default).
+        version: The ``format_version`` this code reads.
 
     Raises:
         FileNotFoundError: If ``path`` does not exist.
-        ValueError: Naming ``name`` if the file is not a readable checkpoint, is not a dlo shape
-            model, or has another format version.
+        ValueError: Naming ``name`` if the file is not a readable checkpoint, is not of
+            ``kind``, or has another format version.
     """
     path = Path(path)
     if not path.is_file():
@@ -45,12 +52,12 @@ def load_checkpoint(path: str | os.PathLike, name: str = "path") -> dict[str, An
             f"{name}: {str(path)!r} is not a readable torch checkpoint "
             f"({type(exc).__name__}: {str(exc).splitlines()[0] if str(exc) else ''})"
         ) from exc
-    if not isinstance(data, dict) or data.get("format") != FORMAT:
-        raise ValueError(f"{name}: {str(path)!r} is not a {FORMAT} checkpoint")
-    version = data.get("format_version")
-    if version != FORMAT_VERSION:
+    if not isinstance(data, dict) or data.get("format") != kind:
+        raise ValueError(f"{name}: {str(path)!r} is not a {kind} checkpoint")
+    found = data.get("format_version")
+    if found != version:
         raise ValueError(
-            f"{name}: {str(path)!r} has checkpoint format version {version!r}; "
-            f"this version of latent_model reads version {FORMAT_VERSION}"
+            f"{name}: {str(path)!r} has checkpoint format version {found!r}; "
+            f"this version of latent_model reads version {version}"
         )
     return data

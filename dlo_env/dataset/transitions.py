@@ -94,7 +94,7 @@ ARRAY_NAMES = tuple(_ARRAYS)
 
 
 @dataclass(frozen=True)
-class TransitionConfig:
+class TransitionCollectConfig:
     """What to collect; the defaults produce the documented transition data.
 
     Attributes:
@@ -209,7 +209,7 @@ class TransitionDataset:
 
 
 # ---------------------------------------------------------------- one chunk
-def _draw_move(rng: np.random.Generator, cord: Cord, config: TransitionConfig) -> np.ndarray:
+def _draw_move(rng: np.random.Generator, cord: Cord, config: TransitionCollectConfig) -> np.ndarray:
     """``(2 * ends,)`` commanded displacement of the held ends."""
     shape = cord.shape
     centre = shape.mean(axis=0)
@@ -236,7 +236,7 @@ def _draw_move(rng: np.random.Generator, cord: Cord, config: TransitionConfig) -
     return np.concatenate(moves)
 
 
-def collect_transition_chunk(config: TransitionConfig, index: int, size: int,
+def collect_transition_chunk(config: TransitionCollectConfig, index: int, size: int,
                              progress: Progress | None = None) -> TransitionDataset:
     """Generate chunk ``index``: exactly ``size`` transitions (a prefix of a larger chunk)."""
     if size < 1:
@@ -323,7 +323,7 @@ def split_transitions(data: TransitionDataset, validation_fraction: float = 0.1,
 
 
 # ---------------------------------------------------------------- the collection job
-def _write_chunk(config: TransitionConfig, index: int, size: int, path: Path,
+def _write_chunk(config: TransitionCollectConfig, index: int, size: int, path: Path,
                  progress: Progress | None) -> None:
     save_transitions(path, collect_transition_chunk(config, index, size, progress))
 
@@ -332,7 +332,7 @@ def _chunk_size(path: Path) -> int:
     return len(load_transitions(path))
 
 
-def transition_job(config: TransitionConfig) -> ChunkJob:
+def transition_job(config: TransitionCollectConfig) -> ChunkJob:
     """The chunked job that collects transitions with ``config``."""
     return ChunkJob(kind="transitions", format_version=FORMAT_VERSION,
                     settings=config.to_json(), write=partial(_write_chunk, config),
@@ -342,7 +342,7 @@ def transition_job(config: TransitionConfig) -> ChunkJob:
 def collect_transitions(
     out: str | os.PathLike[str],
     num_transitions: int,
-    config: TransitionConfig | None = None,
+    config: TransitionCollectConfig | None = None,
     *,
     workers: int = 1,
     resume: bool = False,
@@ -359,7 +359,7 @@ def collect_transitions(
         ValueError: Bad arguments, an existing ``out``, or leftovers of another run.
         KeyboardInterrupt: Re-raised after the running chunks were saved.
     """
-    config = config if config is not None else TransitionConfig()
+    config = config if config is not None else TransitionCollectConfig()
     if not isinstance(num_transitions, (int, np.integer)) or num_transitions < 1:
         raise ValueError(f"num_transitions must be an integer >= 1, got {num_transitions!r}")
     out = check_out(out, resume=resume, workers=workers)

@@ -1,0 +1,229 @@
+"""The transition model against the simulator: every floor of the model, measured in one run.
+
+1. held-out one-move error by grasp (and two-, three-move chains), from a transition file
+   collected with another seed than the training data;
+2. the moves of the linear-3 test tasks chained from the start (three predictions in a row)
+   against the task goals, next to the simulator itself replaying them rest to rest;
+3. transitions from analytic shapes the data never holds as such (arcs, S-curves, spirals,
+   zigzags): each settled in the simulator, then one random move of 1-35 cm;
+4. throughput: one batch of 1024 predictions against simulating the same 1024 moves, as a ratio
+   per transition (torch on 1 thread and on all threads; the simulator in one process);
+5. predictions off the table where the simulator stays on it.
+
+    python benchmarks/transition_model.py [--model PATH] [--heldout data/transitions-heldout.npz]
+        [--curves 400] [--seed 7] [--out runs/transition-benchmark]
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import time
+from pathlib import Path
+
+import numpy as np
+import torch
+
+from dlo_env.atomic import write_text_atomic
+from dlo_env.cord import Cord
+from dlo_env.dataset.transitions import GRASP_NAMES, load_transitions
+from dlo_env.shapes import ANALYTIC_KINDS, analytic_shape, error, on_table
+from dlo_env.tasks import (
+    DEFAULT_MAX_STEP,
+    GRASP_ENDS,
+    apply_action,
+    load_suite,
+    split_move,
+    wait_for_rest,
+)
+from latent_model.transition_metrics import report_lines, transition_report
+from latent_model.transition_model import TransitionModel
+
+FLOORS = {"single_mean_cm": 0.15, "single_within": 0.995, "both_mean_cm": 0.25,
+          "both_within": 0.99, "chain_cm": 0.5, "curves_cm": 0.3, "speedup": 1000.0}
+
+
+def simulate(start: np.ndarray, end: str, move: np.ndarray) -> np.ndarray:
+    """The simulator's transition: reset at ``start``, one straight move, wait for rest."""
+    cord = Cord(grasp=end)
+    cord.reset(start)
+    for action in split_move(move, DEFAULT_MAX_STEP):
+        apply_action(cord, action, DEFAULT_MAX_STEP)
+    wait_for_rest(cord)
+    return cord.shape
+
+
+def settled(shape: np.ndarray, end: str) -> np.ndarray:
+    """``shape`` after it came to rest in the simulator with ``end`` held."""
+    cord = Cord(grasp=end)
+    cord.reset(shape)
+    cord.settle(tolerance=1e-3, max_time=3.0)
+    return cord.shape
+
+
+def random_move(rng: np.random.Generator, end: str) -> np.ndarray:
+    """Uniform direction, length U(1, 35) cm, per held end."""
+    parts = []
+    for _ in GRASP_ENDS[end]:
+        angle, length = rng.uniform(-np.pi, np.pi), rng.uniform(0.01, 0.35)
+        parts.append(length * np.array([np.cos(angle), np.sin(angle)]))
+    return np.concatenate(parts).astype(np.float32)
+
+
+def chained_tasks(model: TransitionModel) -> dict[str, float]:
+    """Linear-3 test tasks: three predictions in a row vs the goals; the simulator rest to rest."""
+    tasks = load_suite("linear-3", "test")
+    predicted, replayed = [], []
+    for task in tasks:
+        shape = task.start
+        sim = task.start
+        for move in task.moves:
+            shape = model.predict(shape, task.grasp, move)
+            sim = simulate(sim, task.grasp, move)
+        predicted.append(error(shape, task.goal))
+        replayed.append(error(sim, task.goal))
+    return {"tasks": len(tasks), "model_mean_cm": 100 * float(np.mean(predicted)),
+            "model_max_cm": 100 * float(np.max(predicted)),
+            "simulator_rest_to_rest_mean_cm": 100 * float(np.mean(replayed))}
+
+
+def analytic_curves(model: TransitionModel, count: int, seed: int
+                    ) -> tuple[dict[str, dict[str, float]], dict[str, int]]:
+    """Errors of one move from settled analytic shapes, by family; off-table counts."""
+    rng = np.random.default_rng(seed)
+    out: dict[str, dict[str, float]] = {}
+    off = {"predicted_off_table": 0, "simulated_off_table": 0, "cases": 0}
+    every = []
+    for kind in ANALYTIC_KINDS:
+        errors = []
+        for i in range(count // len(ANALYTIC_KINDS)):
+            end = GRASP_NAMES[i % 3]
+            start = settled(analytic_shape(kind, rng), end)
+            move = random_move(rng, end)
+            truth = simulate(start, end, move)
+            pred = model.predict(start, end, move)
+            errors.append(error(pred, truth))
+            off["cases"] += 1
+            off["predicted_off_table"] += int(not on_table(pred) and on_table(truth))
+            off["simulated_off_table"] += int(not on_table(truth))
+        e = np.array(errors)
+        every.append(e)
+        out[kind] = {"count": len(e), "mean_cm": 100 * e.mean(),
+                     "p99_cm": 100 * float(np.percentile(e, 99)),
+                     "within_1cm": float((e <= 0.01).mean())}
+    e = np.concatenate(every)
+    out["all"] = {"count": len(e), "mean_cm": 100 * e.mean(),
+                  "p99_cm": 100 * float(np.percentile(e, 99)),
+                  "within_1cm": float((e <= 0.01).mean())}
+    return out, off
+
+
+def throughput(model: TransitionModel, heldout, batch: int = 1024, repeats: int = 5
+               ) -> dict[str, float]:
+    """Seconds per transition: the model on a batch (median of ``repeats`` calls after a
+    warm-up) on 1 thread and on all threads, and the simulator on the same moves."""
+    idx = np.flatnonzero(heldout.grasp == 0)
+    idx = np.resize(idx, batch)
+    starts, moves = heldout.start[idx], heldout.displacement[idx, 0]
+    result = {}
+    default_threads = torch.get_num_threads()
+    for threads in sorted({1, default_threads}):
+        torch.set_num_threads(threads)
+        model.predict(starts, "head", moves)
+        times = []
+        for _ in range(repeats):
+            t = time.perf_counter()
+            model.predict(starts, "head", moves)
+            times.append(time.perf_counter() - t)
+        result[f"model_threads_{threads}_s"] = float(np.median(times)) / batch
+    torch.set_num_threads(default_threads)
+    t = time.perf_counter()
+    for start, move in zip(starts, moves):
+        simulate(start, "head", move)
+    result["simulator_s"] = (time.perf_counter() - t) / batch
+    result["batch"] = batch
+    return result
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--model", default=None, help="transition model (default: shipped)")
+    parser.add_argument("--heldout", default="data/transitions-heldout.npz",
+                        help="held-out transitions (dlo collect --kind transitions --seed 1)")
+    parser.add_argument("--curves", type=int, default=400, help="analytic-shape transitions")
+    parser.add_argument("--seed", type=int, default=7, help="seed of the analytic shapes")
+    parser.add_argument("--out", default="runs/transition-benchmark", help="results folder")
+    args = parser.parse_args()
+    model = TransitionModel.load_or_pretrained(args.model, device="cpu")
+    heldout = load_transitions(args.heldout)
+    print(f"load average at start: {os.getloadavg()[0]:.2f} on {os.cpu_count()} cores")
+    print(f"model: {model.config}")
+
+    rows, rank = transition_report(model, heldout)
+    print(f"\n1. held-out transitions ({args.heldout}, {len(heldout)} moves)")
+    for line in report_lines(rows, rank):
+        print("   " + line)
+    one = {r.group: r for r in rows if r.moves == 1}
+    checks = []
+    for g in ("head", "tail"):
+        checks.append((f"{g} mean <= {FLOORS['single_mean_cm']} cm", one[g].mean_cm,
+                       one[g].mean_cm <= FLOORS["single_mean_cm"]))
+        checks.append((f"{g} within 1 cm >= {FLOORS['single_within']:.1%}", one[g].within_1cm,
+                       one[g].within_1cm >= FLOORS["single_within"]))
+    checks.append((f"both mean <= {FLOORS['both_mean_cm']} cm", one["both"].mean_cm,
+                   one["both"].mean_cm <= FLOORS["both_mean_cm"]))
+    checks.append((f"both within 1 cm >= {FLOORS['both_within']:.0%}", one["both"].within_1cm,
+                   one["both"].within_1cm >= FLOORS["both_within"]))
+
+    chain = chained_tasks(model)
+    print(f"\n2. linear-3 test tasks, moves chained from the start ({chain['tasks']} tasks)")
+    print(f"   model:     {chain['model_mean_cm']:.3f} cm mean to the goal "
+          f"(worst {chain['model_max_cm']:.2f} cm)")
+    print(f"   simulator: {chain['simulator_rest_to_rest_mean_cm']:.3f} cm mean (rest to rest)")
+    checks.append((f"chained linear-3 mean <= {FLOORS['chain_cm']} cm", chain["model_mean_cm"],
+                   chain["model_mean_cm"] <= FLOORS["chain_cm"]))
+
+    curves, off = analytic_curves(model, args.curves, args.seed)
+    print(f"\n3. one move from settled analytic shapes (seed {args.seed})")
+    for kind, r in curves.items():
+        print(f"   {kind:<8} {r['count']:>4}  mean {r['mean_cm']:.3f} cm  p99 {r['p99_cm']:.2f} cm"
+              f"  within 1 cm {r['within_1cm']:.1%}")
+    checks.append((f"analytic shapes mean <= {FLOORS['curves_cm']} cm", curves["all"]["mean_cm"],
+                   curves["all"]["mean_cm"] <= FLOORS["curves_cm"]))
+
+    speed = throughput(model, heldout)
+    sim = speed["simulator_s"]
+    print(f"\n4. throughput, {speed['batch']} head moves")
+    print(f"   simulator (one process): {1e3 * sim:.2f} ms per transition")
+    for key, value in speed.items():
+        if key.startswith("model_threads"):
+            threads = key.split("_")[2]
+            print(f"   model, {threads} thread(s):     {1e6 * value:.1f} us per transition: "
+                  f"{sim / value:.0f}x")
+    best = sim / min(v for k, v in speed.items() if k.startswith("model_threads"))
+    one_thread = sim / speed["model_threads_1_s"]
+    checks.append((f"speed-up >= {FLOORS['speedup']:.0f}x (all threads)", best,
+                   best >= FLOORS["speedup"]))
+
+    print(f"\n5. off the table: {off['predicted_off_table']} predictions of {off['cases']} "
+          f"analytic-shape moves where the simulator stayed on it "
+          f"(simulator itself off: {off['simulated_off_table']})")
+    checks.append(("predictions off the table where the cord is not == 0",
+                   off["predicted_off_table"], off["predicted_off_table"] == 0))
+
+    print("\nfloors")
+    for name, value, ok in checks:
+        shown = f"{value:.4f}" if isinstance(value, float) else str(value)
+        print(f"   {name:<48} {shown:>10}  {'PASS' if ok else 'FAIL'}")
+    out = Path(args.out)
+    write_text_atomic(out / "transition-benchmark.json", json.dumps({
+        "heldout": [r.__dict__ for r in rows], "spread_rank": rank, "chained_linear3": chain,
+        "analytic": curves, "off_table": off, "throughput": speed,
+        "speedup_one_thread": one_thread, "speedup_best": best,
+        "floors": [{"name": n, "value": v, "pass": p} for n, v, p in checks]}, indent=1))
+    print(f"\nwrote {out / 'transition-benchmark.json'}")
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,68 @@
+"""``dlo train --stage transition``: train the transition model on transition data (resumable).
+
+Example:
+    dlo train --stage transition --data data/transitions-train.npz \
+        --heldout data/transitions-heldout.npz --out runs/transition
+"""
+
+from __future__ import annotations
+
+import argparse
+
+
+def run(args: argparse.Namespace) -> int:
+    """Train (or resume), then print and write the held-out error report."""
+    import time
+    from dataclasses import replace
+    from pathlib import Path
+
+    import torch
+
+    from dlo_cli.progress import progress_bar
+    from dlo_env.dataset.transitions import load_transitions, split_transitions
+    from latent_model.transition_metrics import report_lines, transition_report, write_report
+    from latent_model.transition_model import TransitionModelConfig
+    from latent_model.transition_training import (
+        CHECKPOINT_FILE,
+        CURVE_FILE,
+        TransitionTrainConfig,
+        train_transition_model,
+    )
+
+    if args.threads:
+        torch.set_num_threads(args.threads)
+    data = load_transitions(args.data)
+    if args.heldout is not None:
+        heldout = load_transitions(args.heldout)
+    else:
+        print("no --heldout file: holding out 5% of --data's episodes for the report")
+        data, heldout = split_transitions(data, 0.05, seed=args.seed)
+    train_kw = {k: v for k, v in {"steps": args.steps, "batch_size": args.batch_size,
+                                  "eval_every": args.eval_every, "seed": args.seed}.items()
+                if v is not None}
+    model_kw = {k: v for k, v in {"width": args.width, "members": args.members}.items()
+                if v is not None}
+    tc = replace(TransitionTrainConfig(), **train_kw)
+    mc = replace(TransitionModelConfig(), **model_kw)
+    out = Path(args.out)
+    resumed = (out / CHECKPOINT_FILE).exists()
+    print(f"{'resuming' if resumed else 'training'} in {out}: {len(data)} transitions, "
+          f"{len(heldout)} held out\n{mc}\n{tc}")
+    started = time.perf_counter()
+    with progress_bar(tc.steps, "step", "transition") as bar:
+        last = [0]
+
+        def progress(step: int, stats: dict[str, float]) -> None:
+            bar(step - last[0])
+            last[0] = step
+
+        model = train_transition_model(data, out, tc, mc, resume=True, device=args.device,
+                                       progress=None if args.no_progress else progress)
+    print(f"trained in {(time.perf_counter() - started) / 60:.1f} min; model: "
+          f"{out / 'transition.pt'}, curve: {out / CURVE_FILE}")
+    rows, rank = transition_report(model, heldout)
+    for line in report_lines(rows, rank):
+        print(line)
+    write_report(rows, rank, out)
+    print(f"report: {out / 'transition-metrics.csv'}, {out / 'transition-metrics.png'}")
+    return 0

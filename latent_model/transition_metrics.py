@@ -1,0 +1,158 @@
+"""How good a transition model is, measured on held-out simulator transitions.
+
+Errors are the project's ``error`` (mean per-point distance), reported in centimetres: one-,
+two- and three-move errors (the model rolled out from the real start along consecutive moves
+of one cord, each move from its own previous prediction), by grasp and, for one move, by the
+length of the move. Plus the rank correlation between the ensemble's spread and the error.
+"""
+
+from __future__ import annotations
+
+import csv
+import os
+from dataclasses import asdict, dataclass
+from pathlib import Path
+
+import numpy as np
+
+from dlo_env.atomic import atomic_path
+from dlo_env.dataset.transitions import GRASP_NAMES, TransitionDataset
+from dlo_env.shapes import error
+from latent_model.transition_model import TransitionModel
+from latent_model.transition_training import chain_starts
+
+#: Move-length bins of the one-move rows, centimetres.
+LENGTH_BINS = ((0, 5), (5, 15), (15, 25), (25, 36))
+#: A prediction within this of the simulator is "within 1 cm", metres.
+WITHIN = 0.01
+
+
+@dataclass(frozen=True)
+class ErrorRow:
+    """Error statistics of one group of predictions, centimetres."""
+
+    moves: int
+    group: str
+    count: int
+    mean_cm: float
+    median_cm: float
+    p99_cm: float
+    within_1cm: float
+
+    @classmethod
+    def of(cls, moves: int, group: str, errors: np.ndarray) -> ErrorRow:
+        """Statistics of ``errors`` (metres)."""
+        e = np.asarray(errors, dtype=np.float64)
+        if len(e) == 0:
+            return cls(moves, group, 0, *(float("nan"),) * 4)
+        return cls(moves, group, len(e), 100 * e.mean(), 100 * float(np.median(e)),
+                   100 * float(np.percentile(e, 99)), float((e <= WITHIN).mean()))
+
+
+def rollout_errors(model: TransitionModel, data: TransitionDataset, moves: int
+                   ) -> tuple[np.ndarray, np.ndarray]:
+    """Errors (metres) after ``moves`` chained predictions from every possible chain start.
+
+    Returns:
+        ``(first, errors)``: the index of each chain's first transition and its error.
+    """
+    first = chain_starts(data.episode, data.step, moves)
+    errors = np.zeros(len(first))
+    for code, name in enumerate(GRASP_NAMES):
+        sel = first[data.grasp[first] == code]
+        if not len(sel):
+            continue
+        shapes = data.start[sel]
+        for k in range(moves):
+            shapes = model.predict(shapes, name, data.end_displacement(sel + k))
+        errors[data.grasp[first] == code] = error(shapes, data.next[sel + moves - 1])
+    return first, errors
+
+
+def spread_rank_correlation(model: TransitionModel, data: TransitionDataset) -> float:
+    """Spearman rank correlation between the ensemble's spread and the one-move error."""
+    spreads, errors = [], []
+    for code, name in enumerate(GRASP_NAMES):
+        idx = np.flatnonzero(data.grasp == code)
+        if not len(idx):
+            continue
+        pred, spread = model.predict(data.start[idx], name, data.end_displacement(idx),
+                                     return_std=True)
+        spreads.append(spread)
+        errors.append(error(pred, data.next[idx]))
+    s, e = np.concatenate(spreads), np.concatenate(errors)
+    if len(s) < 2:
+        return float("nan")
+    rs, re = np.argsort(np.argsort(s)), np.argsort(np.argsort(e))
+    return float(np.corrcoef(rs, re)[0, 1])
+
+
+def transition_report(model: TransitionModel, data: TransitionDataset, max_moves: int = 3
+                      ) -> tuple[list[ErrorRow], float]:
+    """Error rows (1 to ``max_moves`` moves; all, by grasp, by length) and the spread-error
+    rank correlation, on ``data``."""
+    rows: list[ErrorRow] = []
+    lengths = 100 * np.linalg.norm(data.displacement, axis=-1).max(axis=-1)
+    for moves in range(1, max_moves + 1):
+        first, errors = rollout_errors(model, data, moves)
+        rows.append(ErrorRow.of(moves, "all", errors))
+        for code, name in enumerate(GRASP_NAMES):
+            rows.append(ErrorRow.of(moves, name, errors[data.grasp[first] == code]))
+        if moves == 1:
+            for lo, hi in LENGTH_BINS:
+                sel = (lengths[first] >= lo) & (lengths[first] < hi)
+                rows.append(ErrorRow.of(1, f"{lo}-{min(hi, 35)} cm", errors[sel]))
+    return rows, spread_rank_correlation(model, data)
+
+
+def report_lines(rows: list[ErrorRow], rank: float) -> list[str]:
+    """The report as a printed table."""
+    lines = [f"{'moves':>5} {'group':<10} {'count':>6} {'mean':>8} {'median':>8} "
+             f"{'p99':>8} {'<=1cm':>7}"]
+    for r in rows:
+        lines.append(f"{r.moves:>5} {r.group:<10} {r.count:>6} {r.mean_cm:>6.3f}cm "
+                     f"{r.median_cm:>6.3f}cm {r.p99_cm:>6.2f}cm {100 * r.within_1cm:>6.2f}%")
+    lines.append(f"spread-error rank correlation (one move): {rank:.3f}")
+    return lines
+
+
+def write_report(rows: list[ErrorRow], rank: float, out: str | os.PathLike[str]) -> Path:
+    """Write ``transition-metrics.csv`` and ``transition-metrics.png`` into ``out``."""
+    out = Path(out)
+    with atomic_path(out / "transition-metrics.csv") as tmp, tmp.open("w", newline="") as f:
+        writer = csv.DictWriter(f, fieldnames=list(asdict(rows[0])) + ["spread_rank"])
+        writer.writeheader()
+        for r in rows:
+            writer.writerow({**asdict(r), "spread_rank": round(rank, 4)})
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    groups = [g for g in ("all", *GRASP_NAMES)]
+    fig, axes = plt.subplots(1, 2, figsize=(10, 3.6))
+    width = 0.25
+    for k in (1, 2, 3):
+        got = {r.group: r for r in rows if r.moves == k}
+        x = np.arange(len(groups)) + (k - 2) * width
+        axes[0].bar(x, [got[g].mean_cm if g in got else 0 for g in groups], width,
+                    label=f"{k} move{'s' if k > 1 else ''}")
+        axes[0].scatter(x, [got[g].p99_cm if g in got else 0 for g in groups], marker="_",
+                        s=120, color="k", zorder=3, label="99th percentile" if k == 1 else None)
+    axes[0].set_xticks(np.arange(len(groups)), groups)
+    axes[0].set_ylabel("error (cm)")
+    axes[0].set_title("held-out error by grasp and chain length")
+    axes[0].legend(fontsize=8)
+    bins = [r for r in rows if r.moves == 1 and r.group.endswith("cm")]
+    axes[1].bar([r.group for r in bins], [r.mean_cm for r in bins], color="tab:blue",
+                label="mean")
+    axes[1].scatter([r.group for r in bins], [r.p99_cm for r in bins], marker="_", s=120,
+                    color="k", zorder=3, label="99th percentile")
+    axes[1].set_xlabel("move length")
+    axes[1].set_title(f"one move by length (spread-error rank corr. {rank:.2f})")
+    axes[1].legend(fontsize=8)
+    fig.tight_layout()
+    with atomic_path(out / "transition-metrics.png") as tmp:
+        fig.savefig(tmp, dpi=110)
+    plt.close(fig)
+    return out

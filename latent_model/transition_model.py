@@ -1,0 +1,365 @@
+"""``TransitionModel``: the shape at rest after one straight move of the held end(s).
+
+The network works in the frame attached to the move (:mod:`latent_model.move_frame`): its
+input is the cord in that frame and the move's length (plus the other end's move when both are
+held), its output the displacement of every point. The held ends' final positions are known
+exactly and are set, not predicted. An ensemble of ``members`` networks, batched as one module,
+gives a mean prediction and a spread that says how far to trust it.
+
+Example:
+    >>> tm = TransitionModel.load_or_pretrained()
+    >>> nxt = tm.predict(shapes, "head", d)                  # (B, n, 2), (B, 2) -> (B, n, 2)
+    >>> nxt, spread = tm.predict(shapes, "both", d4, return_std=True)
+"""
+
+from __future__ import annotations
+
+import math
+import os
+from dataclasses import asdict, dataclass
+from importlib import resources
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import torch
+from torch import nn
+
+from dlo_env.cord import CordParams, reachable_targets
+from dlo_env.shapes import TABLE_HALF
+from dlo_env.tasks import DEFAULT_MAX_STEP
+from latent_model.checkpoint import load_checkpoint, save_atomic
+from latent_model.config import config_from_dict
+from latent_model.move_frame import GRASP_CODES, MoveFrame, from_frame, to_frame
+from latent_model.shape_model import resolve_device
+
+#: Marks a file as a transition-model checkpoint.
+FORMAT = "dlo-transition-model"
+#: Bumped whenever the checkpoint layout changes incompatibly.
+FORMAT_VERSION = 1
+#: File name of the model in a training folder and in ``pretrained/``.
+MODEL_FILE = "transition.pt"
+#: Predictions per network call in ``predict`` (keeps activations in cache).
+PREDICT_CHUNK = 4096
+
+
+@dataclass(frozen=True)
+class TransitionModelConfig:
+    """Architecture of the transition model and the setting it was trained for.
+
+    Attributes:
+        n_points: Points of the cord.
+        cord_length: Rest length of the cord, metres.
+        max_step: The environments' ``max_step`` the moves were carried out with, metres.
+        members: Networks in the ensemble.
+        width: Hidden units per layer.
+        depth: Hidden layers.
+        move_scale: Move lengths are divided by this in the input, metres.
+        output_scale: The network's outputs are point displacements in units of this, metres.
+    """
+
+    n_points: int = 20
+    cord_length: float = 1.0
+    max_step: float = DEFAULT_MAX_STEP
+    members: int = 5
+    width: int = 384
+    depth: int = 3
+    move_scale: float = 0.35
+    output_scale: float = 0.1
+
+    def __post_init__(self) -> None:
+        for name in ("n_points", "members", "width", "depth"):
+            value = getattr(self, name)
+            if not isinstance(value, int) or value < 1:
+                raise ValueError(f"TransitionModelConfig.{name} must be a positive int, "
+                                 f"got {value!r}")
+        for name in ("cord_length", "max_step", "move_scale", "output_scale"):
+            if not getattr(self, name) > 0:
+                raise ValueError(f"TransitionModelConfig.{name} must be > 0, got "
+                                 f"{getattr(self, name)!r}")
+
+    @property
+    def inputs(self) -> int:
+        """Network inputs: the cord in the frame, the lead length, the other move, both-flag."""
+        return 2 * self.n_points + 4
+
+
+class EnsembleMLP(nn.Module):
+    """``members`` independent MLPs evaluated as one batched network (SiLU activations).
+
+    Args:
+        members: Networks.
+        inputs: Input features.
+        width: Hidden units.
+        depth: Hidden layers.
+        outputs: Output features.
+    """
+
+    def __init__(self, members: int, inputs: int, width: int, depth: int, outputs: int) -> None:
+        super().__init__()
+        dims = [inputs] + [width] * depth + [outputs]
+        self.weights = nn.ParameterList()
+        self.biases = nn.ParameterList()
+        for i, (a, b) in enumerate(zip(dims[:-1], dims[1:])):
+            bound = 1.0 / math.sqrt(a)
+            if i == len(dims) - 2:
+                bound *= 0.1  # start near "nothing moves but the held ends"
+            self.weights.append(nn.Parameter(torch.empty(members, a, b).uniform_(-bound, bound)))
+            self.biases.append(nn.Parameter(torch.zeros(members, 1, b)))
+
+    @property
+    def members(self) -> int:
+        """Networks in the ensemble."""
+        return self.weights[0].shape[0]
+
+    def forward(self, x: torch.Tensor) -> torch.Tensor:
+        """``(B, inputs)`` or ``(members, B, inputs)`` -> ``(members, B, outputs)``."""
+        h = x.expand(self.members, *x.shape) if x.dim() == 2 else x
+        last = len(self.weights) - 1
+        for i, (w, b) in enumerate(zip(self.weights, self.biases)):
+            h = torch.baddbmm(b, h, w)
+            if i < last:
+                h = nn.functional.silu(h)
+        return h
+
+
+class TransitionModel(nn.Module):
+    """The learned transition model of the cord; numpy in and out in ``predict``.
+
+    Args:
+        config: Architecture and setting.
+        device: ``"auto"`` (CUDA if available), ``"cpu"``, ``"cuda"``...
+        info: Free-form provenance saved with the model (data, training, metrics).
+    """
+
+    def __init__(self, config: TransitionModelConfig | None = None,
+                 device: str | torch.device = "auto", info: dict[str, Any] | None = None) -> None:
+        super().__init__()
+        self.config = config if config is not None else TransitionModelConfig()
+        c = self.config
+        self.net = EnsembleMLP(c.members, c.inputs, c.width, c.depth, 2 * c.n_points)
+        self.device = resolve_device(device)
+        self.info = dict(info or {})
+        self.to(self.device)
+
+    # ------------------------------------------------------------- facts
+    @property
+    def cord_params(self) -> CordParams:
+        """The default ``CordParams`` with this model's number of points and length."""
+        return CordParams(n_points=self.config.n_points, length=self.config.cord_length)
+
+    # ------------------------------------------------------------- torch core
+    def features(self, points: torch.Tensor, lead: torch.Tensor, other: torch.Tensor,
+                 both: torch.Tensor) -> torch.Tensor:
+        """Network input ``(B, inputs)`` from a batch described in the move frames."""
+        c = self.config
+        return torch.cat([points.flatten(1) / c.cord_length, lead[:, None] / c.move_scale,
+                          other / c.move_scale, both[:, None].to(points.dtype)], dim=1)
+
+    def in_frame(self, shapes: torch.Tensor, grasp: torch.Tensor, moves: torch.Tensor
+                 ) -> tuple[torch.Tensor, MoveFrame]:
+        """Every member's prediction in the move frames, ``(members, B, n, 2)``, and the frames.
+
+        ``shapes`` is ``(B, n, 2)`` (one frame per move, shared by the members) or
+        ``(members, B, n, 2)`` (one start per member; frames then cover ``members * B``).
+        """
+        e, n = self.config.members, self.config.n_points
+        per_member = shapes.dim() == 4
+        if per_member:
+            b = shapes.shape[1]
+            grasp, moves, shapes = grasp.repeat(e), moves.repeat(e, 1, 1), shapes.reshape(-1, n, 2)
+        else:
+            b = shapes.shape[0]
+        points, lead, other, frame = to_frame(shapes, grasp, moves)
+        both = grasp == GRASP_CODES["both"]
+        moved = self.predict_points(points, lead, other, both, (e, b) if per_member else None)
+        if per_member:
+            points, lead, other, both = (t.reshape(e, b, *t.shape[1:])
+                                         for t in (points, lead, other, both))
+        return self._pin_ends(moved, points, lead, other, both), frame
+
+    def predict_points(self, points: torch.Tensor, lead: torch.Tensor, other: torch.Tensor,
+                       both: torch.Tensor, members_batch: tuple[int, int] | None
+                       ) -> torch.Tensor:
+        """The members' points in the move frames, ``(members, B, n, 2)``, before the held
+        ends are pinned: the one place where a model design differs.
+
+        Args:
+            points, lead, other, both: The batch in the move frames (flat over members and
+                batch when ``members_batch`` is given, else shared by the members).
+            members_batch: ``(members, B)`` when every member has its own input.
+        """
+        n = self.config.n_points
+        x = self.features(points, lead, other, both)
+        out = self.net(x.reshape(*members_batch, -1) if members_batch else x)  # (E, B, 2n)
+        e, b = out.shape[:2]
+        return points.reshape(-1, b, n, 2) + self.config.output_scale * out.reshape(e, b, n, 2)
+
+    def forward(self, shapes: torch.Tensor, grasp: torch.Tensor, moves: torch.Tensor
+                ) -> torch.Tensor:
+        """Every member's prediction, world ``(members, B, n, 2)``; differentiable.
+
+        Args:
+            shapes: ``(B, n, 2)`` world shapes at rest, or ``(members, B, n, 2)``: one per
+                member (a member's own previous prediction, when rolling out a chain).
+            grasp: ``(B,)`` int64 grasp codes (0 head, 1 tail, 2 both).
+            moves: ``(B, 2, 2)`` reachable displacement of [head, tail] (zero if not held).
+        """
+        moved, frame = self.in_frame(shapes, grasp, moves)
+        e, b, n = moved.shape[:3]
+        if shapes.dim() == 3:  # one frame per move: repeat it for the members
+            frame = MoveFrame(frame.origin.repeat(e, 1), frame.cos.repeat(e),
+                              frame.sin.repeat(e), frame.reversed.repeat(e))
+        return from_frame(moved.reshape(e * b, n, 2), frame).reshape(e, b, n, 2)
+
+    @staticmethod
+    def _pin_ends(moved: torch.Tensor, points: torch.Tensor, lead: torch.Tensor,
+                  other: torch.Tensor, both: torch.Tensor) -> torch.Tensor:
+        # The grippers put the held ends exactly where they were sent: set, do not predict.
+        # moved (E, B, n, 2); points (B or E, ...), lead (..,), other (.., 2), both (..,).
+        first = torch.stack([lead, torch.zeros_like(lead)], dim=-1).expand(moved.shape[0], -1, -1)
+        last = torch.where(both[..., None], points[..., -1, :] + other, moved[..., -1, :])
+        return torch.cat([first[:, :, None], moved[:, :, 1:-1], last[:, :, None]], dim=2)
+
+    # ------------------------------------------------------------- numpy API
+    def reachable_moves(self, shapes: np.ndarray, end: str, displacement: np.ndarray
+                        ) -> np.ndarray:
+        """``(B, 2, 2)`` displacement of [head, tail] the grippers really make (``Cord.move``'s
+        rule: targets clipped to the table and the span), zero for an end not held."""
+        ends = {"head": [0], "tail": [-1], "both": [0, -1]}[end]
+        start = shapes[:, ends].astype(np.float64)  # (B, k, 2)
+        d = displacement.reshape(len(shapes), len(ends), 2)
+        reached = reachable_targets(start + d, self.cord_params) - start
+        moves = np.zeros((len(shapes), 2, 2), dtype=np.float32)
+        if end == "both":
+            moves[:] = reached
+        else:
+            moves[:, 0 if end == "head" else 1] = reached[:, 0]
+        return moves
+
+    def _inputs(self, shapes: Any, end: Any, displacement: Any
+                ) -> tuple[np.ndarray, np.ndarray, bool]:
+        if end not in GRASP_CODES:
+            raise ValueError(f"end must be one of {tuple(GRASP_CODES)}, got {end!r}")
+        n = self.config.n_points
+        arr = np.ascontiguousarray(shapes, dtype=np.float32)
+        single = arr.ndim == 2
+        arr = arr[None] if single else arr
+        if arr.ndim != 3 or arr.shape[1:] != (n, 2):
+            raise ValueError(f"shapes must have shape ({n}, 2) or (B, {n}, 2), "
+                             f"got {np.shape(shapes)}")
+        width = 4 if end == "both" else 2
+        d = np.ascontiguousarray(displacement, dtype=np.float32)
+        d = d[None] if d.ndim == 1 else d
+        if d.shape != (len(arr), width):
+            want = f"({width},) or ({len(arr)}, {width})" if not single else f"({width},)"
+            raise ValueError(f"displacement must have shape {want} for end={end!r} "
+                             f"and {len(arr)} shape(s), got {np.shape(displacement)}")
+        if not (np.isfinite(arr).all() and np.isfinite(d).all()):
+            raise ValueError("shapes and displacement must be finite, got NaN or infinite values")
+        return arr, d, single
+
+    @torch.no_grad()
+    def predict(self, shapes: Any, end: str, displacement: Any, return_std: bool = False
+                ) -> np.ndarray | tuple[np.ndarray, np.ndarray]:
+        """The shape at rest after one straight move of the held end(s).
+
+        Args:
+            shapes: ``(n, 2)`` or ``(B, n, 2)`` world shapes at rest, metres.
+            end: ``"head"``, ``"tail"`` or ``"both"``.
+            displacement: ``(2,)``/``(B, 2)`` for one end; ``(4,)``/``(B, 4)`` (head dx, dy,
+                then tail dx, dy) for both. Targets off the table are clipped as the
+                simulator clips them.
+            return_std: Also return the ensemble's spread.
+
+        Returns:
+            float32 ``(B, n, 2)`` (``(n, 2)`` for one shape), the ensemble's mean, on the
+            table; with ``return_std`` also ``(B,)`` (``()``) the members' spread: the mean
+            over points of each point's standard deviation (metres).
+        """
+        arr, d, single = self._inputs(shapes, end, displacement)
+        moves = self.reachable_moves(arr, end, d)
+        grasp = torch.full((len(arr),), GRASP_CODES[end], dtype=torch.int64)
+        means, spreads = [], []
+        for lo in range(0, len(arr), PREDICT_CHUNK):
+            part = slice(lo, lo + PREDICT_CHUNK)
+            moved, frame = self.in_frame(torch.from_numpy(arr[part]).to(self.device),
+                                         grasp[part].to(self.device),
+                                         torch.from_numpy(moves[part]).to(self.device))
+            # Mean and spread in the frame (the spread does not depend on the frame's angle).
+            means.append(from_frame(moved.mean(dim=0), frame))
+            if return_std:
+                var = moved.var(dim=0, unbiased=False).sum(dim=-1)  # (b, n)
+                spreads.append(var.sqrt().mean(dim=-1))
+        if not return_std:
+            spreads = [torch.zeros(len(arr))]
+        mean = torch.cat(means).cpu().numpy() if means else np.zeros((0,) + arr.shape[1:])
+        spread = torch.cat(spreads).cpu().numpy() if spreads else np.zeros(0)
+        still = np.abs(moves).sum(axis=(1, 2)) == 0  # nothing moves: the cord stays at rest
+        mean[still] = arr[still]
+        spread[still] = 0.0
+        mean = np.clip(mean, -TABLE_HALF, TABLE_HALF).astype(np.float32)
+        spread = spread.astype(np.float32)
+        if single:
+            mean, spread = mean[0], spread[0]
+        return (mean, spread) if return_std else mean
+
+    # ------------------------------------------------------------- persistence
+    def state(self, half: bool = True) -> dict[str, Any]:
+        """The checkpoint dict; weights in float16 when ``half`` (the shipped file's size)."""
+        weights = {k: (v.half() if half else v).cpu() for k, v in self.net.state_dict().items()}
+        return {"format": FORMAT, "format_version": FORMAT_VERSION,
+                "config": asdict(self.config), "net": weights, "info": self.info}
+
+    def save(self, path: str | os.PathLike, half: bool = True) -> Path:
+        """Write the model to ``path`` (a file, or a folder that gets ``transition.pt``)."""
+        path = Path(path)
+        if path.is_dir():
+            path = path / MODEL_FILE
+        return save_atomic(self.state(half), path)
+
+    @classmethod
+    def from_state(cls, data: dict[str, Any], device: str | torch.device = "auto",
+                   name: str = "path") -> TransitionModel:
+        """Rebuild a model from a checkpoint dict (as written by ``save``)."""
+        try:
+            config = config_from_dict(TransitionModelConfig, data["config"], "config")
+            model = cls(config, device="cpu", info=data.get("info"))
+            model.net.load_state_dict({k: v.float() for k, v in data["net"].items()})
+        except (KeyError, TypeError, RuntimeError, ValueError) as exc:
+            raise ValueError(f"{name}: the checkpoint's contents do not fit a TransitionModel: "
+                             f"{exc}") from exc
+        model.device = resolve_device(device)
+        return model.to(model.device).eval()
+
+    @classmethod
+    def load(cls, path: str | os.PathLike, device: str | torch.device = "auto"
+             ) -> TransitionModel:
+        """Load a model written by ``save`` (a file, or a folder holding ``transition.pt``).
+
+        Raises:
+            FileNotFoundError: No such file.
+            ValueError: The file is corrupt, not a transition model, or of another version.
+        """
+        path = Path(path)
+        if path.is_dir():
+            path = path / MODEL_FILE
+        data = load_checkpoint(path, str(path), kind=FORMAT, version=FORMAT_VERSION)
+        return cls.from_state(data, device, name=str(path))
+
+    @classmethod
+    def load_pretrained(cls, device: str | torch.device = "auto") -> TransitionModel:
+        """The shipped model for the default cord (``latent_model/pretrained/transition.pt``)."""
+        with resources.as_file(resources.files("latent_model") / "pretrained" / MODEL_FILE) as p:
+            return cls.load(p, device)
+
+    @classmethod
+    def load_or_pretrained(cls, path: str | os.PathLike | None = None,
+                           device: str | torch.device = "auto") -> TransitionModel:
+        """``load(path)`` when a path is given (not ``None`` or ""), else ``load_pretrained``."""
+        return cls.load(path, device) if path else cls.load_pretrained(device)
+
+    def extra_repr(self) -> str:
+        c = self.config
+        return (f"members={c.members}, width={c.width}, depth={c.depth}, "
+                f"n_points={c.n_points}, device={self.device}")

@@ -1,0 +1,268 @@
+"""Training the transition model: one-move loss plus rolled-out multi-move chains.
+
+Each step takes a batch of single transitions and a batch of chains of 2 to ``chain_moves``
+consecutive moves of one episode. Every member predicts the first move from the real start
+and each later move from its own previous prediction, so errors that would compound along a
+plan are trained away. The loss is the mean per-point distance (the project's ``error``).
+The frame of the move makes rigid-transform augmentation redundant: the model is exactly
+equivariant. Checkpoints are written atomically every ``eval_every`` steps; a run resumes
+from the last one. The learning rate follows a cosine decay over ``steps``.
+"""
+
+from __future__ import annotations
+
+import csv
+import json
+import math
+import os
+import time
+from collections.abc import Callable
+from dataclasses import asdict, dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import torch
+
+from dlo_env.atomic import atomic_path
+from dlo_env.dataset.transitions import GRASP_NAMES, TransitionDataset, split_transitions
+from latent_model.checkpoint import load_checkpoint, save_atomic
+from latent_model.config import LR_SCHEDULES, config_from_dict
+from latent_model.transition_model import TransitionModel, TransitionModelConfig
+
+#: Marks a file as a transition-training checkpoint (resumable state).
+CHECKPOINT_FORMAT = "dlo-transition-training"
+#: File names inside the output folder.
+CHECKPOINT_FILE = "transition-checkpoint.pt"
+CURVE_FILE = "transition-training.csv"
+
+
+@dataclass(frozen=True)
+class TransitionTrainConfig:
+    """How the transition model is trained; the defaults make the shipped model.
+
+    Attributes:
+        steps: Optimiser steps.
+        batch_size: Single transitions per step.
+        chain_batch: Chains per step (each of 2 to ``chain_moves`` moves).
+        chain_moves: Longest chain rolled out.
+        chain_weight: Weight of the chain loss against the one-move loss.
+        lr: Adam learning rate at the start.
+        lr_schedule: ``"cosine"`` (decays to 0 over ``steps``) or ``"constant"``.
+        validation_fraction: Share of the training episodes kept out to watch progress.
+        eval_every: Steps between validation, checkpoint and a row of the training curve.
+        seed: Seed of the initialisation, the split and the batches.
+    """
+
+    steps: int = 20_000
+    batch_size: int = 512
+    chain_batch: int = 128
+    chain_moves: int = 3
+    chain_weight: float = 0.5
+    lr: float = 1e-3
+    lr_schedule: str = "cosine"
+    validation_fraction: float = 0.05
+    eval_every: int = 1000
+    seed: int = 0
+
+    def __post_init__(self) -> None:
+        for name in ("steps", "batch_size", "eval_every"):
+            value = getattr(self, name)
+            if not isinstance(value, int) or value < 1:
+                raise ValueError(f"TransitionTrainConfig.{name} must be a positive int, "
+                                 f"got {value!r}")
+        if not isinstance(self.chain_moves, int) or self.chain_moves < 1:
+            raise ValueError(f"TransitionTrainConfig.chain_moves must be an int >= 1, "
+                             f"got {self.chain_moves!r}")
+        if not isinstance(self.chain_batch, int) or self.chain_batch < 0:
+            raise ValueError(f"TransitionTrainConfig.chain_batch must be an int >= 0, "
+                             f"got {self.chain_batch!r}")
+        if not (self.lr > 0 and self.chain_weight >= 0):
+            raise ValueError("TransitionTrainConfig.lr must be > 0 and chain_weight >= 0")
+        if self.lr_schedule not in LR_SCHEDULES:
+            raise ValueError(f"TransitionTrainConfig.lr_schedule must be one of {LR_SCHEDULES}, "
+                             f"got {self.lr_schedule!r}")
+        if not 0.0 < self.validation_fraction < 1.0:
+            raise ValueError("TransitionTrainConfig.validation_fraction must be in (0, 1), "
+                             f"got {self.validation_fraction!r}")
+
+
+@dataclass
+class TransitionTensors:
+    """Transitions as tensors the model takes: moves already made reachable."""
+
+    start: torch.Tensor  # (T, n, 2)
+    next: torch.Tensor  # (T, n, 2)
+    grasp: torch.Tensor  # (T,) int64
+    moves: torch.Tensor  # (T, 2, 2)
+    episode: np.ndarray
+    step: np.ndarray
+
+
+def as_tensors(model: TransitionModel, data: TransitionDataset) -> TransitionTensors:
+    """The dataset's transitions with every commanded move turned into the reachable one."""
+    moves = np.zeros((len(data), 2, 2), dtype=np.float32)
+    for code, name in enumerate(GRASP_NAMES):
+        idx = np.flatnonzero(data.grasp == code)
+        if len(idx):
+            moves[idx] = model.reachable_moves(data.start[idx], name, data.end_displacement(idx))
+    dev = model.device
+    return TransitionTensors(
+        start=torch.from_numpy(data.start).to(dev), next=torch.from_numpy(data.next).to(dev),
+        grasp=torch.from_numpy(data.grasp.astype(np.int64)).to(dev),
+        moves=torch.from_numpy(moves).to(dev), episode=data.episode, step=data.step)
+
+
+def chain_starts(episode: np.ndarray, step: np.ndarray, moves: int) -> np.ndarray:
+    """Indices ``i`` where transitions ``i .. i + moves - 1`` follow each other on one cord."""
+    if moves < 1 or len(episode) < moves:
+        return np.zeros(0, dtype=np.int64)
+    last = len(episode) - moves + 1
+    ok = np.ones(last, dtype=bool)
+    for k in range(1, moves):
+        ok &= (episode[k:k + last] == episode[:last]) & (step[k:k + last] == step[:last] + k)
+    return np.flatnonzero(ok)
+
+
+def rollout(model: TransitionModel, data: TransitionTensors, first: torch.Tensor, moves: int
+            ) -> list[torch.Tensor]:
+    """Each member's predictions along chains starting at ``first``: ``moves`` tensors
+    ``(members, B, n, 2)``, the k-th after k+1 moves (each from the member's own last one)."""
+    shapes: torch.Tensor = data.start[first]
+    out = []
+    for k in range(moves):
+        idx = first + k
+        shapes = model(shapes, data.grasp[idx], data.moves[idx])
+        out.append(shapes)
+    return out
+
+
+def point_error(pred: torch.Tensor, true: torch.Tensor) -> torch.Tensor:
+    """Mean per-point distance over the last two dims: ``(..., n, 2)`` -> ``(...)``."""
+    return ((pred - true).square().sum(dim=-1) + 1e-12).sqrt().mean(dim=-1)
+
+
+def _curve_row(path: Path, row: dict[str, Any]) -> None:
+    new = not path.is_file()
+    with path.open("a", newline="") as f:
+        writer = csv.DictWriter(f, fieldnames=list(row))
+        if new:
+            writer.writeheader()
+        writer.writerow(row)
+
+
+@torch.no_grad()
+def validation_error(model: TransitionModel, data: TransitionTensors, limit: int = 4096
+                     ) -> float:
+    """Mean one-move error of the ensemble's mean on (at most ``limit``) transitions, metres."""
+    idx = torch.arange(min(limit, len(data.grasp)), device=model.device)
+    pred = model(data.start[idx], data.grasp[idx], data.moves[idx]).mean(dim=0)
+    return float(point_error(pred, data.next[idx]).mean())
+
+
+def train_transition_model(
+    data: TransitionDataset,
+    out: str | os.PathLike[str],
+    config: TransitionTrainConfig | None = None,
+    model_config: TransitionModelConfig | None = None,
+    *,
+    resume: bool = False,
+    device: str | torch.device = "auto",
+    progress: Callable[[int, dict[str, float]], None] | None = None,
+    model_class: type[TransitionModel] = TransitionModel,
+) -> TransitionModel:
+    """Train a transition model on ``data``; writes ``transition.pt`` and the curve to ``out``.
+
+    Args:
+        data: Training transitions (a share of episodes is held out for validation).
+        out: Output folder (checkpoint, training curve CSV, final model).
+        config: Training settings.
+        model_config: Architecture (the cord's points and length are taken from ``data``).
+        resume: Continue from ``out``'s checkpoint (same settings required).
+        device: ``"auto"``, ``"cpu"``, ``"cuda"``...
+        progress: Called as ``progress(steps_done, stats)`` after every step.
+        model_class: The design to train (a ``TransitionModel`` subclass, for comparisons).
+
+    Returns:
+        The trained model (also saved as ``out/transition.pt``).
+    """
+    tc = config if config is not None else TransitionTrainConfig()
+    out = Path(out)
+    out.mkdir(parents=True, exist_ok=True)
+    checkpoint = out / CHECKPOINT_FILE
+    if checkpoint.exists() and not resume:
+        raise ValueError(f"out {str(out)!r} holds a training checkpoint; pass resume=True "
+                         "(--resume) to continue it, or choose another folder")
+    cord = data.metadata.get("cord", {})
+    mc = model_config if model_config is not None else TransitionModelConfig()
+    mc = TransitionModelConfig(**{**asdict(mc), "n_points": int(data.start.shape[1]),
+                                  "cord_length": float(cord.get("length", mc.cord_length)),
+                                  "max_step": float(data.metadata.get("collect", {}).get(
+                                      "max_step", mc.max_step))})
+    torch.manual_seed(tc.seed)
+    model = model_class(mc, device=device)
+    optimiser = torch.optim.Adam(model.net.parameters(), lr=tc.lr)
+    step = 0
+    if resume and checkpoint.is_file():
+        saved = load_checkpoint(checkpoint, str(checkpoint), kind=CHECKPOINT_FORMAT, version=1)
+        if saved["train_config"] != asdict(tc) or saved["model_config"] != asdict(mc):
+            raise ValueError(f"resume: {checkpoint} was written with other settings; use the "
+                             "same settings or another --out")
+        model.net.load_state_dict(saved["net"])
+        optimiser.load_state_dict(saved["optimiser"])
+        step = int(saved["step"])
+    train, validation = split_transitions(data, tc.validation_fraction, seed=tc.seed)
+    tr, va = as_tensors(model, train), as_tensors(model, validation)
+    chains = {k: chain_starts(tr.episode, tr.step, k) for k in range(2, tc.chain_moves + 1)}
+    chains = {k: torch.from_numpy(v).to(model.device) for k, v in chains.items() if len(v)}
+    gen = torch.Generator(device="cpu").manual_seed(tc.seed * 1_000_003 + step)
+    info = {"data": data.metadata.get("collect", {}), "train_config": asdict(tc),
+            "transitions": len(train)}
+    started = time.perf_counter()
+    model.train()
+    while step < tc.steps:
+        fraction = step / tc.steps
+        factor = 0.5 * (1 + math.cos(math.pi * fraction)) if tc.lr_schedule == "cosine" else 1.0
+        for group in optimiser.param_groups:
+            group["lr"] = tc.lr * factor
+        idx = torch.randint(len(tr.grasp), (tc.batch_size,), generator=gen).to(model.device)
+        pred = model(tr.start[idx], tr.grasp[idx], tr.moves[idx])
+        loss_one = point_error(pred, tr.next[idx][None]).mean()
+        loss = loss_one
+        loss_chain = torch.zeros(())
+        if chains and tc.chain_batch and tc.chain_weight:
+            k = list(chains)[step % len(chains)]
+            pick = torch.randint(len(chains[k]), (tc.chain_batch,), generator=gen)
+            first = chains[k][pick.to(model.device)]
+            preds = rollout(model, tr, first, k)
+            loss_chain = torch.stack([point_error(p, tr.next[first + j][None]).mean()
+                                      for j, p in enumerate(preds[1:], start=1)]).mean()
+            loss = loss + tc.chain_weight * loss_chain
+        optimiser.zero_grad(set_to_none=True)
+        loss.backward()
+        optimiser.step()
+        step += 1
+        stats = {"loss": float(loss_one.detach()), "chain": float(loss_chain.detach())}
+        if step % tc.eval_every == 0 or step == tc.steps:
+            model.eval()
+            stats["validation_cm"] = 100 * validation_error(model, va)
+            model.train()
+            _curve_row(out / CURVE_FILE, {"step": step, "lr": tc.lr * factor, **stats,
+                                          "seconds": round(time.perf_counter() - started, 1)})
+            save_atomic({"format": CHECKPOINT_FORMAT, "format_version": 1, "step": step,
+                         "train_config": asdict(tc), "model_config": asdict(mc),
+                         "net": model.net.state_dict(), "optimiser": optimiser.state_dict()},
+                        checkpoint)
+        if progress is not None:
+            progress(step, stats)
+    model.eval()
+    model.info = {**info, "steps": step, "validation_cm": 100 * validation_error(model, va)}
+    model.save(out)
+    with atomic_path(out / "transition-info.json") as tmp:
+        tmp.write_text(json.dumps(model.info, indent=1, sort_keys=True))
+    return model
+
+
+def config_from_json(values: dict[str, Any]) -> TransitionTrainConfig:
+    """A training config from JSON values (unknown keys are an error naming them)."""
+    return config_from_dict(TransitionTrainConfig, values, "train_config")

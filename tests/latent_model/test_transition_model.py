@@ -1,0 +1,172 @@
+"""Specification of the transition model (latent_model.transition_model and its training)."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+import torch
+
+from dlo_env.cord import reachable_targets
+from dlo_env.dataset.transitions import TransitionCollectConfig, collect_transition_chunk
+from dlo_env.shapes import error, random_cord_shape
+from latent_model import TransitionModel
+from latent_model.transition_metrics import transition_report, write_report
+from latent_model.transition_model import TransitionModelConfig
+from latent_model.transition_training import (
+    CURVE_FILE,
+    TransitionTrainConfig,
+    chain_starts,
+    train_transition_model,
+)
+
+TINY = TransitionModelConfig(width=32, depth=2, members=3)
+
+
+@pytest.fixture(scope="module")
+def data():
+    return collect_transition_chunk(TransitionCollectConfig(seed=3), 0, 60)
+
+
+@pytest.fixture(scope="module")
+def model() -> TransitionModel:
+    torch.manual_seed(0)
+    m = TransitionModel(TINY, device="cpu")
+    with torch.no_grad():  # a random but not tiny output, so equivariance is really tested
+        m.net.weights[-1].mul_(30.0)
+    return m.eval()
+
+
+def _shapes(count: int, seed: int = 0, margin: float = 0.4) -> np.ndarray:
+    rng = np.random.default_rng(seed)
+    return np.stack([random_cord_shape(rng, margin=margin) for _ in range(count)])
+
+
+def _turn(points: np.ndarray, angle: float, shift: np.ndarray) -> np.ndarray:
+    c, s = np.cos(angle), np.sin(angle)
+    return (points @ np.array([[c, s], [-s, c]], dtype=np.float32) + shift).astype(np.float32)
+
+
+@pytest.mark.parametrize("end", ["head", "tail", "both"])
+def test_rotating_and_shifting_the_input_rotates_and_shifts_the_output(model, end):
+    shapes = _shapes(16)
+    rng = np.random.default_rng(1)
+    width = 4 if end == "both" else 2
+    d = rng.uniform(-0.1, 0.1, size=(16, width)).astype(np.float32)
+    pred = model.predict(shapes, end, d)
+    for angle, shift in ((0.7, (0.1, -0.2)), (-2.5, (-0.15, 0.05)), (np.pi, (0.0, 0.0))):
+        shift = np.array(shift, dtype=np.float32)
+        turned = model.predict(_turn(shapes, angle, shift), end,
+                               _turn(d.reshape(16, -1, 2), angle, 0 * shift).reshape(16, -1))
+        assert np.abs(turned - _turn(pred, angle, shift)).max() < 1e-5
+    assert np.abs(pred - shapes).max() > 0.01  # the model does move the cord
+
+
+def test_a_tail_move_is_a_head_move_of_the_reversed_cord(model):
+    shapes = _shapes(8, seed=2)
+    d = np.random.default_rng(2).uniform(-0.1, 0.1, size=(8, 2)).astype(np.float32)
+    tail = model.predict(shapes, "tail", d)
+    head = model.predict(shapes[:, ::-1], "head", d)[:, ::-1]
+    assert np.abs(tail - head).max() < 1e-6
+
+
+def test_the_held_ends_go_exactly_where_they_were_sent(model):
+    shapes = _shapes(8, seed=3)
+    d = np.random.default_rng(3).uniform(-0.1, 0.1, size=(8, 4)).astype(np.float32)
+    both = model.predict(shapes, "both", d)
+    ends = shapes[:, [0, -1]].astype(np.float64)
+    sent = reachable_targets(ends + d.reshape(8, 2, 2), model.cord_params)  # span rule included
+    assert np.allclose(both[:, [0, -1]], sent, atol=1e-6)
+    tail = model.predict(shapes, "tail", d[:, 2:])
+    assert np.allclose(tail[:, -1], shapes[:, -1] + d[:, 2:], atol=1e-6)
+
+
+def test_no_move_leaves_the_cord_where_it_lies_and_targets_are_clipped_like_the_cord(model):
+    shapes = _shapes(4, seed=4)
+    assert np.array_equal(model.predict(shapes, "head", np.zeros((4, 2))), shapes)
+    off = model.predict(shapes, "head", np.tile([5.0, 0.0], (4, 1)))
+    assert np.allclose(off[:, 0, 0], 1.0 - model.cord_params.rim_margin, atol=1e-6)
+    assert (np.abs(off) <= 1.0).all()
+
+
+def test_predictions_never_leave_the_table():
+    m = TransitionModel(TINY, device="cpu")
+    with torch.no_grad():
+        m.net.biases[-1].fill_(50.0)  # a model that would throw every point off the table
+    shapes = _shapes(6, seed=5, margin=0.1)
+    pred = m.predict(shapes, "head", np.full((6, 2), 0.05))
+    assert np.abs(pred).max() <= 1.0
+
+
+def test_single_shapes_batches_and_the_ensemble_spread(model):
+    shapes = _shapes(5, seed=6)
+    d = np.full((5, 2), 0.05, dtype=np.float32)
+    batch, spread = model.predict(shapes, "head", d, return_std=True)
+    assert batch.shape == (5, 20, 2) and batch.dtype == np.float32
+    assert spread.shape == (5,) and (spread > 0).all()
+    one, one_spread = model.predict(shapes[0], "head", d[0], return_std=True)
+    assert one.shape == (20, 2) and np.ndim(one_spread) == 0
+    assert np.allclose(one, batch[0], atol=1e-6)
+
+
+@pytest.mark.parametrize(("args", "message"), [
+    ((np.zeros((3, 19, 2)), "head", np.zeros((3, 2))), "shapes must have shape"),
+    ((np.zeros((3, 20, 2)), "middle", np.zeros((3, 2))), "end must be one of"),
+    ((np.zeros((3, 20, 2)), "both", np.zeros((3, 2))), "displacement must have shape"),
+    ((np.zeros((3, 20, 2)), "head", np.full((3, 2), np.nan)), "must be finite"),
+])
+def test_bad_input_gets_one_line_naming_the_argument(model, args, message):
+    with pytest.raises(ValueError, match=message) as info:
+        model.predict(*args)
+    assert "\n" not in str(info.value)
+
+
+def test_save_and_load_round_trip_and_a_corrupt_file_is_refused(model, tmp_path):
+    path = model.save(tmp_path)
+    loaded = TransitionModel.load(tmp_path, device="cpu")
+    assert loaded.config == model.config
+    shapes = _shapes(4, seed=7)
+    d = np.full((4, 2), 0.08, dtype=np.float32)
+    # stored in float16: predictions agree to well under a tenth of a millimetre
+    assert np.abs(loaded.predict(shapes, "head", d) - model.predict(shapes, "head", d)).max() < 5e-5
+    path.write_bytes(path.read_bytes()[:100])
+    with pytest.raises(ValueError, match="not a readable torch checkpoint"):
+        TransitionModel.load(path)
+    with pytest.raises(FileNotFoundError):
+        TransitionModel.load(tmp_path / "missing.pt")
+
+
+def test_chain_starts_only_link_consecutive_moves_of_one_cord():
+    episode = np.array([0, 0, 0, 1, 1, 2])
+    step = np.array([0, 1, 2, 0, 1, 0])
+    assert chain_starts(episode, step, 1).tolist() == [0, 1, 2, 3, 4, 5]
+    assert chain_starts(episode, step, 2).tolist() == [0, 1, 3]
+    assert chain_starts(episode, step, 3).tolist() == [0]
+
+
+@pytest.mark.slow
+def test_training_learns_resumes_and_reports(data, tmp_path):
+    tc = TransitionTrainConfig(steps=60, batch_size=64, chain_batch=16, eval_every=30,
+                               validation_fraction=0.2)
+    model = train_transition_model(data, tmp_path, tc, TINY, device="cpu")
+    curve = (tmp_path / CURVE_FILE).read_text().splitlines()
+    assert curve[0].startswith("step,") and len(curve) == 3
+    untrained = TransitionModel(TINY, device="cpu")
+    idx = np.flatnonzero(data.grasp == 0)
+    trained_err = error(model.predict(data.start[idx], "head", data.end_displacement(idx)),
+                        data.next[idx]).mean()
+    assert trained_err < error(untrained.predict(data.start[idx], "head",
+                                                  data.end_displacement(idx)),
+                               data.next[idx]).mean()
+    with pytest.raises(ValueError, match="resume"):
+        train_transition_model(data, tmp_path, tc, TINY, device="cpu")
+    longer = TransitionTrainConfig(**{**tc.__dict__, "steps": 90})
+    with pytest.raises(ValueError, match="other settings"):
+        train_transition_model(data, tmp_path, longer, TINY, device="cpu", resume=True)
+    again = train_transition_model(data, tmp_path, tc, TINY, device="cpu", resume=True)
+    assert again.info["steps"] == 60  # the checkpoint was at the end: nothing more to do
+    rows, rank = transition_report(model, data, max_moves=2)
+    assert {r.group for r in rows} >= {"all", "head", "tail", "both", "0-5 cm"}
+    assert -1.0 <= rank <= 1.0
+    write_report(rows, rank, tmp_path)
+    assert (tmp_path / "transition-metrics.png").stat().st_size > 1000
+    assert (tmp_path / "transition-metrics.csv").read_text().startswith("moves,group,count")
