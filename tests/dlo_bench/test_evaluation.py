@@ -9,17 +9,16 @@ import numpy as np
 import pytest
 
 import dlo_env  # noqa: F401
-from dlo_env.tasks import suite_seeds
-from planners import (
+from dlo_bench import (
     FidelityProfile,
-    PlannerPolicy,
-    StraightLinePolicy,
     divergence,
     evaluate,
     format_divergence,
     format_table,
+    write_evaluation,
 )
-from planners.evaluation import write_evaluation
+from dlo_env.tasks import suite_seeds
+from planners import PlannerPolicy, StraightLinePolicy
 
 ENV_ID = "dlo_env/DLOEndpoint-v0"
 
@@ -32,17 +31,16 @@ class ZeroPolicy:
 
 
 class ReplayPolicy:
-    """Replays given action sequences, one per episode (advanced by ``reset``)."""
+    """Replays given action sequences, one per episode (advanced at every ``episode_start``)."""
 
     def __init__(self, episodes: list[np.ndarray]) -> None:
         self.episodes = episodes
         self.index = -1
 
-    def reset(self) -> None:
-        self.index += 1
-        self.step = 0
-
     def predict(self, observation, state=None, episode_start=None, deterministic=True):
+        if episode_start is not None and bool(episode_start[0]):
+            self.index += 1
+            self.step = 0
         actions = self.episodes[self.index]
         action = actions[self.step] if self.step < len(actions) else np.zeros(2, np.float32)
         self.step += 1
