@@ -8,27 +8,10 @@ from __future__ import annotations
 
 import argparse
 
-from dlo_cli.flags import positive_int
+from dlo_cli.flags import number_in, positive_int
 
-
-def _seed(text: str) -> int:
-    try:
-        value = int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected an integer >= 0, got {text!r}") from None
-    if value < 0:
-        raise argparse.ArgumentTypeError(f"expected an integer >= 0, got {text!r}")
-    return value
-
-
-def _cosine(text: str) -> float:
-    try:
-        value = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected a number in [-1, 1], got {text!r}") from None
-    if not -1.0 <= value <= 1.0:
-        raise argparse.ArgumentTypeError(f"expected a number in [-1, 1], got {text!r}")
-    return value
+_seed = number_in(int, 0, expected="an integer >= 0")
+_cosine = number_in(float, -1.0, 1.0, expected="a number in [-1, 1]")
 
 
 def _npz_path(text: str) -> str:

@@ -6,17 +6,30 @@ Defaults come from the config dataclasses and the agent registry; ``docs/cli.md`
 from __future__ import annotations
 
 import argparse
+from collections.abc import Callable
+from typing import Any
 
 
-def positive_int(text: str) -> int:
-    """An argparse type: an integer >= 1."""
-    try:
-        value = int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected a positive integer, got {text!r}") from None
-    if value < 1:
-        raise argparse.ArgumentTypeError(f"expected a positive integer, got {text!r}")
-    return value
+def number_in(kind: type, low: float | None = None, high: float | None = None,
+              expected: str = "") -> Callable[[str], Any]:
+    """An argparse type: a ``kind`` (int or float) in ``[low, high]``, else a message saying
+    what was ``expected``."""
+
+    def parse(text: str) -> Any:
+        try:
+            value = kind(text)
+        except ValueError:
+            value = None
+        if value is None or (low is not None and value < low) or (
+                high is not None and value > high):
+            raise argparse.ArgumentTypeError(f"expected {expected}, got {text!r}")
+        return value
+
+    return parse
+
+
+#: An argparse type: an integer >= 1.
+positive_int = number_in(int, 1, expected="a positive integer")
 
 
 def add_out(parser: argparse.ArgumentParser, command: str, what: str) -> None:
