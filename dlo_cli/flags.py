@@ -50,11 +50,11 @@ def add_agent(parser: argparse.ArgumentParser, default: list[str] | None) -> Non
     """``--agent``: one or several registered agent names."""
     from dlo_bench.agents import AGENTS, SB3_PREFIX
 
-    names = ", ".join(f"{name} ({spec.summary})" for name, spec in AGENTS.items())
+    names = "; ".join(f"{name}: {spec.summary}" for name, spec in AGENTS.items())
     parser.add_argument("--agent", nargs="+", default=default, required=default is None,
                         metavar="AGENT",
-                        help=f"one or several agents: {names}, or {SB3_PREFIX}PATH (a folder "
-                             "written by `dlo baseline`)")
+                        help=f"one or several agents. {names}; {SB3_PREFIX}PATH: a folder written "
+                             "by `dlo baseline`")
 
 
 def add_difficulty(parser: argparse.ArgumentParser | argparse._MutuallyExclusiveGroup,
