@@ -17,6 +17,7 @@ from typing import Any
 
 import numpy as np
 
+from dlo_bench.progress import progress_bar
 from planners.interfaces import EpisodeStats, PlanningPolicy, Policy
 
 #: Bins of the distance the manipulated end has travelled along a plan, metres: the
@@ -202,13 +203,6 @@ def _episode_options(
     return [None if difficulty is None else {"difficulty": difficulty}] * episodes
 
 
-def _progress_bar(episodes: int, agent: str) -> Any:
-    """A tqdm bar over the episodes (tqdm comes with the ``model`` and ``rl`` extras)."""
-    from tqdm import tqdm
-
-    return tqdm(total=episodes, desc=agent or "evaluate", unit="episode")
-
-
 def _run_episode(
     policy: Policy, env: Any, index: int, reset_seed: int | None, options: dict[str, Any] | None,
     difficulty: int | None, fidelity: bool,
@@ -320,7 +314,7 @@ def evaluate(
         if isinstance(policy, PlanningPolicy):
             policy.check_env(env)
         options = _episode_options(difficulty, suite, split, episodes, env.unwrapped.cord.grasp)
-        bar = _progress_bar(episodes, agent) if progress else None
+        bar = progress_bar(episodes, agent or "evaluate", "episode") if progress else None
         records, profiles = [], []
         for i, opts in enumerate(options):
             reset_seed = seed + i if suite is None else None
@@ -330,7 +324,7 @@ def evaluate(
                 profiles.append(profile)
             if bar is not None:
                 bar.update(1)
-                bar.set_postfix(success=f"{np.mean([r.success for r in records]):.0%}")
+                bar.set_postfix_str(f"success {np.mean([r.success for r in records]):.0%}")
         if bar is not None:
             bar.close()
     finally:

@@ -56,6 +56,8 @@ def run(args: argparse.Namespace) -> int:
     from dataclasses import asdict
     from pathlib import Path
 
+    import stable_baselines3  # noqa: F401  (first, so a core install is told to add the rl extra)
+
     from dlo_bench.baselines import BaselineConfig, read_monitor_logs, train_baseline
     from dlo_bench.paths import default_out
 

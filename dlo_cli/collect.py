@@ -44,7 +44,7 @@ def run(args: argparse.Namespace) -> int:
     import sys
     import time
 
-    from dlo_cli.progress import progress_bar
+    from dlo_bench.progress import progress_bar
     from dlo_env.dataset.collect import CollectConfig, collect, parts_dir
     from dlo_env.dataset.diversity import diversity_report
 

@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import argparse
 import importlib
+import os
 import sys
 from importlib import metadata
 
@@ -70,6 +71,9 @@ def main(argv: list[str] | None = None) -> int:
         return EXIT_USER_ERROR
     try:
         return int(args._run(args) or 0)
+    except BrokenPipeError:  # the reader of our output went away (`dlo ... | head`)
+        sys.stdout = open(os.devnull, "w")  # noqa: SIM115 (nothing more is written)
+        return 1
     except KeyboardInterrupt:
         if args.debug:
             raise

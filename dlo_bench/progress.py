@@ -1,5 +1,5 @@
 """Progress bars: tqdm when it is installed (the ``model`` and ``rl`` extras), else a plain line
-every tenth of the way, so the core install runs every command it can."""
+on stderr every tenth of the way, so the core install runs everything it can."""
 
 from __future__ import annotations
 
