@@ -4,31 +4,35 @@ from __future__ import annotations
 
 import argparse
 
+from dlo_cli.flags import add_difficulty, add_seed, add_threads, positive_int
+
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
-    """Flags of ``dlo baseline`` (they map onto ``planners.rl_baseline.BaselineConfig``)."""
-    parser.add_argument("--algo", choices=("ppo", "sac", "sac-her"), required=True)
-    parser.add_argument("--timesteps", type=int, default=300_000,
-                        help="environment steps of training, summed over environments "
-                             "(default 300000)")
-    parser.add_argument("--n-envs", type=int, default=2, help="environments (default 2)")
+    """Flags of ``dlo baseline``; defaults are ``dlo_bench.baselines.BaselineConfig``'s."""
+    from dlo_bench.baselines import ALGOS, BaselineConfig
+
+    parser.add_argument("--algo", choices=ALGOS, required=True, help="the algorithm")
+    parser.add_argument("--timesteps", type=positive_int, default=BaselineConfig.timesteps,
+                        help="environment steps of training, summed over environments")
+    parser.add_argument("--n-envs", type=positive_int, default=BaselineConfig.n_envs,
+                        help="environments")
     parser.add_argument("--subprocess", action="store_true",
                         help="step the environments in subprocesses (needs a free core each)")
-    parser.add_argument("--seed", type=int, default=0)
-    parser.add_argument("--difficulty", type=int, nargs="+", default=[1, 2, 3], metavar="K",
-                        help="task difficulties to train on, one drawn per episode "
-                             "(default 1 2 3)")
-    parser.add_argument("--reward-type", choices=("dense", "sparse"), default="dense")
-    parser.add_argument("--env-id", default="dlo_env/DLOEndpoint-v0")
+    add_seed(parser, "the agent and the environments")
+    add_difficulty(parser, list(BaselineConfig.difficulties),
+                   "training draws one per episode")
+    parser.add_argument("--reward-type", choices=("dense", "sparse"),
+                        default=BaselineConfig.reward_type, help="the environment's reward")
+    parser.add_argument("--env-id", default=BaselineConfig.env_id, help="environment")
     parser.add_argument("--set", nargs="+", default=[], metavar="FIELD=VALUE",
                         help="other BaselineConfig fields, values in JSON "
                              "(e.g. ppo_n_steps=512 net_arch=[64,64])")
-    parser.add_argument("--out", required=True, help="output folder")
+    parser.add_argument("--out", default=None,
+                        help="output folder (None: runs/baseline/ALGO)")
     parser.add_argument("--resume", action="store_true",
                         help="continue an interrupted run from OUT/checkpoint.zip")
-    parser.add_argument("--device", default="cpu", help="cpu (default) or cuda")
-    parser.add_argument("--threads", type=int, default=1,
-                        help="torch CPU threads (default 1: small networks, shared machine)")
+    parser.add_argument("--device", default="cpu", help="torch device: cpu or cuda")
+    add_threads(parser)
 
 
 def _overrides(items: list[str]) -> dict:
@@ -49,38 +53,30 @@ def _overrides(items: list[str]) -> dict:
 def run(args: argparse.Namespace) -> int:
     """Train, save and summarise one baseline."""
     import json
-    import sys
     from dataclasses import asdict
     from pathlib import Path
 
-    from planners.rl_baseline import (
-        BaselineConfig,
-        ResumeMismatch,
-        read_monitor_logs,
-        train_baseline,
-    )
+    import stable_baselines3  # noqa: F401  (first, so a core install is told to add the rl extra)
 
+    from dlo_bench.baselines import BaselineConfig, read_monitor_logs, train_baseline
+    from dlo_bench.paths import default_out
+
+    settings = dict(
+        algo=args.algo, env_id=args.env_id, difficulties=list(args.difficulty),
+        reward_type=args.reward_type, timesteps=args.timesteps, n_envs=args.n_envs,
+        subprocess=args.subprocess, seed=args.seed,
+    )
+    settings.update(_overrides(args.set))
     try:
-        settings = dict(
-            algo=args.algo, env_id=args.env_id, difficulties=list(args.difficulty),
-            reward_type=args.reward_type, timesteps=args.timesteps, n_envs=args.n_envs,
-            subprocess=args.subprocess, seed=args.seed,
-        )
-        settings.update(_overrides(args.set))
         config = BaselineConfig.from_dict(settings)
-    except (ValueError, TypeError) as exc:
-        print(f"dlo baseline: {exc}", file=sys.stderr)
-        return 2
-    out = Path(args.out)
+    except TypeError as exc:  # a --set value of the wrong type
+        raise ValueError(f"--set: {exc}") from exc
+    out = Path(args.out) if args.out else default_out("baseline") / config.algo
     print(f"training {config.algo} on {config.env_id} (difficulties {config.difficulties}) for "
           f"{config.timesteps} steps with {config.n_envs} envs -> {out}")
     print("config: " + json.dumps(asdict(config)), flush=True)
-    try:
-        path = train_baseline(config, out, device=args.device, resume=args.resume,
-                              threads=args.threads)
-    except ResumeMismatch as exc:
-        print(f"dlo baseline: {exc}", file=sys.stderr)
-        return 2
+    path = train_baseline(config, out, device=args.device, resume=args.resume,
+                          threads=args.threads)
     meta = json.loads((out / "hyperparameters.json").read_text())
     logs = read_monitor_logs(out / "monitor")
     last = slice(-100, None)

@@ -4,100 +4,78 @@ from __future__ import annotations
 
 import argparse
 
-AGENTS = ("straight-line", "latent-tree", "latent-tree-closed", "physics-mpc", "ppo", "sac-her")
+from dlo_cli.flags import add_agent, add_difficulty, add_model, add_out, add_planner_flags
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
-    """Flags of ``dlo benchmark`` (they map onto ``planners.benchmark.BenchmarkConfig``)."""
+    """Flags of ``dlo benchmark``; defaults are ``BenchmarkConfig``'s (the published table)."""
+    from dlo_bench.benchmark import QUICK_EPISODES, BenchmarkConfig
+
+    parser.add_argument("--quick", action="store_true",
+                        help=f"{QUICK_EPISODES} episodes of each cell: a smoke test of every "
+                             "agent (under a minute on two cores; CI runs it)")
     parser.add_argument("--episodes", type=int, default=None,
                         help="episodes per agent and difficulty, the first tasks of each test "
-                             "split (default 50, the whole split; 2 with --quick)")
-    parser.add_argument("--quick", action="store_true",
-                        help="a few episodes of each (a couple of minutes; used by CI)")
-    parser.add_argument("--agents", nargs="+", default=list(AGENTS), metavar="AGENT",
-                        help=f"agents to run (default all: {' '.join(AGENTS)})")
-    parser.add_argument("--difficulty", type=int, nargs="+", default=[1, 2, 3], metavar="K",
-                        help="difficulties, each the test split of suite linear-K "
-                             "(default 1 2 3)")
-    parser.add_argument("--models", default="benchmarks/models",
-                        help="folder with the RL baselines, one `dlo baseline` output folder "
-                             "per agent: MODELS/ppo, MODELS/sac-her (default benchmarks/models)")
-    parser.add_argument("--shape-model", default=None,
-                        help="shape model file of the latent-tree agents (default: the shipped "
-                             "latent_model/pretrained/model.pt)")
-    parser.add_argument("--replan-every", type=int, default=10,
-                        help="steps between replans of latent-tree-closed (default 10)")
-    parser.add_argument("--max-seconds", type=float, default=None,
-                        help="time budget of one latent-tree plan, seconds (default: the "
-                             "planner's)")
-    parser.add_argument("--seed", type=int, default=0, help="seed of the planners (default 0)")
-    parser.add_argument("--threads", type=int, default=1, help="torch CPU threads (default 1)")
-    parser.add_argument("--no-fidelity", action="store_true",
-                        help="skip the transition fidelity of the latent-tree plans")
+                             f"split (None: {BenchmarkConfig.episodes}, the whole split; "
+                             f"{QUICK_EPISODES} with --quick)")
+    add_agent(parser, default=list(BenchmarkConfig.agents))
+    add_difficulty(parser, list(BenchmarkConfig.difficulties),
+                   "each runs the test split of suite linear-K")
+    parser.add_argument("--baselines", default=BenchmarkConfig.baselines,
+                        help="folder with one `dlo baseline` output folder per RL agent "
+                             "(BASELINES/ppo, BASELINES/sac-her; None: the shipped ones)")
+    add_model(parser)
+    add_planner_flags(parser)
+    parser.add_argument("--seed", type=int, default=BenchmarkConfig.seed,
+                        help="seed of the planners' sampling (the tasks are the suites')")
     parser.add_argument("--resume", action="store_true",
                         help="reuse the cells an interrupted run with the same settings wrote")
-    parser.add_argument("--out", default="benchmarks",
-                        help="folder for results.md/.json/.png and results_episodes/ "
-                             "(default benchmarks)")
+    add_out(parser, "benchmark", "results.md/.json/.png and results_episodes/; "
+                                 "`--out benchmarks` refreshes the committed results")
 
 
-def _command(args: argparse.Namespace) -> str:
+def _command(args: argparse.Namespace, parser_defaults: dict) -> str:
+    """The command line that reproduces this run (flags that differ from the defaults)."""
     parts = ["dlo benchmark"]
-    if args.quick:
-        parts.append("--quick")
-    if args.episodes is not None:
-        parts.append(f"--episodes {args.episodes}")
-    if list(args.agents) != list(AGENTS):
-        parts.append("--agents " + " ".join(args.agents))
-    if list(args.difficulty) != [1, 2, 3]:
-        parts.append("--difficulty " + " ".join(map(str, args.difficulty)))
-    for flag, value, default in (("--models", args.models, "benchmarks/models"),
-                                 ("--shape-model", args.shape_model, None),
-                                 ("--replan-every", args.replan_every, 10),
-                                 ("--max-seconds", args.max_seconds, None),
-                                 ("--seed", args.seed, 0), ("--threads", args.threads, 1),
-                                 ("--out", args.out, "benchmarks")):
-        if value != default:
+    for key, value in vars(args).items():
+        if key.startswith("_") or key in ("command", "debug") or value == parser_defaults.get(key):
+            continue
+        flag = "--" + key.replace("_", "-")
+        if value is True:
+            parts.append(flag)
+        elif isinstance(value, list):
+            parts.append(f"{flag} {' '.join(map(str, value))}")
+        else:
             parts.append(f"{flag} {value}")
-    if args.no_fidelity:
-        parts.append("--no-fidelity")
     return " ".join(parts)
 
 
 def run(args: argparse.Namespace) -> int:
     """Run the benchmark, print the table and the speed ratio, write the results."""
-    import sys
     import time
 
     import torch
 
-    from planners.benchmark import (
-        QUICK_EPISODES,
-        BenchmarkConfig,
-        planning_time_ratios,
-        run_benchmark,
-        write_results,
-    )
+    from dlo_bench.benchmark import QUICK_EPISODES, BenchmarkConfig, run_benchmark
+    from dlo_bench.benchmark_report import planning_time_ratios, write_results
 
-    torch.set_num_threads(max(1, args.threads))
+    torch.set_num_threads(args.threads)
     episodes = args.episodes if args.episodes is not None else (
-        QUICK_EPISODES if args.quick else 50)
-    try:
-        config = BenchmarkConfig(
-            agents=tuple(args.agents), difficulties=tuple(args.difficulty), episodes=episodes,
-            seed=args.seed, models_dir=args.models, shape_model=args.shape_model,
-            replan_every=args.replan_every, max_seconds=args.max_seconds,
-            fidelity=not args.no_fidelity,
-        )
-    except ValueError as exc:
-        print(f"dlo benchmark: {exc}", file=sys.stderr)
-        return 2
+        QUICK_EPISODES if args.quick else BenchmarkConfig.episodes)
+    config = BenchmarkConfig(
+        agents=tuple(args.agent), difficulties=tuple(args.difficulty), episodes=episodes,
+        seed=args.seed, baselines=args.baselines, model=args.model,
+        replan_every=args.replan_every, max_seconds=args.max_seconds,
+        fidelity=not args.no_fidelity,
+    )
     print(f"benchmark: {len(config.agents)} agents x difficulties {config.difficulties} x "
           f"{config.episodes} episodes -> {args.out}", flush=True)
     t0 = time.perf_counter()
     rows = run_benchmark(config, args.out, resume=args.resume, progress=True)
     seconds = time.perf_counter() - t0
-    paths = write_results(rows, args.out, _command(args), seconds)
+    parser = argparse.ArgumentParser()
+    add_arguments(parser)
+    paths = write_results(rows, args.out, _command(args, vars(parser.parse_args([]))), seconds)
     print(paths["md"].read_text().split("\n\n", 2)[2].split("\n\n")[0])  # the table
     ratios = planning_time_ratios(rows)
     if ratios:

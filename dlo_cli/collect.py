@@ -1,42 +1,18 @@
-"""``dlo collect``: collect a dataset of cord shapes from the simulator.
+"""``dlo collect``: collect cord shapes or one-move transitions from the simulator.
 
 Example:
     dlo collect --num-shapes 200000 --seed 0 --workers 2 --out data/train.npz
+    dlo collect --kind transitions --num-transitions 60000 --workers 2 --out data/transitions.npz
 """
 
 from __future__ import annotations
 
 import argparse
 
+from dlo_cli.flags import number_in, positive_int
 
-def _positive_int(text: str) -> int:
-    try:
-        value = int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected a positive integer, got {text!r}") from None
-    if value < 1:
-        raise argparse.ArgumentTypeError(f"expected a positive integer, got {text!r}")
-    return value
-
-
-def _seed(text: str) -> int:
-    try:
-        value = int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected an integer >= 0, got {text!r}") from None
-    if value < 0:
-        raise argparse.ArgumentTypeError(f"expected an integer >= 0, got {text!r}")
-    return value
-
-
-def _cosine(text: str) -> float:
-    try:
-        value = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected a number in [-1, 1], got {text!r}") from None
-    if not -1.0 <= value <= 1.0:
-        raise argparse.ArgumentTypeError(f"expected a number in [-1, 1], got {text!r}")
-    return value
+_seed = number_in(int, 0, expected="an integer >= 0")
+_cosine = number_in(float, -1.0, 1.0, expected="a number in [-1, 1]")
 
 
 def _npz_path(text: str) -> str:
@@ -46,22 +22,24 @@ def _npz_path(text: str) -> str:
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
-    """Flags of ``dlo collect``."""
+    """Flags of ``dlo collect`` (defaults from ``CollectConfig``)."""
+    from dlo_env.dataset.collect import CollectConfig
+
     parser.add_argument("--kind", choices=("shapes", "transitions"), default="shapes",
-                        help="what to collect: cord-like shapes (GAN data) or one-move "
-                             "transitions (transition-model data) (default: shapes)")
-    parser.add_argument("--num-shapes", type=_positive_int,
+                        help="what to collect: cord-like shapes (shape-model data) or one-move "
+                             "transitions (transition-model data)")
+    parser.add_argument("--num-shapes", type=positive_int, default=None,
                         help="cord-like shapes to collect (--kind shapes)")
-    parser.add_argument("--num-transitions", type=_positive_int,
+    parser.add_argument("--num-transitions", type=positive_int, default=None,
                         help="transitions to collect (--kind transitions)")
     parser.add_argument("--out", type=_npz_path, required=True, help="dataset file (.npz)")
-    parser.add_argument("--seed", type=_seed, default=0, help="root seed (default 0)")
-    parser.add_argument("--workers", type=_positive_int, default=1,
-                        help="worker processes (default 1); the arrays do not depend on it")
-    parser.add_argument("--cosine-threshold", type=_cosine, default=0.25,
-                        help="cord-like filter: least cosine of consecutive segments (0.25)")
-    parser.add_argument("--record-every", type=_positive_int, default=10,
-                        help="record a shape every K physics substeps (10: about 1 cm)")
+    parser.add_argument("--seed", type=_seed, default=0, help="root seed")
+    parser.add_argument("--workers", type=positive_int, default=1,
+                        help="worker processes; the arrays do not depend on it")
+    parser.add_argument("--cosine-threshold", type=_cosine, default=CollectConfig.cosine_threshold,
+                        help="cord-like filter: least cosine of consecutive segments")
+    parser.add_argument("--record-every", type=positive_int, default=CollectConfig.record_every,
+                        help="record a shape every K physics substeps (10: about 1 cm of motion)")
     parser.add_argument("--resume", action="store_true",
                         help="continue an interrupted run from OUT.parts/")
 
@@ -72,28 +50,25 @@ def run(args: argparse.Namespace) -> int:
         from dlo_cli.collect_transitions import run as run_transitions
 
         return run_transitions(args)
+    if args.num_shapes is None:
+        raise ValueError("--num-shapes is required with --kind shapes")
     import os
     import sys
     import time
 
-    from tqdm import tqdm
-
+    from dlo_bench.progress import progress_bar
     from dlo_env.dataset.chunks import parts_dir
     from dlo_env.dataset.collect import CollectConfig, collect
     from dlo_env.dataset.diversity import diversity_report
 
-    if args.num_shapes is None:
-        print("dlo collect: error: --num-shapes is required with --kind shapes", file=sys.stderr)
-        return 2
     config = CollectConfig(seed=args.seed, cosine_threshold=args.cosine_threshold,
                            record_every=args.record_every)
     counts = {"accepted": 0, "rejected": 0}
-    bars: list[tqdm] = []  # opened on the first report, so argument errors print no bar
+    bars: list = []  # opened on the first report, so argument errors print no bar
 
     def progress(accepted: int, rejected: int) -> None:
         if not bars:
-            bars.append(tqdm(total=args.num_shapes, unit="shape", desc="collect",
-                             dynamic_ncols=True))
+            bars.append(progress_bar(args.num_shapes, desc="collect", unit="shape"))
         bar = bars[0]
         counts["accepted"] += accepted
         counts["rejected"] += rejected
@@ -105,9 +80,6 @@ def run(args: argparse.Namespace) -> int:
     try:
         data = collect(args.out, args.num_shapes, config, workers=args.workers,
                        resume=args.resume, progress=progress)
-    except ValueError as exc:
-        print(f"dlo collect: error: {exc}", file=sys.stderr)
-        return 2
     except KeyboardInterrupt:
         print(f"\ninterrupted: finished chunks are kept in {parts_dir(args.out)}; run the same "
               "command with --resume to continue", file=sys.stderr)

@@ -17,7 +17,7 @@ def run(args: argparse.Namespace) -> int:
 
     import numpy as np
 
-    from dlo_cli.progress import progress_bar
+    from dlo_bench.progress import progress_bar
     from dlo_env.dataset.chunks import parts_dir
     from dlo_env.dataset.transitions import (
         GRASP_NAMES,
@@ -26,23 +26,26 @@ def run(args: argparse.Namespace) -> int:
     )
 
     if args.num_transitions is None:
-        print("dlo collect: error: --num-transitions is required with --kind transitions",
-              file=sys.stderr)
-        return 2
+        raise ValueError("--num-transitions is required with --kind transitions")
     config = TransitionCollectConfig(seed=args.seed)
+    bars: list = []  # opened on the first report, so argument errors print no bar
+
+    def progress(done: int, rejected: int) -> None:
+        if not bars:
+            bars.append(progress_bar(args.num_transitions, desc="collect", unit="transition"))
+        bars[0].update(done)
+
     started = time.perf_counter()
-    with progress_bar(args.num_transitions, "transition", "collect") as bar:
-        try:
-            data = collect_transitions(args.out, args.num_transitions, config,
-                                       workers=args.workers, resume=args.resume,
-                                       progress=lambda done, _rejected: bar(done))
-        except ValueError as exc:
-            print(f"dlo collect: error: {exc}", file=sys.stderr)
-            return 2
-        except KeyboardInterrupt:
-            print(f"\ninterrupted: finished chunks are kept in {parts_dir(args.out)}; run the "
-                  "same command with --resume to continue", file=sys.stderr)
-            return 130
+    try:
+        data = collect_transitions(args.out, args.num_transitions, config,
+                                   workers=args.workers, resume=args.resume, progress=progress)
+    except KeyboardInterrupt:
+        print(f"\ninterrupted: finished chunks are kept in {parts_dir(args.out)}; run the "
+              "same command with --resume to continue", file=sys.stderr)
+        return 130
+    finally:
+        for bar in bars:
+            bar.close()
     elapsed = time.perf_counter() - started
     meta = data.metadata
     made = meta["num_transitions"] - meta["transitions_resumed"]

@@ -2,36 +2,34 @@
 
 Runs the latent-tree planner (open and closed loop) and the straight-line reference on a
 handful of random tasks (5 of each difficulty 1-3), prints the results table, and writes into
-the output folder: the table as JSON and CSV, ``episode.gif`` (one closed-loop episode of the
-hardest difficulty: the real cord, the goal in green and the current plan's shapes as pale
-ghosts) and ``interpolation.png`` (the paper's Fig. 2: a latent interpolation, next to a plan
-against the real cord).
+the output folder: the table as JSON and CSV, ``episode.gif`` (a solved closed-loop episode of
+the hardest difficulty: the real cord, the gripper, the goal in green and the current plan's
+shapes as pale ghosts) and ``interpolation.png`` (the paper's Fig. 2: a latent interpolation,
+next to a plan against the real cord).
 """
 
 from __future__ import annotations
 
 import argparse
 
+from dlo_cli.flags import add_difficulty, add_model, add_out, add_seed, add_threads, positive_int
+
 AGENTS = ("straight-line", "latent-tree", "latent-tree-closed")
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     """Flags of ``dlo demo``."""
-    parser.add_argument("--out", default="dlo-demo", help="output folder (default dlo-demo)")
-    parser.add_argument("--model", default=None,
-                        help="shape model file or folder (default: the shipped pretrained model)")
-    parser.add_argument("--episodes", type=int, default=5,
-                        help="tasks per difficulty and agent (default 5)")
-    parser.add_argument("--difficulties", type=int, nargs="+", default=[1, 2, 3], metavar="K")
-    parser.add_argument("--seed", type=int, default=0, help="seed of tasks and planner")
-    parser.add_argument("--threads", type=int, default=1,
-                        help="torch CPU threads (default 1: the model is small, and extra "
-                             "threads only contend on a shared machine)")
+    add_out(parser, "demo", "the tables, episode.gif and interpolation.png")
+    add_model(parser)
+    parser.add_argument("--episodes", type=positive_int, default=5,
+                        help="tasks per difficulty and agent")
+    add_difficulty(parser, [1, 2, 3], "random tasks; the GIF shows the hardest")
+    add_seed(parser, "the tasks and the planners")
+    add_threads(parser)
 
 
 def run(args: argparse.Namespace) -> int:
     """Run the demo; returns the exit code."""
-    import sys
     import time
     from pathlib import Path
 
@@ -41,53 +39,48 @@ def run(args: argparse.Namespace) -> int:
     from tqdm import tqdm
 
     import dlo_env  # noqa: F401  (registers the environments)
-    from latent_model import ShapeModel
-    from planners.agents import build_agent
-    from planners.evaluation import evaluate, format_table, write_evaluation, write_summaries
-    from planners.fidelity import transition_fidelity
-    from planners.figures import record_episode, save_episode_gif, save_interpolation_png
+    from dlo_bench.agents import build_agent, load_shape_model
+    from dlo_bench.charts import save_interpolation_png
+    from dlo_bench.evaluation import evaluate
+    from dlo_bench.fidelity import transition_fidelity
+    from dlo_bench.figures import record_episode, save_episode_gif
+    from dlo_bench.report import format_table, write_evaluation, write_summaries
     from planners.interpolation import interpolate
     from planners.latent_tree import LatentTreePlanner
 
-    if args.episodes < 1 or args.threads < 1:
-        print("dlo demo: --episodes and --threads must be >= 1", file=sys.stderr)
-        return 2
     torch.set_num_threads(args.threads)
-    try:
-        model = ShapeModel.load_or_pretrained(args.model, device="cpu")
-    except FileNotFoundError as exc:
-        print(f"dlo demo: no shape model: {exc}. Train one with `dlo train` or pass --model.",
-              file=sys.stderr)
-        return 2
+    model = load_shape_model(args.model)
     env_id = "dlo_env/DLOEndpoint-v0"
     out = Path(args.out)
-    print(f"dlo demo: {model!r}\n{len(args.difficulties) * len(AGENTS)} runs of "
+    print(f"dlo demo: {model!r}\n{len(args.difficulty) * len(AGENTS)} runs of "
           f"{args.episodes} episodes -> {out}")
 
-    summaries = []
-    rows = [(d, a) for d in args.difficulties for a in AGENTS]
+    summaries, solved = [], {}
+    rows = [(d, a) for d in args.difficulty for a in AGENTS]
     for difficulty, agent in tqdm(rows, desc="demo", unit="run"):
-        env = gym.make(env_id)
-        policy = build_agent(agent, env, model=model, seed=args.seed)
-        env.close()
+        with gym.make(env_id) as env:
+            policy = build_agent(agent, env, model=model, seed=args.seed)
         result = evaluate(policy, env_id, difficulty=difficulty, episodes=args.episodes,
                           seed=args.seed + 1000 * difficulty, agent=agent)
         write_evaluation(result, out, f"{agent}-d{difficulty}")
         summaries.append(result.summary)
+        if agent == "latent-tree-closed":  # the GIF replays a solved episode (else the first)
+            seeds = [r.seed for r in result.records if r.success] or [result.records[0].seed]
+            solved[difficulty] = seeds[0]
     print(format_table(summaries))
     write_summaries(summaries, out / "summary.json")
 
-    # One closed-loop episode as a GIF: the real cord, the goal, the current plan as ghosts.
-    # The hardest difficulty asked for: its plans have several moves and the policy replans.
-    gif_difficulty = max(args.difficulties)
+    # A solved closed-loop episode as a GIF: the real cord, the goal, the current plan as
+    # ghosts. The hardest difficulty asked for: its plans have several moves and it replans.
+    gif_difficulty = max(args.difficulty)
     env = gym.make(env_id)
     policy = build_agent("latent-tree-closed", env, model=model, seed=args.seed)
-    frames, info = record_episode(policy, env, seed=args.seed + 1000 * gif_difficulty,
+    frames, info = record_episode(policy, env, seed=solved[gif_difficulty],
                                   options={"difficulty": gif_difficulty})
     gif = save_episode_gif(frames, out / "episode.gif", fps=round(1.0 / env.unwrapped.params.dt))
     print(f"episode.gif: difficulty {gif_difficulty}, {len(frames) - 1} steps, "
           f"{'solved' if info['is_success'] else 'not solved'}, final error "
-          f"{100 * info['error']:.1f} cm, {policy.stats.plans} plans")
+          f"{100 * info['error']:.1f} cm, {policy.episode_stats().plans} plans")
 
     # The paper's Fig. 2 on a difficulty-1 task, next to a plan against the real cord.
     obs, _ = env.reset(seed=args.seed + 1000, options={"difficulty": 1})

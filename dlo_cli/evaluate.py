@@ -4,43 +4,35 @@ from __future__ import annotations
 
 import argparse
 
-AGENT_HELP = (
-    "latent-tree (open loop), latent-tree-closed (replans), straight-line (reference), "
-    "physics-mpc, or sb3:PATH (a folder written by `dlo baseline`); repeat to compare"
+from dlo_cli.flags import (
+    add_agent,
+    add_difficulty,
+    add_model,
+    add_out,
+    add_planner_flags,
+    add_seed,
+    positive_int,
 )
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     """Flags of ``dlo evaluate``."""
-    parser.add_argument("--agent", nargs="+", required=True, metavar="AGENT", help=AGENT_HELP)
+    from dlo_env.tasks import SUITES
+
+    add_agent(parser, default=None)
     which = parser.add_mutually_exclusive_group()
-    which.add_argument("--difficulty", type=int, nargs="+", default=[1], metavar="K",
-                       help="straight moves per random task, 1-5; several give several rows "
-                            "(default 1)")
+    add_difficulty(which, [1], "random tasks (reset seeds SEED, SEED+1, ...); several give "
+                               "several rows")
     which.add_argument("--suite", nargs="+", metavar="NAME",
-                       help="named task suites instead (linear-1, linear-2, linear-3)")
+                       help=f"named task suites instead of random tasks: {', '.join(SUITES)}")
     parser.add_argument("--split", default="test", choices=("test", "train"),
-                        help="split of the suites (default test)")
-    parser.add_argument("--episodes", type=int, default=20, help="episodes per row (default 20)")
-    parser.add_argument("--seed", type=int, default=0,
-                        help="episode i of random tasks resets with seed+i; also the planner's "
-                             "seed (default 0)")
-    parser.add_argument("--env-id", default="dlo_env/DLOEndpoint-v0")
-    parser.add_argument("--model", default=None,
-                        help="shape model file or folder for the latent-tree agents "
-                             "(default: the shipped pretrained model)")
-    parser.add_argument("--replan-every", type=int, default=10,
-                        help="steps between replans of latent-tree-closed (default 10)")
-    parser.add_argument("--max-seconds", type=float, default=None,
-                        help="time budget of one latent-tree plan, seconds")
-    parser.add_argument("--threads", type=int, default=1,
-                        help="torch CPU threads (default 1: the model is small, and extra "
-                             "threads only contend on a shared machine)")
-    parser.add_argument("--no-fidelity", action="store_true",
-                        help="skip the transition fidelity simulation of each first plan")
-    parser.add_argument("--out", default="runs/evaluate",
-                        help="folder for <agent>-<difficulty>.csv/.json and summary.json "
-                             "(default runs/evaluate)")
+                        help="split of the suites")
+    parser.add_argument("--episodes", type=positive_int, default=20, help="episodes per row")
+    add_seed(parser, "the tasks (episode i of random tasks resets with SEED+i) and planners")
+    parser.add_argument("--env-id", default="dlo_env/DLOEndpoint-v0", help="environment")
+    add_model(parser)
+    add_planner_flags(parser)
+    add_out(parser, "evaluate", "<agent>-<difficulty>.csv/.json and summary.json")
 
 
 def _file_name(agent: str, label: str) -> str:
@@ -51,39 +43,25 @@ def _file_name(agent: str, label: str) -> str:
 def run(args: argparse.Namespace) -> int:
     """Evaluate every agent on every difficulty (or suite), print the table, write files."""
     import platform
-    import sys
     from pathlib import Path
 
     import gymnasium as gym
 
     import dlo_env  # noqa: F401  (registers the environments)
-    from planners.agents import build_agent
-    from planners.evaluation import (
-        evaluate,
-        format_divergence,
-        format_table,
-        write_evaluation,
-        write_summaries,
-    )
+    from dlo_bench.agents import agent_spec, build_agent, load_shape_model
+    from dlo_bench.evaluation import evaluate
+    from dlo_bench.report import format_divergence, format_table, write_evaluation, write_summaries
+    from dlo_env.tasks import suite_seeds
 
-    if args.episodes < 1:
-        print(f"dlo evaluate: --episodes must be >= 1, got {args.episodes}", file=sys.stderr)
-        return 2
+    specs = [agent_spec(agent) for agent in args.agent]  # unknown names fail before any work
+    for suite in args.suite or []:
+        suite_seeds(suite, args.split)
     model = None
-    if any(a.startswith("latent-tree") for a in args.agent):
+    if any(spec.shape_model for spec in specs):
         import torch
 
-        from latent_model import ShapeModel
-
-        torch.set_num_threads(max(1, args.threads))
-
-        try:
-            model = ShapeModel.load_or_pretrained(args.model, device="cpu")
-        except FileNotFoundError as exc:
-            print(f"dlo evaluate: no shape model: {exc}. Train one with `dlo train` or pass "
-                  "--model.", file=sys.stderr)
-            return 2
-    overrides = {} if args.max_seconds is None else {"max_seconds": args.max_seconds}
+        torch.set_num_threads(args.threads)
+        model = load_shape_model(args.model)
     rows = ([(None, s, s) for s in args.suite] if args.suite
             else [(d, None, f"d{d}") for d in args.difficulty])
     out = Path(args.out)
@@ -91,15 +69,10 @@ def run(args: argparse.Namespace) -> int:
     summaries = []
     for agent in args.agent:
         for difficulty, suite, label in rows:
-            env = gym.make(args.env_id)
-            try:
+            with gym.make(args.env_id) as env:
                 policy = build_agent(agent, env, model=model, seed=args.seed,
-                                     replan_every=args.replan_every, tree_overrides=overrides)
-            except ValueError as exc:
-                print(f"dlo evaluate: {exc}", file=sys.stderr)
-                return 2
-            finally:
-                env.close()
+                                     replan_every=args.replan_every,
+                                     max_seconds=args.max_seconds)
             result = evaluate(policy, args.env_id, difficulty=difficulty, suite=suite,
                               episodes=args.episodes, seed=args.seed, split=args.split,
                               agent=agent, fidelity=not args.no_fidelity, progress=True)

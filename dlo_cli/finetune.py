@@ -19,13 +19,16 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help="held-out shapes to check the metrics did not degrade (default: the "
                              "file recorded in the model, when it exists)")
     parser.add_argument("--out", default=None,
-                        help="output folder for the new model.pt (default: MODEL-finetuned)")
-    parser.add_argument("--gan-steps", type=int, default=None)
-    parser.add_argument("--encoder-steps", type=int, default=None)
-    parser.add_argument("--seed", type=int, default=0)
+                        help="output folder for the new model.pt (None: runs/finetune)")
+    parser.add_argument("--gan-steps", type=int, default=None,
+                        help="GAN steps of the additional training (None: FinetuneConfig's)")
+    parser.add_argument("--encoder-steps", type=int, default=None,
+                        help="Encoder steps of the additional training (None: FinetuneConfig's)")
+    parser.add_argument("--seed", type=int, default=0, help="seed of the training")
     parser.add_argument("--report-size", type=int, default=1000,
                         help="held-out reference and inversion shapes per report")
-    parser.add_argument("--device", default="auto")
+    parser.add_argument("--device", default="auto",
+                        help="torch device: auto (cuda if available), cpu or cuda")
     parser.add_argument("--no-progress", action="store_true", help="hide the progress bars")
 
 
@@ -36,15 +39,13 @@ def run(args: argparse.Namespace) -> int:
     from dataclasses import replace
     from pathlib import Path
 
+    from dlo_bench.paths import default_out
     from dlo_env.atomic import write_text_atomic
     from latent_model import FinetuneConfig, ShapeModel, finetune
     from latent_model.dataset import load_shapes
     from latent_model.shape_model import MODEL_FILE
 
-    model_path = Path(args.model)
-    if model_path.is_dir():
-        model_path = model_path / MODEL_FILE
-    model = ShapeModel.load(model_path, device=args.device)
+    model = ShapeModel.load(args.model, device=args.device)
     shapes = load_shapes(args.shapes, name="--shapes")
     data_path = args.data or model.info.get("data")
     if not data_path:
@@ -58,9 +59,8 @@ def run(args: argparse.Namespace) -> int:
     steps = {k: v for k, v in {"gan_steps": args.gan_steps,
                                "encoder_steps": args.encoder_steps}.items() if v is not None}
     config = replace(config, **steps)
-    out = Path(args.out) if args.out else model_path.parent.with_name(
-        model_path.parent.name + "-finetuned")
-    print(f"fine-tuning {model_path} on {len(shapes)} shapes from {args.shapes}; "
+    out = Path(args.out) if args.out else default_out("finetune")
+    print(f"fine-tuning {args.model} on {len(shapes)} shapes from {args.shapes}; "
           f"training data {data_path}; held-out {heldout_path if heldout is not None else None}")
     new_model, report = finetune(model, shapes, train_shapes, heldout, config, seed=args.seed,
                                  report_size=args.report_size,

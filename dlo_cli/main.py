@@ -1,53 +1,90 @@
 """Entry point of the ``dlo`` command.
 
 Each subcommand lives in its own module of this package, which provides
-``add_arguments(parser)`` and ``run(args) -> int``. Modules are imported only when their
-subcommand runs, so ``dlo collect`` works without torch installed.
+``add_arguments(parser)`` and ``run(args) -> int``; a module imports what its job needs inside
+``run``, so ``dlo collect`` works on the core install. Errors a user can act on are turned into
+one line by :func:`main` (see :mod:`dlo_cli.errors`).
 """
 
 from __future__ import annotations
 
 import argparse
 import importlib
+import os
 import sys
+from importlib import metadata
+
+from dlo_cli.errors import EXIT_INTERRUPTED, EXIT_USER_ERROR, user_error_message
+
+DESCRIPTION = ("dlo: a cord on a table as goal-conditioned Gymnasium environments, a GAN shape "
+               "model, latent-space planners and a benchmark. Every command writes under "
+               "runs/<command> unless --out says otherwise.")
+EPILOG = "Run `dlo COMMAND --help` for a command's flags; docs/cli.md explains them all."
 
 #: subcommand -> (module, one-line help)
 COMMANDS: dict[str, tuple[str, str]] = {
-    "demo": ("dlo_cli.demo", "plan and execute a few tasks with the shipped model (main job)"),
+    "demo": ("dlo_cli.demo", "plan and execute a few tasks with the shipped model (start here)"),
     "collect": ("dlo_cli.collect", "collect a dataset of cord shapes from the simulator"),
     "train": ("dlo_cli.train", "train the GAN and the encoder on a shape dataset"),
     "finetune": ("dlo_cli.finetune", "additional training on shapes the model cannot represent"),
-    "evaluate": ("dlo_cli.evaluate", "score an agent on the environment"),
+    "evaluate": ("dlo_cli.evaluate", "score agents on random tasks or named suites"),
     "baseline": ("dlo_cli.baseline", "train a Stable-Baselines3 baseline"),
-    "benchmark": ("dlo_cli.benchmark", "run every agent on the test suites"),
+    "benchmark": ("dlo_cli.benchmark", "run every agent on the test suites, one table"),
 }
 
 
+def _version() -> str:
+    try:
+        return metadata.version("dlo")
+    except metadata.PackageNotFoundError:  # run from a source tree that was not installed
+        return "unknown (not installed)"
+
+
 def build_parser() -> argparse.ArgumentParser:
-    """The argument parser with one subparser per available subcommand."""
-    parser = argparse.ArgumentParser(prog="dlo", description=__doc__.splitlines()[0])
+    """The argument parser with one subparser per subcommand."""
+    parser = argparse.ArgumentParser(prog="dlo", description=DESCRIPTION, epilog=EPILOG)
+    parser.add_argument("--version", action="version", version=f"dlo {_version()}")
+    parser.add_argument("--debug", action="store_true",
+                        help="show the full traceback of an error instead of one line")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND")
     for name, (module_name, help_text) in COMMANDS.items():
-        try:
-            module = importlib.import_module(module_name)
-        except ModuleNotFoundError as exc:
-            if exc.name == module_name:  # not written yet
-                continue
-            raise
-        p = sub.add_parser(name, help=help_text, description=help_text)
+        module = importlib.import_module(module_name)
+        p = sub.add_parser(name, help=help_text, description=help_text,
+                           formatter_class=argparse.ArgumentDefaultsHelpFormatter)
+        p.add_argument("--debug", action="store_true", default=argparse.SUPPRESS,
+                       help="show the full traceback of an error instead of one line")
         module.add_arguments(p)
         p.set_defaults(_run=module.run)
     return parser
 
 
 def main(argv: list[str] | None = None) -> int:
-    """Run the ``dlo`` command line; returns the exit code."""
+    """Run the ``dlo`` command line; returns the exit code.
+
+    An error the user can act on (bad input, a missing or corrupt file, a missing optional
+    dependency) prints one line on stderr and returns 2; ``--debug`` raises it instead.
+    """
     parser = build_parser()
     args = parser.parse_args(argv)
     if not hasattr(args, "_run"):
         parser.print_help()
-        return 2
-    return int(args._run(args) or 0)
+        return EXIT_USER_ERROR
+    try:
+        return int(args._run(args) or 0)
+    except BrokenPipeError:  # the reader of our output went away (`dlo ... | head`)
+        sys.stdout = open(os.devnull, "w")  # noqa: SIM115 (nothing more is written)
+        return 1
+    except KeyboardInterrupt:
+        if args.debug:
+            raise
+        print(f"dlo {args.command}: interrupted", file=sys.stderr)
+        return EXIT_INTERRUPTED
+    except Exception as exc:
+        message = user_error_message(exc)
+        if message is None or args.debug:
+            raise
+        print(f"dlo {args.command}: error: {message}", file=sys.stderr)
+        return EXIT_USER_ERROR
 
 
 if __name__ == "__main__":

@@ -12,22 +12,22 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                              "(dlo collect --kind transitions) for --stage transition")
     parser.add_argument("--out", required=True, help="output folder (resumes if it holds a run)")
     parser.add_argument("--heldout", default=None,
-                        help="held-out data collected with another seed (default: 5%% of --data)")
+                        help="held-out data collected with another seed (None: 5%% of --data)")
     parser.add_argument("--stage", choices=("gan", "encoder", "all", "transition"), default="all",
-                        help="gan, encoder, all (both: the shape model), or transition (the "
-                             "transition model) (default: all)")
+                        help="what to train: gan, encoder, all (the shape model), or transition "
+                             "(the transition model, on transition data)")
     parser.add_argument("--steps", type=int, default=None,
-                        help="--stage transition: optimiser steps (default 20000)")
+                        help="--stage transition: optimiser steps (None: TransitionTrainConfig's)")
     parser.add_argument("--members", type=int, default=None,
-                        help="--stage transition: networks in the ensemble (default 5)")
+                        help="--stage transition: networks in the ensemble (None: 5)")
     parser.add_argument("--minutes", type=float, default=30.0,
-                        help="training wall time of the run, evaluations excluded (default 30)")
+                        help="training wall time of the run, evaluations excluded")
     parser.add_argument("--gan-steps", type=int, default=None,
                         help="train the GAN for this many generator steps instead of minutes")
     parser.add_argument("--encoder-steps", type=int, default=None,
                         help="train the Encoder for this many steps instead of minutes")
     parser.add_argument("--device", default="auto", help="auto (cuda if available), cpu, cuda")
-    parser.add_argument("--seed", type=int, default=0)
+    parser.add_argument("--seed", type=int, default=0, help="seed of the training")
     parser.add_argument("--representation", choices=("canonical", "world"), default=None,
                         help="canonical (default) or world (the paper's)")
     parser.add_argument("--output", choices=("angles", "points"), default=None,
@@ -36,13 +36,13 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help="the paper's recipe: points output, batch 1024, 5 D-steps, Adam "
                              "2e-4, Encoder trained only after the GAN (overridable by the flags)")
     parser.add_argument("--width", type=int, default=None, help="hidden units per layer")
-    parser.add_argument("--batch-size", type=int, default=None)
+    parser.add_argument("--batch-size", type=int, default=None, help="shapes per batch")
     parser.add_argument("--d-steps", type=int, default=None,
                         help="discriminator steps per generator step")
     parser.add_argument("--threads", type=int, default=None, help="torch CPU threads")
     parser.add_argument("--eval-every", type=int, default=None, help="steps between evaluations")
     parser.add_argument("--report-size", type=int, default=2000,
-                        help="held-out reference shapes of the final report (default 2000)")
+                        help="held-out reference shapes of the final report")
     parser.add_argument("--no-progress", action="store_true", help="hide the progress bar")
 
 

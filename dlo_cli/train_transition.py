@@ -18,7 +18,7 @@ def run(args: argparse.Namespace) -> int:
 
     import torch
 
-    from dlo_cli.progress import progress_bar
+    from dlo_bench.progress import progress_bar
     from dlo_env.dataset.transitions import load_transitions, split_transitions
     from latent_model.transition_metrics import report_lines, transition_report, write_report
     from latent_model.transition_model import TransitionModelConfig
@@ -49,15 +49,20 @@ def run(args: argparse.Namespace) -> int:
     print(f"{'resuming' if resumed else 'training'} in {out}: {len(data)} transitions, "
           f"{len(heldout)} held out\n{mc}\n{tc}")
     started = time.perf_counter()
-    with progress_bar(tc.steps, "step", "transition") as bar:
-        last = [0]
+    bar = None if args.no_progress else progress_bar(tc.steps, desc="transition", unit="step")
+    done = [0]
 
-        def progress(step: int, stats: dict[str, float]) -> None:
-            bar(step - last[0])
-            last[0] = step
+    def progress(step: int, stats: dict[str, float]) -> None:
+        if bar is not None:
+            bar.update(step - done[0])
+            done[0] = step
 
+    try:
         model = train_transition_model(data, out, tc, mc, resume=True, device=args.device,
-                                       progress=None if args.no_progress else progress)
+                                       progress=progress)
+    finally:
+        if bar is not None:
+            bar.close()
     print(f"trained in {(time.perf_counter() - started) / 60:.1f} min; model: "
           f"{out / 'transition.pt'}, curve: {out / CURVE_FILE}")
     rows, rank = transition_report(model, heldout)

@@ -19,6 +19,9 @@ _GOAL = (120, 200, 120)
 _CORD = (30, 60, 140)
 _HEAD = (200, 60, 40)
 _GRIPPER = (240, 150, 20)
+#: The colours (RGB) of every mark, by name; other drawings of the cord (GIFs) use the same.
+PALETTE = {"floor": _FLOOR, "table": _TABLE, "edge": _EDGE, "goal": _GOAL, "cord": _CORD,
+           "head": _HEAD, "gripper": _GRIPPER}
 
 
 class CordRenderer:

@@ -8,10 +8,13 @@ from __future__ import annotations
 import argparse
 from dataclasses import dataclass
 
+import gymnasium as gym
 import torch
 
-from latent_model import ShapeModel
-from planners import PlannerPolicy, StraightLinePolicy, evaluate, format_table
+import dlo_env  # noqa: F401  (registers the environments)
+from dlo_bench import build_agent, evaluate, format_table
+from dlo_bench.agents import load_shape_model
+from planners.policy import DEFAULT_REPLAN_EVERY
 
 
 @dataclass
@@ -22,7 +25,7 @@ class Args:
     """episodes per agent"""
     seed: int = 0
     """episode i resets with seed + i"""
-    replan_every: int = 10
+    replan_every: int = DEFAULT_REPLAN_EVERY
     """steps between replans of the closed-loop planner"""
     model: str = ""
     """a shape model file (default: the shipped pretrained model)"""
@@ -40,15 +43,13 @@ if __name__ == "__main__":
     args = parse_args()
     torch.set_num_threads(1)  # a small model: more threads only contend
 
-    model = ShapeModel.load_or_pretrained(args.model, device="cpu")
-    agents = {
-        "straight-line": StraightLinePolicy(),
-        "latent-tree": PlannerPolicy(model),
-        "latent-tree-closed": PlannerPolicy(model, replan_every=args.replan_every),
-    }
+    env_id = "dlo_env/DLOEndpoint-v0"
+    model = load_shape_model(args.model or None)  # loaded once, shared by both planners
     summaries = []
-    for name, policy in agents.items():
-        result = evaluate(policy, "dlo_env/DLOEndpoint-v0", difficulty=args.difficulty,
+    for name in ("straight-line", "latent-tree", "latent-tree-closed"):
+        policy = build_agent(name, gym.make(env_id), model=model, seed=args.seed,
+                             replan_every=args.replan_every)
+        result = evaluate(policy, env_id, difficulty=args.difficulty,
                           episodes=args.episodes, seed=args.seed, agent=name)
         summaries.append(result.summary)
     print(format_table(summaries))

@@ -12,10 +12,10 @@ import gymnasium as gym
 import torch
 
 import dlo_env  # noqa: F401  (registers the environments)
+from dlo_bench.charts import save_interpolation_png
 from dlo_env.shapes import error
 from latent_model import ShapeModel
 from planners import interpolate
-from planners.figures import save_interpolation_png
 
 
 @dataclass

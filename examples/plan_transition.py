@@ -12,9 +12,10 @@ import gymnasium as gym
 import torch
 
 import dlo_env  # noqa: F401  (registers the environments)
+from dlo_bench import transition_fidelity
 from dlo_env.shapes import error
 from latent_model import ShapeModel
-from planners import LatentTreePlanner, transition_fidelity
+from planners import LatentTreePlanner
 
 
 @dataclass

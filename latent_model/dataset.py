@@ -24,7 +24,16 @@ def load_shapes(path: str | os.PathLike, name: str = "path") -> np.ndarray:
     if not path.is_file():
         raise FileNotFoundError(f"{name}: no dataset file at {str(path)!r}")
     try:
-        with np.load(path, allow_pickle=False) as data:
+        archive = np.load(path, allow_pickle=False)
+    except ValueError as exc:  # neither a zip nor an .npy: numpy would have to unpickle it
+        raise ValueError(f"{name}: {str(path)!r} is not a readable .npz file (corrupt, or not "
+                         "written by numpy)") from exc
+    except (OSError, EOFError, zipfile.BadZipFile) as exc:
+        raise ValueError(f"{name}: {str(path)!r} is not a readable .npz file ({exc})") from exc
+    if not isinstance(archive, np.lib.npyio.NpzFile):
+        raise ValueError(f"{name}: {str(path)!r} holds a single array, not an .npz archive")
+    try:
+        with archive as data:
             files = set(data.files)
             if "metadata" not in files:  # a plain shape array, e.g. shapes to fine-tune on
                 if "shapes" not in files:

@@ -62,7 +62,7 @@ class TransitionModelConfig:
     cord_length: float = 1.0
     max_step: float = DEFAULT_MAX_STEP
     members: int = 5
-    width: int = 384
+    width: int = 256
     depth: int = 3
     move_scale: float = 0.35
     output_scale: float = 0.1

@@ -1,41 +1,31 @@
-"""planners: latent interpolation, the latent-tree planner, planners as policies, evaluation.
+"""planners: the agents. Latent interpolation, the latent-tree planner, the physics-in-the-loop
+planner and the straight-line reference, each an SB3-style policy.
 
-Every planner is run as a policy in the real simulator and scored on what the cord actually
-does (``evaluate``); ``transition_fidelity`` compares a plan's predicted shapes with the real
-cord doing the same end motion.
+The interfaces they share are ``typing.Protocol``s in :mod:`planners.interfaces`: the
+``ShapeSurrogate`` a latent planner plans on, and the ``Policy`` / ``PlanningPolicy`` a harness
+(``dlo_bench``) drives.
 """
 
 from __future__ import annotations
 
-from planners.evaluation import (
-    EpisodeRecord,
-    Evaluation,
-    FidelityProfile,
-    divergence,
-    evaluate,
-    format_divergence,
-    format_table,
-)
-from planners.fidelity import Fidelity, transition_fidelity
+from planners.interfaces import EpisodeStats, PlanningPolicy, Policy, ShapeSurrogate
 from planners.interpolation import interpolate
 from planners.latent_tree import LatentTreePlanner, Plan, TreeConfig
+from planners.physics_mpc import PhysicsMPCConfig, PhysicsMPCPolicy
 from planners.policy import PlannerPolicy
 from planners.straight_line import StraightLinePolicy
 
 __all__ = [
-    "EpisodeRecord",
-    "Evaluation",
-    "Fidelity",
-    "FidelityProfile",
+    "EpisodeStats",
     "LatentTreePlanner",
+    "PhysicsMPCConfig",
+    "PhysicsMPCPolicy",
     "Plan",
     "PlannerPolicy",
+    "PlanningPolicy",
+    "Policy",
+    "ShapeSurrogate",
     "StraightLinePolicy",
     "TreeConfig",
-    "divergence",
-    "evaluate",
-    "format_divergence",
-    "format_table",
     "interpolate",
-    "transition_fidelity",
 ]

@@ -2,16 +2,15 @@
 
 from __future__ import annotations
 
-from typing import Any
-
 import numpy as np
 
+from planners.interfaces import ShapeSurrogate
 from planners.observation import as_shape
 from planners.surrogate import Surrogate
 
 
 def interpolate(
-    model: Any,
+    model: ShapeSurrogate,
     start: np.ndarray,
     goal: np.ndarray,
     steps: int = 10,

@@ -31,6 +31,7 @@ from dlo_env.shapes import (
     segment_lengths,
     turning_cosines,
 )
+from planners.interfaces import ShapeSurrogate
 from planners.observation import as_shape
 from planners.surrogate import Surrogate
 
@@ -257,7 +258,8 @@ class LatentTreePlanner:
     """
 
     def __init__(
-        self, model: Any, config: TreeConfig | None = None, *, seed: int = 0, **overrides: Any
+        self, model: ShapeSurrogate, config: TreeConfig | None = None, *, seed: int = 0,
+        **overrides: Any,
     ) -> None:
         known = {f.name for f in fields(TreeConfig)}
         unknown = sorted(set(overrides) - known)

@@ -19,6 +19,7 @@ import numpy as np
 
 from dlo_env.cord import Cord, CordParams
 from dlo_env.shapes import error
+from planners.interfaces import EpisodeStats, Observation
 
 
 @dataclass(frozen=True)
@@ -117,6 +118,22 @@ class PhysicsMPCPolicy:
             config=config,
         )
 
+    def check_env(self, env: object) -> None:
+        """Raise ``ValueError`` unless the environment's cord, grasp and step match this policy."""
+        base = getattr(env, "unwrapped", env)
+        if (base.params, base.cord.grasp, base.max_step) != (self.params, self.grasp,
+                                                              self.max_step):
+            raise ValueError(
+                f"the physics planner was made for grasp {self.grasp!r}, max_step "
+                f"{self.max_step} m and {self.params}, but the environment has grasp "
+                f"{base.cord.grasp!r}, max_step {base.max_step} m and {base.params}: build it "
+                "with PhysicsMPCPolicy.for_env(env)"
+            )
+
+    def episode_stats(self) -> EpisodeStats:
+        """Planning calls and seconds of this episode (it never fails to return a plan)."""
+        return EpisodeStats(plans=self.stats.plans, seconds=self.stats.seconds)
+
     def reset(self) -> None:
         """Forget the current plan and the episode's statistics."""
         self._queue: list[np.ndarray] = []
@@ -184,7 +201,7 @@ class PhysicsMPCPolicy:
     # ------------------------------------------------------------------ policy
     def predict(
         self,
-        observation: dict[str, np.ndarray],
+        observation: Observation,
         state: object = None,
         episode_start: np.ndarray | None = None,
         deterministic: bool = True,

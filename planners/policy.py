@@ -31,6 +31,7 @@ from typing import Any
 import numpy as np
 
 from dlo_env.shapes import error
+from planners.interfaces import EpisodeStats, Observation, ShapeSurrogate
 from planners.latent_tree import LatentTreePlanner, Plan
 from planners.moves import actions_by_move
 from planners.observation import read_observation
@@ -38,6 +39,8 @@ from planners.surrogate import model_n_points
 
 #: The cord counts as at rest when no point moved farther than this in one step, metres.
 REST_MOTION = 5e-4
+#: Environment steps between checks of the closed-loop policy (``latent-tree-closed``).
+DEFAULT_REPLAN_EVERY = 10
 
 
 @dataclass
@@ -77,7 +80,8 @@ class PlannerPolicy:
             ``n_points`` must match the environment's cord.
         planner: The planner (default: ``LatentTreePlanner(model)`` with default parameters).
         replan_every: ``None`` for open loop; ``k`` to check the plan against the observed cord
-            every ``k`` environment steps (closed loop).
+            every ``k`` environment steps (closed loop; the benchmark's agent uses
+            ``DEFAULT_REPLAN_EVERY``).
         max_step: The environment's ``max_step`` (metres per unit action).
         replan_tolerance: Closed loop: replan when ``error`` between the observed cord and the
             plan's prediction exceeds this, metres; ``0`` replans at every check. The default
@@ -99,7 +103,7 @@ class PlannerPolicy:
 
     def __init__(
         self,
-        model: Any,
+        model: ShapeSurrogate,
         planner: LatentTreePlanner | None = None,
         replan_every: int | None = None,
         *,
@@ -164,6 +168,17 @@ class PlannerPolicy:
                 f"the planner moves the {self.planner.config.end!r} end but the environment "
                 f"holds {grasp!r}"
             )
+
+    def episode_stats(self) -> EpisodeStats:
+        """Planning calls, failures, seconds and the first and latest plans of this episode."""
+        return EpisodeStats(
+            plans=self.stats.plans,
+            failures=self.stats.failures,
+            seconds=self.stats.seconds,
+            goal_inversion_error=self.stats.goal_inversion_error,
+            first_plan=self.plans[0] if self.plans else None,
+            latest_plan=self.plans[-1] if self.plans else None,
+        )
 
     def reset(self) -> None:
         """Forget the current episode: plans, queued actions, goal latent and stats."""
@@ -236,9 +251,9 @@ class PlannerPolicy:
 
     def predict(
         self,
-        observation: dict[str, Any],
+        observation: Observation,
         state: Any = None,
-        episode_start: Any = None,
+        episode_start: np.ndarray | None = None,
         deterministic: bool = True,
     ) -> tuple[np.ndarray, Any]:
         """The next action for one observation (unbatched, or a batch of one).

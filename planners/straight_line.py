@@ -6,6 +6,7 @@ from typing import Any
 
 import numpy as np
 
+from planners.interfaces import Observation
 from planners.moves import actions_through
 from planners.observation import read_observation
 
@@ -34,9 +35,9 @@ class StraightLinePolicy:
 
     def predict(
         self,
-        observation: dict[str, Any],
+        observation: Observation,
         state: Any = None,
-        episode_start: Any = None,
+        episode_start: np.ndarray | None = None,
         deterministic: bool = True,
     ) -> tuple[np.ndarray, Any]:
         """The next action for one observation (unbatched, or a batch of one)."""

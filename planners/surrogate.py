@@ -1,10 +1,11 @@
 """Numpy access to a shape model (the surrogate) for the planners.
 
-The planners need four things from a model: ``n_points``, ``latent_dim``, ``decode(z)`` and
-``invert(shapes)`` (``latent_model.ShapeModel`` provides them; so does any toy model with the
-same methods). This module converts arrays in and out, counts decoder calls, and draws the
-points of a straight latent segment, using the model's own ``interpolate_latents`` when it has
-one (a latent that holds an angle may need to wrap), a straight line otherwise.
+The planners need four things from a model, the :class:`~planners.interfaces.ShapeSurrogate`
+protocol: ``n_points``, ``latent_dim``, ``decode(z)`` and ``invert(shapes)``
+(``latent_model.ShapeModel`` provides them; so does any toy model with the same methods). This
+module converts arrays in and out, counts decoder calls, and draws the points of a straight
+latent segment, using the model's own ``interpolate_latents`` when it has one (a latent that
+holds an angle may need to wrap), a straight line otherwise.
 """
 
 from __future__ import annotations
@@ -14,6 +15,8 @@ from typing import Any
 
 import numpy as np
 
+from planners.interfaces import ShapeSurrogate
+
 
 def to_numpy(value: Any) -> np.ndarray:
     """A numpy array from a numpy array, a list, or a torch tensor (detached, on the CPU)."""
@@ -22,7 +25,7 @@ def to_numpy(value: Any) -> np.ndarray:
     return np.asarray(value)
 
 
-def model_n_points(model: Any) -> int:
+def model_n_points(model: ShapeSurrogate) -> int:
     """Number of points of the shapes ``model`` decodes; ``ValueError`` if it does not say."""
     n = getattr(model, "n_points", None)
     if not isinstance(n, (int, np.integer)) or n < 3:
@@ -33,7 +36,7 @@ def model_n_points(model: Any) -> int:
     return int(n)
 
 
-def model_latent_dim(model: Any) -> int:
+def model_latent_dim(model: ShapeSurrogate) -> int:
     """Dimension of the latents ``model`` decodes; ``ValueError`` if it does not say."""
     d = getattr(model, "latent_dim", None)
     if not isinstance(d, (int, np.integer)) or d < 1:
@@ -60,11 +63,11 @@ class Surrogate:
     """A shape model seen through numpy float32 arrays, with a count of decoder calls.
 
     Args:
-        model: Anything with ``n_points``, ``latent_dim``, ``decode(z) -> (B, n, 2)`` and
-            ``invert(shapes) -> (z, err, ok)``.
+        model: A :class:`~planners.interfaces.ShapeSurrogate`: ``n_points``, ``latent_dim``,
+            ``decode(z) -> (B, n, 2)`` and ``invert(shapes) -> (z, err, ok)``.
     """
 
-    def __init__(self, model: Any) -> None:
+    def __init__(self, model: ShapeSurrogate) -> None:
         for method in ("decode", "invert"):
             if not callable(getattr(model, method, None)):
                 raise ValueError(

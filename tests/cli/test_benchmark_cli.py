@@ -16,10 +16,10 @@ ROW_KEYS = {"agent", "difficulty", "success_rate", "median_error", "seconds_per_
 @pytest.fixture(scope="module")
 def models(tmp_path_factory):
     """Tiny PPO and SAC + HER baselines and an untrained shape model: plumbing, not quality."""
+    from dlo_bench.baselines import BaselineConfig, train_baseline
     from latent_model import ShapeModel
     from latent_model.config import ModelConfig
     from latent_model.normalisation import Normalisation
-    from planners.rl_baseline import BaselineConfig, train_baseline
 
     root = tmp_path_factory.mktemp("bench-models")
     tiny = dict(timesteps=256, n_envs=1, net_arch=(16, 16), ppo_n_steps=128, ppo_batch_size=64,
@@ -37,8 +37,8 @@ def test_quick_benchmark_writes_every_agent_and_difficulty(models, tmp_path, cap
     # Difficulty 1 only: the physics planner is the slow agent (the other suites run the same
     # code, and the missing-agent test covers all three).
     code = main(["benchmark", "--quick", "--episodes", "1", "--difficulty", "1",
-                 "--models", str(models),
-                 "--shape-model", str(models / "shape.pt"), "--max-seconds", "0.05",
+                 "--baselines", str(models),
+                 "--model", str(models / "shape.pt"), "--max-seconds", "0.05",
                  "--replan-every", "50", "--out", str(out)])
     assert code == 0
     printed = capsys.readouterr().out
@@ -59,8 +59,8 @@ def test_quick_benchmark_writes_every_agent_and_difficulty(models, tmp_path, cap
 
 def test_agents_without_a_model_are_reported_not_dropped(tmp_path, capsys):
     out = tmp_path / "bench"
-    code = main(["benchmark", "--quick", "--agents", "straight-line", "ppo", "sac-her",
-                 "--episodes", "1", "--models", str(tmp_path / "none"), "--out", str(out)])
+    code = main(["benchmark", "--quick", "--agent", "straight-line", "ppo", "sac-her",
+                 "--episodes", "1", "--baselines", str(tmp_path / "none"), "--out", str(out)])
     assert code == 0
     rows = json.loads((out / "results.json").read_text())
     assert [(r["agent"], r["difficulty"]) for r in rows] == [
@@ -75,7 +75,7 @@ def test_agents_without_a_model_are_reported_not_dropped(tmp_path, capsys):
 
 
 def test_resume_reuses_finished_cells(tmp_path, capsys):
-    args = ["benchmark", "--agents", "straight-line", "--difficulty", "1", "--episodes", "1",
+    args = ["benchmark", "--agent", "straight-line", "--difficulty", "1", "--episodes", "1",
             "--out", str(tmp_path)]
     assert main(args) == 0
     first = json.loads((tmp_path / "results.json").read_text())
@@ -87,5 +87,5 @@ def test_resume_reuses_finished_cells(tmp_path, capsys):
 
 
 def test_benchmark_rejects_an_unknown_agent(tmp_path, capsys):
-    assert main(["benchmark", "--agents", "teleport", "--out", str(tmp_path)]) == 2
+    assert main(["benchmark", "--agent", "teleport", "--out", str(tmp_path)]) == 2
     assert "agents must be" in capsys.readouterr().err

@@ -28,7 +28,7 @@ def test_demo_writes_the_table_the_episode_gif_and_the_interpolation_png(tmp_pat
     model = tmp_path / "untrained.pt"  # random weights: tests the job, not the model
     ShapeModel(ModelConfig(), Normalisation(), device="cpu").save(model)
     out = tmp_path / "demo"
-    code = main(["demo", "--model", str(model), "--episodes", "1", "--difficulties", "1",
+    code = main(["demo", "--model", str(model), "--episodes", "1", "--difficulty", "1",
                  "--out", str(out)])
     assert code == 0
     assert "latent-tree-closed" in capsys.readouterr().out
@@ -40,6 +40,6 @@ def test_demo_writes_the_table_the_episode_gif_and_the_interpolation_png(tmp_pat
                     reason="latent_model/pretrained/model.pt is not shipped yet")
 def test_demo_runs_on_the_shipped_model(tmp_path):
     out = tmp_path / "demo"
-    code = main(["demo", "--episodes", "1", "--difficulties", "1", "2", "--out", str(out)])
+    code = main(["demo", "--episodes", "1", "--difficulty", "1", "2", "--out", str(out)])
     assert code == 0
     _check_outputs(out, rows=6)

@@ -6,7 +6,7 @@ hyperparameters (``hyperparameters.json``), the ``Monitor`` logs (``monitor/*.mo
 with ``is_success``) and a learning-curve PNG. A checkpoint (``checkpoint.zip``) is written
 atomically every ``checkpoint_every`` steps, so an interrupted run resumes (``resume=True``).
 ``load_baseline`` loads such a folder back as an object with ``predict``, which the evaluation
-harness drives like any planner policy.
+harness drives like any planner policy. The shipped baselines are in ``dlo_bench/pretrained/``.
 """
 
 from __future__ import annotations
@@ -325,6 +325,8 @@ def train_baseline(
          "resumed_at": start if resuming else None, "torch_threads": torch.get_num_threads()},
     )
     checkpoint.unlink(missing_ok=True)
+    from dlo_bench.charts import plot_learning_curve
+
     plot_learning_curve(monitor_dir, out / "learning_curve.png", title=config.algo)
     return out / "model.zip"
 
@@ -354,31 +356,6 @@ def read_monitor_logs(monitor_dir: str | os.PathLike) -> dict[str, Any]:
     }
 
 
-def plot_learning_curve(monitor_dir: str | os.PathLike, png: str | os.PathLike,
-                        title: str = "") -> None:
-    """Episode return and success rate (moving averages) against environment steps."""
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    logs = read_monitor_logs(monitor_dir)
-    fig, (ax1, ax2) = plt.subplots(1, 2, figsize=(9, 3.2))
-    if len(logs["reward"]):
-        k = max(1, len(logs["reward"]) // 50)
-        kernel = np.ones(k) / k
-        steps = logs["timesteps"][k - 1:]
-        ax1.plot(steps, np.convolve(logs["reward"], kernel, mode="valid"))
-        ax2.plot(steps, np.convolve(logs["is_success"], kernel, mode="valid"))
-    ax1.set(xlabel="environment steps", ylabel="episode return", title=f"{title} return")
-    ax2.set(xlabel="environment steps", ylabel="success rate", ylim=(0, 1),
-            title=f"{title} success")
-    fig.tight_layout()
-    with atomic_path(png) as tmp:
-        fig.savefig(tmp, dpi=100)
-    plt.close(fig)
-
-
 def read_baseline_metadata(path: str | os.PathLike) -> dict[str, Any]:
     """The ``hyperparameters.json`` of a baseline folder (or of the folder of its ``model.zip``).
 
@@ -403,17 +380,28 @@ def read_baseline_metadata(path: str | os.PathLike) -> dict[str, Any]:
     return meta
 
 
-def load_baseline(path: str | os.PathLike, device: str = "cpu") -> Any:
+def load_baseline(path: str | os.PathLike, device: str = "cpu", algo: str = "") -> Any:
     """Load a folder written by ``train_baseline`` (or its ``model.zip``).
+
+    Args:
+        path: The folder (or its ``model.zip``).
+        device: Torch device.
+        algo: The algorithm the folder must hold ("" accepts any of ``ALGOS``).
 
     Returns:
         The SB3 model; it has ``predict(obs, state, episode_start, deterministic)``.
+
+    Raises:
+        FileNotFoundError: If the folder holds no baseline.
+        ValueError: If it holds another algorithm than ``algo`` or another format version.
     """
     from stable_baselines3 import PPO, SAC
 
     p = Path(path)
     folder = p.parent if p.suffix == ".zip" else p
     config = BaselineConfig.from_dict(read_baseline_metadata(folder)["config"])
+    if algo and config.algo != algo:
+        raise ValueError(f"baseline {str(folder)!r} holds a {config.algo} model, not {algo}")
     model_path = folder / "model.zip"
     if config.algo == "ppo":
         return PPO.load(model_path, device=device)

@@ -1,7 +1,8 @@
-"""Pictures of plans: an episode as a GIF (cord, goal, planned ghosts), the interpolation PNG.
+"""An episode as a GIF: the real cord, the gripper, the goal and the current plan's shapes.
 
-Pillow draws the GIF frames and matplotlib the PNG; both are imported inside the functions, so
-the planners run without them. Files are written atomically.
+Pillow (the ``render`` extra) draws the frames; it is imported inside the function, so the
+harness runs without it. The colours are the environment renderer's. Files are written
+atomically.
 """
 
 from __future__ import annotations
@@ -9,19 +10,20 @@ from __future__ import annotations
 import os
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
 from dlo_env.atomic import atomic_path
+from dlo_env.rendering import PALETTE
 from dlo_env.shapes import TABLE_HALF
+from planners.interfaces import PlanningPolicy, Policy
 
-_FLOOR = (60, 60, 60)
-_TABLE = (232, 224, 204)
-_GOAL = (120, 200, 120)
 _GHOST = (150, 170, 225)
-_CORD = (30, 60, 140)
-_HEAD = (200, 60, 40)
 _TEXT = (20, 20, 20)
+#: The legend: one entry per mark drawn.
+LEGEND = ("cord (blue), head (red dot) held by the gripper (orange ring),",
+          "goal (green), current plan's shapes (pale blue)")
 
 
 @dataclass(frozen=True)
@@ -74,19 +76,22 @@ def save_episode_gif(frames: list[Frame], path: str | os.PathLike, size: int = 4
     width = max(2, size // 120)
     images = []
     for frame in frames:
-        image = Image.new("RGB", (size, size), _TABLE)
+        image = Image.new("RGB", (size, size), PALETTE["table"])
         draw = ImageDraw.Draw(image)
-        draw.line(to_pixels(frame.goal), fill=_GOAL, width=width + 5, joint="curve")
+        draw.line(to_pixels(frame.goal), fill=PALETTE["goal"], width=width + 5, joint="curve")
         for ghost in frame.ghosts:
             draw.line(to_pixels(ghost), fill=_GHOST, width=1)
         cord = to_pixels(frame.shape)
-        draw.line(cord, fill=_CORD, width=width, joint="curve")
+        draw.line(cord, fill=PALETTE["cord"], width=width, joint="curve")
         hx, hy = cord[0]
         r = 2 * width
-        draw.ellipse([hx - r, hy - r, hx + r, hy + r], fill=_HEAD)
+        draw.ellipse([hx - r, hy - r, hx + r, hy + r], fill=PALETTE["head"])
+        r = 3 * width
+        draw.ellipse([hx - r, hy - r, hx + r, hy + r], outline=PALETTE["gripper"], width=width)
         if frame.caption:
             draw.text((6, 4), frame.caption, fill=_TEXT)
-        draw.text((6, size - 16), "cord (blue), goal (green), current plan (pale)", fill=_TEXT)
+        for k, line in enumerate(LEGEND):
+            draw.text((6, size - 14 * (len(LEGEND) - k) - 2), line, fill=_TEXT)
         images.append(image.convert("P", palette=Image.Palette.ADAPTIVE, colors=64))
     with atomic_path(path) as tmp:
         images[0].save(tmp, format="GIF", save_all=True, append_images=images[1:],
@@ -94,84 +99,14 @@ def save_episode_gif(frames: list[Frame], path: str | os.PathLike, size: int = 4
     return path
 
 
-def save_interpolation_png(
-    path: str | os.PathLike,
-    interpolation: np.ndarray,
-    start: np.ndarray,
-    goal: np.ndarray,
-    planned: np.ndarray | None = None,
-    real: np.ndarray | None = None,
-    title: str = "",
-) -> Path:
-    """The paper's Fig. 2: decoded shapes along the latent line from start to goal.
-
-    With ``planned`` and ``real`` a second panel compares a plan's shapes with what the
-    simulator did under the same end motion (where they part ways).
-
-    Args:
-        path: The PNG to write.
-        interpolation: ``(T, n, 2)`` decoded shapes of the latent line.
-        start: ``(n, 2)`` the real start shape.
-        goal: ``(n, 2)`` the real goal shape.
-        planned: ``(K, n, 2)`` a plan's shapes (optional).
-        real: ``(K, n, 2)`` the simulator's shapes at the same end positions (optional).
-        title: Figure title.
-
-    Returns:
-        The path written.
-    """
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    path = Path(path)
-    panels = 2 if planned is not None and real is not None else 1
-    fig, axes = plt.subplots(1, panels, figsize=(5.2 * panels, 5.0), squeeze=False)
-    colours = plt.cm.viridis(np.linspace(0.0, 1.0, len(interpolation)))
-    ax = axes[0, 0]
-    for shape, colour in zip(interpolation, colours):
-        ax.plot(shape[:, 0], shape[:, 1], "-", color=colour, lw=1.5)
-        ax.plot(shape[0, 0], shape[0, 1], "o", color=colour, ms=3)
-    ax.plot(start[:, 0], start[:, 1], "k--", lw=1, label="start (real)")
-    ax.plot(goal[:, 0], goal[:, 1], "k:", lw=1.5, label="goal (real)")
-    ax.set_title("latent interpolation, start (purple) to goal (yellow)", fontsize=9)
-    ax.legend(fontsize=8, loc="best")
-    if panels == 2:
-        ax = axes[0, 1]
-        idx = np.unique(np.linspace(0, len(planned) - 1, min(len(planned), 8)).round().astype(int))
-        colours = plt.cm.plasma(np.linspace(0.0, 0.85, len(idx)))
-        for i, colour in zip(idx, colours):
-            ax.plot(planned[i, :, 0], planned[i, :, 1], "-", color=colour, lw=1.5)
-            ax.plot(real[i, :, 0], real[i, :, 1], "--", color=colour, lw=1.0)
-        ax.plot([], [], "k-", label="planned (surrogate)")
-        ax.plot([], [], "k--", label="real (simulator)")
-        ax.set_title("latent-tree plan vs the real cord at the same head positions", fontsize=9)
-        ax.legend(fontsize=8, loc="best")
-    for ax in axes[0]:
-        ax.set_aspect("equal", adjustable="datalim")
-        ax.set_xlabel("x (m)")
-        ax.set_ylabel("y (m)")
-        ax.grid(alpha=0.3)
-    if title:
-        fig.suptitle(title, fontsize=10)
-    fig.tight_layout()
-    try:
-        with atomic_path(path) as tmp:
-            fig.savefig(tmp, format="png", dpi=110)
-    finally:
-        plt.close(fig)
-    return path
-
-
 def record_episode(
-    policy: object, env: object, *, seed: int | None = None, options: dict | None = None,
+    policy: Policy, env: Any, *, seed: int | None = None, options: dict | None = None,
     ghosts: int = 12,
 ) -> tuple[list[Frame], dict]:
     """Run one episode and keep, at every step, the cord, the goal and the current plan.
 
     Args:
-        policy: An SB3-style policy; if it has ``plans``, the latest plan's shapes are the
+        policy: An SB3-style policy; for a ``PlanningPolicy`` the latest plan's shapes are the
             ghosts of each frame.
         env: A ``dlo_env`` goal environment.
         seed: Reset seed.
@@ -184,15 +119,13 @@ def record_episode(
     obs, info = env.reset(seed=seed, options=options)
     n = obs["achieved_goal"].size // 2
     goal = obs["desired_goal"].reshape(n, 2)
-    if hasattr(policy, "reset"):
-        policy.reset()
     empty = np.zeros((0, n, 2), dtype=np.float32)
 
     def current_ghosts() -> np.ndarray:
-        plans = getattr(policy, "plans", None)
-        if not plans:
+        plan = policy.episode_stats().latest_plan if isinstance(policy, PlanningPolicy) else None
+        if plan is None:
             return empty
-        shapes = plans[-1].shapes
+        shapes = plan.shapes
         idx = np.unique(np.linspace(0, len(shapes) - 1, min(ghosts, len(shapes))).astype(int))
         return shapes[idx]
 

@@ -9,17 +9,16 @@ import numpy as np
 import pytest
 
 import dlo_env  # noqa: F401
-from dlo_env.tasks import suite_seeds
-from planners import (
+from dlo_bench import (
     FidelityProfile,
-    PlannerPolicy,
-    StraightLinePolicy,
     divergence,
     evaluate,
     format_divergence,
     format_table,
+    write_evaluation,
 )
-from planners.evaluation import write_evaluation
+from dlo_env.tasks import suite_seeds
+from planners import PlannerPolicy, StraightLinePolicy
 
 ENV_ID = "dlo_env/DLOEndpoint-v0"
 
@@ -32,17 +31,16 @@ class ZeroPolicy:
 
 
 class ReplayPolicy:
-    """Replays given action sequences, one per episode (advanced by ``reset``)."""
+    """Replays given action sequences, one per episode (advanced at every ``episode_start``)."""
 
     def __init__(self, episodes: list[np.ndarray]) -> None:
         self.episodes = episodes
         self.index = -1
 
-    def reset(self) -> None:
-        self.index += 1
-        self.step = 0
-
     def predict(self, observation, state=None, episode_start=None, deterministic=True):
+        if episode_start is not None and bool(episode_start[0]):
+            self.index += 1
+            self.step = 0
         actions = self.episodes[self.index]
         action = actions[self.step] if self.step < len(actions) else np.zeros(2, np.float32)
         self.step += 1
@@ -171,3 +169,29 @@ def test_evaluate_records_the_first_plan_and_where_it_parts_ways_with_the_cord(t
     _, json_path = write_evaluation(result, tmp_path, "toy-d1")
     data = json.loads(json_path.read_text())
     assert len(data["fidelity_profiles"]) == 2
+
+
+class CountingPlanner:
+    """A planning policy that never moves and reports made-up statistics through the protocol."""
+
+    def predict(self, observation, state=None, episode_start=None, deterministic=True):
+        return np.zeros(2, dtype=np.float32), state
+
+    def reset(self) -> None:
+        pass
+
+    def check_env(self, env) -> None:
+        pass
+
+    def episode_stats(self):
+        from planners import EpisodeStats
+
+        return EpisodeStats(plans=3, failures=1, seconds=0.25, goal_inversion_error=0.004)
+
+
+def test_evaluate_records_what_a_planning_policy_reports_through_episode_stats():
+    result = evaluate(CountingPlanner(), ENV_ID, difficulty=1, episodes=1, seed=0)
+    record = result.records[0]
+    assert (record.plans, record.planning_failures) == (3, 1)
+    assert record.planning_seconds == 0.25 and record.goal_inversion_error == 0.004
+    assert math.isnan(record.fidelity)  # no first plan reported: nothing to simulate

@@ -3,9 +3,10 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from dlo_bench import transition_fidelity
 from dlo_env.cord import Cord
 from dlo_env.tasks import apply_action, split_move
-from planners import Plan, transition_fidelity
+from planners import Plan
 
 
 def _straight_start() -> np.ndarray:

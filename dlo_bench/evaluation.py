@@ -1,43 +1,25 @@
 """The evaluation harness: run any policy in a ``dlo_env`` environment and score what the cord did.
 
-A policy is anything with Stable-Baselines3's ``predict(obs, state, episode_start,
-deterministic) -> (action, state)``: ``PlannerPolicy``, ``StraightLinePolicy``, the
-physics-in-the-loop planner, or a trained SB3 model. ``reset()`` is called at every episode
-start when the policy has one. Policies that plan expose ``stats`` (with ``seconds``, and
-``plans``/``failures`` counts); those with a ``plans`` list get the transition fidelity of the
-plan made from the episode's start.
+A policy is a :class:`planners.interfaces.Policy`, Stable-Baselines3's ``predict(obs, state,
+episode_start, deterministic) -> (action, state)``: ``PlannerPolicy``, ``StraightLinePolicy``,
+the physics-in-the-loop planner, or a trained SB3 model. The first step of every episode has
+``episode_start`` true (the policies reset on it). A :class:`planners.interfaces.PlanningPolicy`
+is asked for its ``episode_stats()`` after every episode; when it reports a first plan, that
+plan's transition fidelity is measured against the simulator.
 """
 
 from __future__ import annotations
 
-import csv
-import io
-import json
 import math
-import os
 import time
-from dataclasses import asdict, dataclass, field, fields
-from pathlib import Path
+from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
 
-from dlo_env.atomic import write_text_atomic
+from dlo_bench.progress import progress_bar
+from planners.interfaces import EpisodeStats, PlanningPolicy, Policy
 
-#: Columns of the printed table: (summary key, header, format).
-TABLE_COLUMNS = (
-    ("agent", "agent", "{}"),
-    ("difficulty", "diff", "{}"),
-    ("episodes", "episodes", "{}"),
-    ("success_rate", "success", "{:.0%}"),
-    ("median_final_error", "median err (cm)", "{:.2f}"),
-    ("mean_final_error", "mean err (cm)", "{:.2f}"),
-    ("mean_steps", "steps", "{:.1f}"),
-    ("median_planning_seconds", "plan s (median)", "{:.3f}"),
-    ("planning_failures", "plan fails", "{}"),
-    ("mean_fidelity", "fidelity (cm)", "{:.2f}"),
-)
-_CENTIMETRES = {"median_final_error", "mean_final_error", "mean_fidelity"}
 #: Bins of the distance the manipulated end has travelled along a plan, metres: the
 #: divergence table reports the mean fidelity error of the planned shapes in each.
 TRAVEL_BINS = (0.0, 0.05, 0.10, 0.20, 0.30, math.inf)
@@ -221,8 +203,72 @@ def _episode_options(
     return [None if difficulty is None else {"difficulty": difficulty}] * episodes
 
 
+def _run_episode(
+    policy: Policy, env: Any, index: int, reset_seed: int | None, options: dict[str, Any] | None,
+    difficulty: int | None, fidelity: bool,
+) -> tuple[EpisodeRecord, FidelityProfile | None]:
+    """One episode of ``policy`` in ``env``: its record, and the first plan's fidelity profile."""
+    from dlo_bench.fidelity import transition_fidelity
+    from dlo_env.shapes import error as shape_error
+
+    base = env.unwrapped
+    n = base.params.n_points
+    obs, info = env.reset(seed=reset_seed, options=options)
+    start = np.asarray(obs["achieved_goal"], dtype=np.float32).reshape(n, 2)
+    goal = np.asarray(obs["desired_goal"], dtype=np.float32).reshape(n, 2)
+    task_seed = int(info.get("task_seed", -1))
+    task_difficulty = int(info.get("difficulty", difficulty or 0))
+    state, episode_start, steps, seconds = None, True, 0, 0.0
+    while True:
+        t0 = time.perf_counter()
+        action, state = policy.predict(
+            obs, state=state, episode_start=np.array([episode_start]), deterministic=True
+        )
+        seconds += time.perf_counter() - t0
+        episode_start = False
+        obs, _, terminated, truncated, info = env.step(np.asarray(action).reshape(-1))
+        steps += 1
+        if terminated or truncated:
+            break
+    planned = isinstance(policy, PlanningPolicy)
+    stats = policy.episode_stats() if planned else EpisodeStats(seconds=seconds)
+    plan = stats.first_plan
+    fid = plan_final = fid_max = travel = start_inv = math.nan
+    profile = None
+    if plan is not None:
+        travel = plan.path_length
+        start_inv = float(plan.stats.get("start_inversion_error", math.nan))
+        if fidelity:
+            result = transition_fidelity(plan, start, params=base.params, max_step=base.max_step)
+            fid, plan_final, fid_max = result.mean_error, result.final_error, result.max_error
+            profile = FidelityProfile(index, result.errors, result.travel, result.move)
+    record = EpisodeRecord(
+        episode=index,
+        seed=-1 if reset_seed is None else int(reset_seed),
+        task_seed=task_seed,
+        difficulty=task_difficulty,
+        success=bool(info["is_success"]),
+        start_error=float(shape_error(start, goal)),
+        final_error=float(info["error"]),
+        final_max_error=float(info["max_error"]),
+        steps=steps,
+        seconds=seconds,
+        planning_seconds=stats.seconds,
+        plans=stats.plans,
+        planning_failures=stats.failures,
+        fidelity=fid,
+        plan_final_error=plan_final,
+        fidelity_max=fid_max,
+        plan_moves=len(plan.nodes) - 1 if plan is not None else 0,
+        plan_travel=travel,
+        start_inversion_error=start_inv,
+        goal_inversion_error=stats.goal_inversion_error,
+    )
+    return record, profile
+
+
 def evaluate(
-    policy: Any,
+    policy: Policy,
     env_id: str = "dlo_env/DLOEndpoint-v0",
     difficulty: int | None = None,
     suite: str | None = None,
@@ -238,7 +284,7 @@ def evaluate(
     """Run ``episodes`` episodes of ``policy`` and score them against the real cord.
 
     Args:
-        policy: Anything with SB3's ``predict(obs, state, episode_start, deterministic)``.
+        policy: A ``planners.interfaces.Policy`` (SB3's ``predict``).
         env_id: A ``dlo_env`` goal environment id.
         difficulty: Straight moves per task (the environment's default if None).
         suite: A named suite (``linear-1``, ...) instead of ``difficulty``: its fixed tasks.
@@ -256,10 +302,8 @@ def evaluate(
     import gymnasium as gym
 
     import dlo_env  # noqa: F401  (registers the environments)
-    from dlo_env.shapes import error as shape_error
-    from planners.fidelity import transition_fidelity
 
-    if not callable(getattr(policy, "predict", None)):
+    if not isinstance(policy, Policy):
         raise ValueError(f"policy must have a predict() method, got {type(policy).__name__}")
     if not (isinstance(episodes, int) and episodes >= 1):
         raise ValueError(f"episodes must be an int >= 1, got {episodes!r}")
@@ -267,77 +311,20 @@ def evaluate(
         raise ValueError("give difficulty or suite, not both")
     env = gym.make(env_id, **(env_kwargs or {}))
     try:
-        base = env.unwrapped
-        if hasattr(policy, "check_env"):
+        if isinstance(policy, PlanningPolicy):
             policy.check_env(env)
-        grasp = getattr(getattr(base, "cord", None), "grasp", "head")
-        options = _episode_options(difficulty, suite, split, episodes, grasp)
-        n = base.params.n_points
+        options = _episode_options(difficulty, suite, split, episodes, env.unwrapped.cord.grasp)
+        bar = progress_bar(episodes, agent or "evaluate", "episode") if progress else None
         records, profiles = [], []
-        bar = None
-        if progress:
-            from tqdm import tqdm
-
-            bar = tqdm(total=episodes, desc=agent or "evaluate", unit="episode")
         for i, opts in enumerate(options):
             reset_seed = seed + i if suite is None else None
-            obs, info = env.reset(seed=reset_seed, options=opts)
-            start = np.asarray(obs["achieved_goal"], dtype=np.float32).reshape(n, 2)
-            goal = np.asarray(obs["desired_goal"], dtype=np.float32).reshape(n, 2)
-            task_seed = int(info.get("task_seed", -1))
-            task_difficulty = int(info.get("difficulty", difficulty or 0))
-            if hasattr(policy, "reset"):
-                policy.reset()
-            state, episode_start, steps, seconds = None, True, 0, 0.0
-            while True:
-                t0 = time.perf_counter()
-                action, state = policy.predict(
-                    obs, state=state, episode_start=np.array([episode_start]), deterministic=True
-                )
-                seconds += time.perf_counter() - t0
-                episode_start = False
-                obs, _, terminated, truncated, info = env.step(np.asarray(action).reshape(-1))
-                steps += 1
-                if terminated or truncated:
-                    break
-            stats = getattr(policy, "stats", None)
-            plans = list(getattr(policy, "plans", []) or [])
-            fid = plan_final = fid_max = travel = start_inv = math.nan
-            if plans:
-                travel = plans[0].path_length
-                start_inv = float(plans[0].stats.get("start_inversion_error", math.nan))
-            if fidelity and plans:
-                result = transition_fidelity(plans[0], start, params=base.params,
-                                             max_step=base.max_step)
-                fid, plan_final, fid_max = result.mean_error, result.final_error, result.max_error
-                profiles.append(FidelityProfile(i, result.errors, result.travel, result.move))
-            records.append(
-                EpisodeRecord(
-                    episode=i,
-                    seed=-1 if reset_seed is None else int(reset_seed),
-                    task_seed=task_seed,
-                    difficulty=task_difficulty,
-                    success=bool(info["is_success"]),
-                    start_error=float(shape_error(start, goal)),
-                    final_error=float(info["error"]),
-                    final_max_error=float(info["max_error"]),
-                    steps=steps,
-                    seconds=seconds,
-                    planning_seconds=float(getattr(stats, "seconds", seconds)),
-                    plans=int(getattr(stats, "plans", 0)),
-                    planning_failures=int(getattr(stats, "failures", 0)),
-                    fidelity=fid,
-                    plan_final_error=plan_final,
-                    fidelity_max=fid_max,
-                    plan_moves=len(plans[0].nodes) - 1 if plans else 0,
-                    plan_travel=travel,
-                    start_inversion_error=start_inv,
-                    goal_inversion_error=float(getattr(stats, "goal_inversion_error", math.nan)),
-                )
-            )
+            record, profile = _run_episode(policy, env, i, reset_seed, opts, difficulty, fidelity)
+            records.append(record)
+            if profile is not None:
+                profiles.append(profile)
             if bar is not None:
                 bar.update(1)
-                bar.set_postfix(success=f"{np.mean([r.success for r in records]):.0%}")
+                bar.set_postfix_str(f"success {np.mean([r.success for r in records]):.0%}")
         if bar is not None:
             bar.close()
     finally:
@@ -345,113 +332,3 @@ def evaluate(
     summary = summarise(records, agent=agent, env_id=env_id)
     summary["divergence"] = divergence(profiles)
     return Evaluation(records=records, summary=summary, profiles=profiles)
-
-
-def format_table(summaries: list[dict[str, Any]]) -> str:
-    """A plain-text table of summaries, one row each (errors and fidelity in centimetres)."""
-    rows = [[header for _, header, _ in TABLE_COLUMNS]]
-    for s in summaries:
-        row = []
-        for key, _, fmt in TABLE_COLUMNS:
-            value = s.get(key, "")
-            if isinstance(value, float) and math.isnan(value):
-                row.append("-")
-                continue
-            if key in _CENTIMETRES and isinstance(value, float):
-                value = 100.0 * value
-            row.append(fmt.format(value) if value != "" else "")
-        rows.append(row)
-    widths = [max(len(r[c]) for r in rows) for c in range(len(rows[0]))]
-    lines = ["  ".join(cell.rjust(w) for cell, w in zip(r, widths)) for r in rows]
-    lines.insert(1, "  ".join("-" * w for w in widths))
-    return "\n".join(lines)
-
-
-def format_divergence(summaries: list[dict[str, Any]]) -> str:
-    """A plain-text table of where plans and the real cord part ways (centimetres).
-
-    One row per summary that has plans: the mean error at the plan's first shape (the start
-    inversion), by the distance the end has travelled, by straight move, at the plan's last
-    shape, and between the plan's last shape and the real cord at rest after it.
-    """
-    rows = []
-    for s in summaries:
-        d = s.get("divergence") or {}
-        if not d.get("shapes"):
-            continue
-        rows.append((s, d))
-    if not rows:
-        return ""
-    travel_keys = list(rows[0][1]["by_travel"])
-    move_keys = list(rows[0][1]["by_move"])
-    header = (["agent", "diff", "plans", "at start"] + [f"travel {k}" for k in travel_keys]
-              + [f"move {k}" for k in move_keys] + ["at end", "end at rest"])
-    table = [header]
-    for s, d in rows:
-        values = ([d["at_start"]] + [d["by_travel"].get(k, math.nan) for k in travel_keys]
-                  + [d["by_move"].get(k, math.nan) for k in move_keys]
-                  + [d["at_end"], s.get("mean_plan_final_error", math.nan)])
-        cells = ["-" if not math.isfinite(v) else f"{100 * v:.2f}" for v in values]
-        table.append([str(s.get("agent", "")), str(s.get("difficulty", "")),
-                      str(d["plans"])] + cells)
-    widths = [max(len(r[c]) for r in table) for c in range(len(header))]
-    lines = ["  ".join(cell.rjust(w) for cell, w in zip(r, widths)) for r in table]
-    lines.insert(1, "  ".join("-" * w for w in widths))
-    return "\n".join(lines)
-
-
-def json_ready(value: Any) -> Any:
-    """``value`` with non-finite floats as None (strict JSON), recursively."""
-    if isinstance(value, float) and not math.isfinite(value):
-        return None
-    if isinstance(value, dict):
-        return {k: json_ready(v) for k, v in value.items()}
-    if isinstance(value, (list, tuple)):
-        return [json_ready(v) for v in value]
-    if isinstance(value, (np.integer, np.floating, np.bool_)):
-        return json_ready(value.item())
-    return value
-
-
-def write_summaries(summaries: list[dict[str, Any]], path: str | os.PathLike) -> Path:
-    """Write a list of summaries to a JSON file atomically (NaN becomes ``null``)."""
-    return write_text_atomic(path, json.dumps(json_ready(summaries), indent=2) + "\n")
-
-
-def write_evaluation(
-    evaluation: Evaluation,
-    folder: str | os.PathLike,
-    name: str,
-    extra: dict[str, Any] | None = None,
-) -> tuple[Path, Path]:
-    """Write ``<name>.csv`` (one row per episode) and ``<name>.json`` (summary, records, extra).
-
-    Files are written atomically; NaN becomes an empty CSV cell and JSON ``null``.
-
-    Returns:
-        The CSV and JSON paths.
-    """
-    folder = Path(folder)
-    folder.mkdir(parents=True, exist_ok=True)
-    names = [f.name for f in fields(EpisodeRecord)]
-    buffer = io.StringIO()
-    writer = csv.DictWriter(buffer, fieldnames=names)
-    writer.writeheader()
-    for record in evaluation.records:
-        row = asdict(record)
-        writer.writerow({k: ("" if isinstance(v, float) and math.isnan(v) else v)
-                         for k, v in row.items()})
-    csv_path, json_path = folder / f"{name}.csv", folder / f"{name}.json"
-    write_text_atomic(csv_path, buffer.getvalue())
-    data = {
-        "summary": evaluation.summary,
-        "records": [asdict(r) for r in evaluation.records],
-        "fidelity_profiles": [
-            {"episode": p.episode, "errors": p.errors.tolist(), "travel": p.travel.tolist(),
-             "move": p.move.tolist()}
-            for p in evaluation.profiles
-        ],
-        **(extra or {}),
-    }
-    write_text_atomic(json_path, json.dumps(json_ready(data), indent=2) + "\n")
-    return csv_path, json_path

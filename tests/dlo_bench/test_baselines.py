@@ -10,11 +10,8 @@ import numpy as np
 import pytest
 
 import dlo_env  # noqa: F401  (registers the environments)
-from dlo_env.tasks import load_suite
-from planners.agents import build_agent
-from planners.evaluation import evaluate
-from planners.physics_mpc import PhysicsMPCConfig, PhysicsMPCPolicy
-from planners.rl_baseline import (
+from dlo_bench import build_agent, evaluate
+from dlo_bench.baselines import (
     BaselineConfig,
     RandomDifficulty,
     load_baseline,
@@ -22,6 +19,8 @@ from planners.rl_baseline import (
     read_monitor_logs,
     train_baseline,
 )
+from dlo_env.tasks import load_suite
+from planners.physics_mpc import PhysicsMPCConfig, PhysicsMPCPolicy
 
 ENV_ID = "dlo_env/DLOEndpoint-v0"
 #: A tiny run: the plumbing, not the learning, is tested.

@@ -1,4 +1,5 @@
-"""Fixtures of the planner tests: toy models, so no test depends on a trained checkpoint."""
+"""Fixtures shared by the tests: toy models, so no planner or harness test needs a trained
+checkpoint."""
 
 from __future__ import annotations
 

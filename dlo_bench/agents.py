@@ -1,0 +1,192 @@
+"""The agent registry: one table maps an agent's name to its builder, defaults and environments.
+
+``build_agent(name, env, **options)`` makes the policy called ``name`` for ``env``; every
+command, the benchmark and the examples build agents through it, so a name means the same agent
+everywhere. ``sb3:PATH`` loads any folder written by ``dlo baseline``. Adding an agent is one
+entry in ``AGENTS``.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Mapping
+from dataclasses import dataclass, field, fields, replace
+from pathlib import Path
+from typing import Any
+
+from dlo_bench.paths import shipped_baseline
+from planners.interfaces import Policy, ShapeSurrogate
+from planners.policy import DEFAULT_REPLAN_EVERY
+
+ENDPOINT = "dlo_env/DLOEndpoint-v0"
+DUAL_ENDPOINT = "dlo_env/DLODualEndpoint-v0"
+#: Prefix of an agent name that loads a ``dlo baseline`` folder: ``sb3:PATH``.
+SB3_PREFIX = "sb3:"
+
+
+@dataclass(frozen=True)
+class AgentOptions:
+    """What a builder may be told; fields an agent does not use are ignored by it.
+
+    Attributes:
+        model: Shape model of the latent-tree agents: a loaded model, a file or folder, or None
+            for the shipped one.
+        baseline: Folder of a ``dlo baseline`` run for the RL agents (None: the shipped one).
+        seed: Seed of the planner's sampling.
+        replan_every: Steps between the checks of ``latent-tree-closed``.
+        max_seconds: Time budget of one latent-tree plan, seconds (None: ``TreeConfig``'s).
+        device: Torch device of the RL agents.
+    """
+
+    model: ShapeSurrogate | str | Path | None = None
+    baseline: str | Path | None = None
+    seed: int = 0
+    replan_every: int = DEFAULT_REPLAN_EVERY
+    max_seconds: float | None = None
+    device: str = "cpu"
+
+
+@dataclass(frozen=True)
+class AgentSpec:
+    """One registered agent.
+
+    Attributes:
+        name: The agent's name on the command line and in tables.
+        summary: One line saying what it is.
+        build: ``build(env, options) -> policy``.
+        environments: Environment ids it acts in.
+        extra: The ``pip install "dlo[EXTRA]"`` it needs beyond the core ("" for none).
+        shape_model: Whether it plans on a shape model (``options.model``).
+        defaults: ``AgentOptions`` fields this agent sets differently.
+    """
+
+    name: str
+    summary: str
+    build: Callable[[Any, AgentOptions], Policy]
+    environments: tuple[str, ...] = (ENDPOINT,)
+    extra: str = ""
+    shape_model: bool = False
+    defaults: Mapping[str, Any] = field(default_factory=dict)
+
+
+def _max_step(env: Any) -> float:
+    return float(env.unwrapped.max_step)
+
+
+def load_shape_model(model: ShapeSurrogate | str | Path | None) -> ShapeSurrogate:
+    """``model`` itself when it is loaded, else ``ShapeModel.load_or_pretrained(model)``.
+
+    Raises:
+        FileNotFoundError: Saying "no shape model" and where, when the file is missing.
+    """
+    if isinstance(model, ShapeSurrogate):
+        return model
+    from latent_model import ShapeModel
+
+    try:
+        return ShapeModel.load_or_pretrained(model, device="cpu")
+    except FileNotFoundError as exc:
+        raise FileNotFoundError(f"no shape model: {exc} (train one with `dlo train`)") from exc
+
+
+def _latent_tree(closed: bool) -> Callable[[Any, AgentOptions], Policy]:
+    def build(env: Any, options: AgentOptions) -> Policy:
+        from planners.latent_tree import LatentTreePlanner
+        from planners.policy import PlannerPolicy
+
+        model = load_shape_model(options.model)
+        budget = {} if options.max_seconds is None else {"max_seconds": options.max_seconds}
+        planner = LatentTreePlanner(model, seed=options.seed, **budget)
+        policy = PlannerPolicy(model, planner, max_step=_max_step(env),
+                               replan_every=options.replan_every if closed else None)
+        policy.check_env(env)
+        return policy
+
+    return build
+
+
+def _straight_line(env: Any, options: AgentOptions) -> Policy:
+    from planners.straight_line import StraightLinePolicy
+
+    return StraightLinePolicy(max_step=_max_step(env))
+
+
+def _physics_mpc(env: Any, options: AgentOptions) -> Policy:
+    from planners.physics_mpc import PhysicsMPCConfig, PhysicsMPCPolicy
+
+    return PhysicsMPCPolicy.for_env(env, PhysicsMPCConfig(seed=options.seed))
+
+
+def _sb3(algo: str) -> Callable[[Any, AgentOptions], Policy]:
+    def build(env: Any, options: AgentOptions) -> Policy:
+        from dlo_bench.baselines import load_baseline
+
+        folder = options.baseline if options.baseline is not None else shipped_baseline(algo)
+        return load_baseline(folder, device=options.device, algo=algo)
+
+    return build
+
+
+#: Every agent by name, in the benchmark's table order.
+AGENTS: dict[str, AgentSpec] = {spec.name: spec for spec in (
+    AgentSpec("straight-line", "moves the head straight to the goal's head (reference)",
+              _straight_line),
+    AgentSpec("latent-tree", "the paper's latent tree, planned once (open loop)",
+              _latent_tree(closed=False), extra="model", shape_model=True),
+    AgentSpec("latent-tree-closed", "the latent tree, checked and replanned every few steps",
+              _latent_tree(closed=True), extra="model", shape_model=True),
+    AgentSpec("physics-mpc", "CEM over straight moves with the simulator as the model",
+              _physics_mpc, environments=(ENDPOINT, DUAL_ENDPOINT)),
+    AgentSpec("ppo", "the shipped PPO baseline (Stable-Baselines3)", _sb3("ppo"), extra="rl"),
+    AgentSpec("sac-her", "the shipped SAC + HER baseline (Stable-Baselines3)", _sb3("sac-her"),
+              extra="rl"),
+)}
+
+
+def agent_names() -> tuple[str, ...]:
+    """Registered names and the ``sb3:PATH`` form, for help texts and error messages."""
+    return (*AGENTS, f"{SB3_PREFIX}PATH")
+
+
+def agent_spec(name: str) -> AgentSpec:
+    """The spec of ``name``; ``sb3:PATH`` gives an RL agent loading that folder.
+
+    Raises:
+        ValueError: For an unknown name.
+    """
+    if name in AGENTS:
+        return AGENTS[name]
+    if name.startswith(SB3_PREFIX) and len(name) > len(SB3_PREFIX):
+        folder = name[len(SB3_PREFIX):]
+        return AgentSpec(name, f"the baseline in {folder}", _sb3(""), extra="rl",
+                         defaults={"baseline": folder})
+    raise ValueError(f"agent name must be one of {', '.join(agent_names())}, got {name!r}")
+
+
+def build_agent(name: str, env: Any, **options: Any) -> Policy:
+    """The policy called ``name``, matched to ``env`` (its cord, grasp and ``max_step``).
+
+    Args:
+        name: A key of ``AGENTS``, or ``sb3:PATH`` with a folder written by ``dlo baseline``.
+        env: The environment the agent will act in (wrapped or not).
+        **options: ``AgentOptions`` fields (``model``, ``baseline``, ``seed``,
+            ``replan_every``, ``max_seconds``, ``device``); None keeps the default.
+
+    Returns:
+        A policy with SB3's ``predict``.
+
+    Raises:
+        ValueError: For an unknown name or option, an environment the agent does not act in,
+            or a model that does not fit the environment.
+        FileNotFoundError: When a model or baseline file is missing.
+    """
+    spec = agent_spec(name)
+    known = {f.name for f in fields(AgentOptions)}
+    unknown = sorted(set(options) - known)
+    if unknown:
+        raise ValueError(f"build_agent options must be some of {sorted(known)}, got {unknown}")
+    env_id = getattr(env.unwrapped.spec, "id", None)
+    if env_id is not None and env_id not in spec.environments:
+        raise ValueError(f"agent {name!r} acts in {', '.join(spec.environments)}, "
+                         f"got environment {env_id!r}")
+    given = {k: v for k, v in options.items() if v is not None}  # None: the default
+    return spec.build(env, replace(AgentOptions(), **{**spec.defaults, **given}))

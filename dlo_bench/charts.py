@@ -1,0 +1,161 @@
+"""Charts drawn with matplotlib (the ``model`` and ``rl`` extras): the paper's interpolation
+figure, the benchmark's bar chart and a baseline's learning curve.
+
+matplotlib is imported inside the functions, so the harness runs without it; files are written
+atomically.
+"""
+
+from __future__ import annotations
+
+import os
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from dlo_env.atomic import atomic_path
+
+
+def _pyplot() -> Any:
+    """``matplotlib.pyplot`` on the file-only Agg backend."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    return plt
+
+
+def _save(fig: Any, path: str | os.PathLike, dpi: int) -> Path:
+    """Write ``fig`` as a PNG atomically and close it."""
+    plt = _pyplot()
+    try:
+        with atomic_path(path) as tmp:
+            fig.savefig(tmp, format="png", dpi=dpi)
+    finally:
+        plt.close(fig)
+    return Path(path)
+
+
+def save_interpolation_png(
+    path: str | os.PathLike,
+    interpolation: np.ndarray,
+    start: np.ndarray,
+    goal: np.ndarray,
+    planned: np.ndarray | None = None,
+    real: np.ndarray | None = None,
+    title: str = "",
+) -> Path:
+    """The paper's Fig. 2: decoded shapes along the latent line from start to goal.
+
+    With ``planned`` and ``real`` a second panel compares a plan's shapes with what the
+    simulator did under the same end motion (where they part ways).
+
+    Args:
+        path: The PNG to write.
+        interpolation: ``(T, n, 2)`` decoded shapes of the latent line.
+        start: ``(n, 2)`` the real start shape.
+        goal: ``(n, 2)`` the real goal shape.
+        planned: ``(K, n, 2)`` a plan's shapes (optional).
+        real: ``(K, n, 2)`` the simulator's shapes at the same end positions (optional).
+        title: Figure title.
+
+    Returns:
+        The path written.
+    """
+    plt = _pyplot()
+
+    path = Path(path)
+    panels = 2 if planned is not None and real is not None else 1
+    fig, axes = plt.subplots(1, panels, figsize=(5.2 * panels, 5.0), squeeze=False)
+    colours = plt.cm.viridis(np.linspace(0.0, 1.0, len(interpolation)))
+    ax = axes[0, 0]
+    for shape, colour in zip(interpolation, colours):
+        ax.plot(shape[:, 0], shape[:, 1], "-", color=colour, lw=1.5)
+        ax.plot(shape[0, 0], shape[0, 1], "o", color=colour, ms=3)
+    ax.plot(start[:, 0], start[:, 1], "k--", lw=1, label="start (real)")
+    ax.plot(goal[:, 0], goal[:, 1], "k:", lw=1.5, label="goal (real)")
+    ax.set_title("latent interpolation, start (purple) to goal (yellow)", fontsize=9)
+    ax.legend(fontsize=8, loc="best")
+    if panels == 2:
+        ax = axes[0, 1]
+        idx = np.unique(np.linspace(0, len(planned) - 1, min(len(planned), 8)).round().astype(int))
+        colours = plt.cm.plasma(np.linspace(0.0, 0.85, len(idx)))
+        for i, colour in zip(idx, colours):
+            ax.plot(planned[i, :, 0], planned[i, :, 1], "-", color=colour, lw=1.5)
+            ax.plot(real[i, :, 0], real[i, :, 1], "--", color=colour, lw=1.0)
+        ax.plot([], [], "k-", label="planned (surrogate)")
+        ax.plot([], [], "k--", label="real (simulator)")
+        ax.set_title("latent-tree plan vs the real cord at the same head positions", fontsize=9)
+        ax.legend(fontsize=8, loc="best")
+    for ax in axes[0]:
+        ax.set_aspect("equal", adjustable="datalim")
+        ax.set_xlabel("x (m)")
+        ax.set_ylabel("y (m)")
+        ax.grid(alpha=0.3)
+    if title:
+        fig.suptitle(title, fontsize=10)
+    fig.tight_layout()
+    return _save(fig, path, dpi=110)
+
+
+def plot_results(rows: list[dict[str, Any]], png: str | os.PathLike) -> None:
+    """Bar charts of success rate, median error and seconds per episode (missing rows skipped)."""
+    plt = _pyplot()
+
+    agents = list(dict.fromkeys(r["agent"] for r in rows))
+    difficulties = sorted({r["difficulty"] for r in rows})
+    by = {(r["agent"], r["difficulty"]): r for r in rows}
+    panels = (("success_rate", "success rate", 1.0, False),
+              ("median_error", "median final error (cm)", 100.0, False),
+              ("seconds_per_episode", "seconds per episode", 1.0, True))
+    fig, axes = plt.subplots(1, 3, figsize=(13, 4.2))
+    width = 0.8 / max(1, len(agents))
+    x = np.arange(len(difficulties))
+    for ax, (key, label, scale, log) in zip(axes, panels):
+        for i, agent in enumerate(agents):
+            values = []
+            for d in difficulties:
+                v = by.get((agent, d), {}).get(key)
+                values.append(np.nan if v is None else v * scale)
+            ax.bar(x + (i - (len(agents) - 1) / 2) * width, values, width, label=agent)
+        ax.set_xticks(x, [f"difficulty {d}" for d in difficulties])
+        ax.set_ylabel(label)
+        if log:
+            ax.set_yscale("log")
+        if key == "success_rate":
+            ax.set_ylim(0, 1)
+        if key == "median_error":
+            ax.axhline(2.0, color="k", lw=0.8, ls="--")  # the success threshold
+    handles, labels = axes[0].get_legend_handles_labels()
+    fig.legend(handles, labels, loc="lower center", ncol=len(agents), fontsize=8,
+               frameon=False)
+    missing = sorted({r["agent"] for r in rows if r["status"] != "ok"})
+    title = "dlo benchmark (test suites)"
+    if missing:
+        title += " — missing: " + ", ".join(missing)
+    fig.suptitle(title)
+    fig.tight_layout(rect=(0, 0.07, 1, 1))
+    _save(fig, png, dpi=100)
+
+
+def plot_learning_curve(monitor_dir: str | os.PathLike, png: str | os.PathLike,
+                        title: str = "") -> None:
+    """Episode return and success rate (moving averages) against environment steps."""
+    plt = _pyplot()
+
+    from dlo_bench.baselines import read_monitor_logs
+
+    logs = read_monitor_logs(monitor_dir)
+    fig, (ax1, ax2) = plt.subplots(1, 2, figsize=(9, 3.2))
+    if len(logs["reward"]):
+        k = max(1, len(logs["reward"]) // 50)
+        kernel = np.ones(k) / k
+        steps = logs["timesteps"][k - 1:]
+        ax1.plot(steps, np.convolve(logs["reward"], kernel, mode="valid"))
+        ax2.plot(steps, np.convolve(logs["is_success"], kernel, mode="valid"))
+    ax1.set(xlabel="environment steps", ylabel="episode return", title=f"{title} return")
+    ax2.set(xlabel="environment steps", ylabel="success rate", ylim=(0, 1),
+            title=f"{title} success")
+    fig.tight_layout()
+    _save(fig, png, dpi=100)

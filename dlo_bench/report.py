@@ -1,0 +1,146 @@
+"""Reports of evaluations: plain-text tables, and the per-episode CSV and JSON files.
+
+NaN becomes "-" in the tables, an empty CSV cell and JSON ``null``; files are written
+atomically.
+"""
+
+from __future__ import annotations
+
+import csv
+import io
+import json
+import math
+import os
+from dataclasses import asdict, fields
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from dlo_bench.evaluation import EpisodeRecord, Evaluation
+from dlo_env.atomic import write_text_atomic
+
+#: Columns of the printed table: (summary key, header, format).
+TABLE_COLUMNS = (
+    ("agent", "agent", "{}"),
+    ("difficulty", "diff", "{}"),
+    ("episodes", "episodes", "{}"),
+    ("success_rate", "success", "{:.0%}"),
+    ("median_final_error", "median err (cm)", "{:.2f}"),
+    ("mean_final_error", "mean err (cm)", "{:.2f}"),
+    ("mean_steps", "steps", "{:.1f}"),
+    ("median_planning_seconds", "plan s (median)", "{:.3f}"),
+    ("planning_failures", "plan fails", "{}"),
+    ("mean_fidelity", "fidelity (cm)", "{:.2f}"),
+)
+_CENTIMETRES = {"median_final_error", "mean_final_error", "mean_fidelity"}
+def aligned(rows: list[list[str]]) -> str:
+    """Rows of cells as right-aligned text columns, the first row a header underlined."""
+    widths = [max(len(r[c]) for r in rows) for c in range(len(rows[0]))]
+    lines = ["  ".join(cell.rjust(w) for cell, w in zip(r, widths)) for r in rows]
+    lines.insert(1, "  ".join("-" * w for w in widths))
+    return "\n".join(lines)
+
+
+def format_table(summaries: list[dict[str, Any]]) -> str:
+    """A plain-text table of summaries, one row each (errors and fidelity in centimetres)."""
+    rows = [[header for _, header, _ in TABLE_COLUMNS]]
+    for s in summaries:
+        row = []
+        for key, _, fmt in TABLE_COLUMNS:
+            value = s.get(key, "")
+            if isinstance(value, float) and math.isnan(value):
+                row.append("-")
+                continue
+            if key in _CENTIMETRES and isinstance(value, float):
+                value = 100.0 * value
+            row.append(fmt.format(value) if value != "" else "")
+        rows.append(row)
+    return aligned(rows)
+
+
+def format_divergence(summaries: list[dict[str, Any]]) -> str:
+    """A plain-text table of where plans and the real cord part ways (centimetres).
+
+    One row per summary that has plans: the mean error at the plan's first shape (the start
+    inversion), by the distance the end has travelled, by straight move, at the plan's last
+    shape, and between the plan's last shape and the real cord at rest after it.
+    """
+    rows = []
+    for s in summaries:
+        d = s.get("divergence") or {}
+        if not d.get("shapes"):
+            continue
+        rows.append((s, d))
+    if not rows:
+        return ""
+    travel_keys = list(rows[0][1]["by_travel"])
+    move_keys = list(rows[0][1]["by_move"])
+    header = (["agent", "diff", "plans", "at start"] + [f"travel {k}" for k in travel_keys]
+              + [f"move {k}" for k in move_keys] + ["at end", "end at rest"])
+    table = [header]
+    for s, d in rows:
+        values = ([d["at_start"]] + [d["by_travel"].get(k, math.nan) for k in travel_keys]
+                  + [d["by_move"].get(k, math.nan) for k in move_keys]
+                  + [d["at_end"], s.get("mean_plan_final_error", math.nan)])
+        cells = ["-" if not math.isfinite(v) else f"{100 * v:.2f}" for v in values]
+        table.append([str(s.get("agent", "")), str(s.get("difficulty", "")),
+                      str(d["plans"])] + cells)
+    return aligned(table)
+
+
+def json_ready(value: Any) -> Any:
+    """``value`` with non-finite floats as None (strict JSON), recursively."""
+    if isinstance(value, float) and not math.isfinite(value):
+        return None
+    if isinstance(value, dict):
+        return {k: json_ready(v) for k, v in value.items()}
+    if isinstance(value, (list, tuple)):
+        return [json_ready(v) for v in value]
+    if isinstance(value, (np.integer, np.floating, np.bool_)):
+        return json_ready(value.item())
+    return value
+
+
+def write_summaries(summaries: list[dict[str, Any]], path: str | os.PathLike) -> Path:
+    """Write a list of summaries to a JSON file atomically (NaN becomes ``null``)."""
+    return write_text_atomic(path, json.dumps(json_ready(summaries), indent=2) + "\n")
+
+
+def write_evaluation(
+    evaluation: Evaluation,
+    folder: str | os.PathLike,
+    name: str,
+    extra: dict[str, Any] | None = None,
+) -> tuple[Path, Path]:
+    """Write ``<name>.csv`` (one row per episode) and ``<name>.json`` (summary, records, extra).
+
+    Files are written atomically; NaN becomes an empty CSV cell and JSON ``null``.
+
+    Returns:
+        The CSV and JSON paths.
+    """
+    folder = Path(folder)
+    folder.mkdir(parents=True, exist_ok=True)
+    names = [f.name for f in fields(EpisodeRecord)]
+    buffer = io.StringIO()
+    writer = csv.DictWriter(buffer, fieldnames=names)
+    writer.writeheader()
+    for record in evaluation.records:
+        row = asdict(record)
+        writer.writerow({k: ("" if isinstance(v, float) and math.isnan(v) else v)
+                         for k, v in row.items()})
+    csv_path, json_path = folder / f"{name}.csv", folder / f"{name}.json"
+    write_text_atomic(csv_path, buffer.getvalue())
+    data = {
+        "summary": evaluation.summary,
+        "records": [asdict(r) for r in evaluation.records],
+        "fidelity_profiles": [
+            {"episode": p.episode, "errors": p.errors.tolist(), "travel": p.travel.tolist(),
+             "move": p.move.tolist()}
+            for p in evaluation.profiles
+        ],
+        **(extra or {}),
+    }
+    write_text_atomic(json_path, json.dumps(json_ready(data), indent=2) + "\n")
+    return csv_path, json_path

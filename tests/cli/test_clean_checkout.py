@@ -1,0 +1,56 @@
+"""``dlo benchmark --quick`` in a clean checkout leaves ``git status`` clean and finds every agent.
+
+The checkout is the repository's tracked files (as they are now) committed to a fresh git
+repository; the command runs from it with its default output folder.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import shutil
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+ROOT = Path(__file__).resolve().parents[2]
+
+
+def _git(*args: str, cwd: Path) -> str:
+    return subprocess.run(["git", *args], cwd=cwd, check=True, capture_output=True,
+                          text=True, timeout=120).stdout
+
+
+@pytest.fixture
+def checkout(tmp_path) -> Path:
+    if shutil.which("git") is None or not (ROOT / ".git").exists():
+        pytest.skip("needs git and a git checkout of the project")
+    clone = tmp_path / "clone"
+    for name in _git("ls-files", "-z", cwd=ROOT).split("\0"):
+        source = ROOT / name
+        if name and source.is_file():  # tracked files deleted in the working tree are skipped
+            (clone / name).parent.mkdir(parents=True, exist_ok=True)
+            shutil.copy2(source, clone / name)
+    _git("init", "-q", cwd=clone)
+    _git("add", "-A", cwd=clone)
+    _git("-c", "user.name=test", "-c", "user.email=test@example.org", "commit", "-qm", "clean",
+         cwd=clone)
+    return clone
+
+
+@pytest.mark.slow
+def test_quick_benchmark_in_a_clean_checkout_writes_under_runs_and_changes_no_tracked_file(
+        checkout):
+    env = {**os.environ, "PYTHONPATH": str(checkout)}
+    where = subprocess.run([sys.executable, "-c", "import dlo_bench; print(dlo_bench.__file__)"],
+                           cwd=checkout, env=env, capture_output=True, text=True, timeout=120)
+    assert Path(where.stdout.strip()).is_relative_to(checkout)  # the checkout's own code runs
+    code = "import sys; from dlo_cli.main import main; sys.exit(main(sys.argv[1:]))"
+    done = subprocess.run([sys.executable, "-c", code, "benchmark", "--quick"], cwd=checkout,
+                          env=env, capture_output=True, text=True, timeout=900)
+    assert done.returncode == 0, done.stderr[-2000:]
+    assert _git("status", "--porcelain", "--untracked-files=all", cwd=checkout) == ""
+    rows = json.loads((checkout / "runs" / "benchmark" / "results.json").read_text())
+    assert all(row["status"] == "ok" for row in rows), [r["note"] for r in rows]

@@ -1,0 +1,75 @@
+"""The agent registry: one name, one agent, built for the environment it acts in."""
+
+from __future__ import annotations
+
+import gymnasium as gym
+import numpy as np
+import pytest
+
+import dlo_env  # noqa: F401  (registers the environments)
+from dlo_bench import AGENTS, build_agent
+from dlo_bench.agents import DUAL_ENDPOINT, ENDPOINT, agent_names
+from dlo_bench.paths import shipped_baseline
+from planners.interfaces import PlanningPolicy, Policy
+
+
+def _first_action(policy, env) -> np.ndarray:
+    obs, _ = env.reset(seed=0, options={"difficulty": 1})
+    action, _ = policy.predict(obs, episode_start=np.array([True]), deterministic=True)
+    return np.asarray(action).reshape(-1)
+
+
+@pytest.mark.parametrize("name", list(AGENTS))
+def test_every_registered_agent_acts_in_each_of_its_environments(name, toy_model):
+    spec = AGENTS[name]
+    for env_id in spec.environments:
+        with gym.make(env_id) as env:
+            policy = build_agent(name, env, model=toy_model)
+            assert isinstance(policy, Policy)
+            action = _first_action(policy, env)
+            assert env.action_space.contains(action.astype(np.float32))
+
+
+def test_planners_report_their_statistics_through_the_planning_protocol(toy_model):
+    with gym.make(ENDPOINT) as env:
+        for name in ("latent-tree", "latent-tree-closed", "physics-mpc"):
+            policy = build_agent(name, env, model=toy_model)
+            assert isinstance(policy, PlanningPolicy)
+            _first_action(policy, env)
+            assert policy.episode_stats().plans == 1
+        assert not isinstance(build_agent("straight-line", env), PlanningPolicy)
+
+
+def test_closed_loop_agent_takes_the_replanning_interval_and_open_loop_ignores_it(toy_model):
+    with gym.make(ENDPOINT) as env:
+        assert build_agent("latent-tree-closed", env, model=toy_model,
+                           replan_every=7).replan_every == 7
+        assert build_agent("latent-tree", env, model=toy_model, replan_every=7).replan_every \
+            is None
+
+
+def test_build_agent_rejects_an_unknown_option():
+    with gym.make(ENDPOINT) as env, pytest.raises(ValueError, match="options must be some of"):
+        build_agent("straight-line", env, replan_evry=3)
+
+
+def test_build_agent_rejects_an_environment_the_agent_does_not_act_in(toy_model):
+    with gym.make(DUAL_ENDPOINT) as env, pytest.raises(ValueError, match="acts in"):
+        build_agent("latent-tree", env, model=toy_model)
+
+
+def test_agent_names_list_the_registry_and_the_sb3_form():
+    assert agent_names() == (*AGENTS, "sb3:PATH")
+
+
+def test_shipped_baselines_are_found_from_any_working_directory(tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    assert (shipped_baseline("ppo") / "model.zip").is_file()
+    with gym.make(ENDPOINT) as env:
+        assert env.action_space.contains(
+            _first_action(build_agent("ppo", env), env).astype(np.float32))
+
+
+def test_a_baseline_folder_of_another_algorithm_is_rejected():
+    with gym.make(ENDPOINT) as env, pytest.raises(ValueError, match="holds a ppo model"):
+        build_agent("sac-her", env, baseline=shipped_baseline("ppo"))
