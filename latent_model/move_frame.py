@@ -82,3 +82,23 @@ def from_frame(points: torch.Tensor, frame: MoveFrame) -> torch.Tensor:
     """Map ``(B, n, 2)`` points from the frames back to world shapes (point order restored)."""
     world = _rotate(points, frame.cos, frame.sin) + frame.origin[:, None]
     return _flip(world, frame.reversed)
+
+
+def into_frame(vectors: torch.Tensor, frame: MoveFrame, reorder: bool = True) -> torch.Tensor:
+    """World direction vectors ``(B, k, 2)`` turned into the frames; with ``reorder`` they are
+    one per point of the cord and take the frame's point order too."""
+    if reorder:
+        vectors = _flip(vectors, frame.reversed)
+    return _rotate(vectors, frame.cos, -frame.sin)
+
+
+def rim_vectors(points: torch.Tensor, half: float, reach: float) -> torch.Tensor:
+    """How close each world point ``(..., 2)`` is to the table's rim, as a vector.
+
+    Each edge within ``reach`` adds its outward normal scaled by ``1 - distance / reach``, so
+    the vector is exactly zero farther than ``reach`` from every edge: there the model sees
+    no rim and stays exactly equivariant, as the physics is.
+    """
+    near_high = torch.relu(1.0 - (half - points) / reach)
+    near_low = torch.relu(1.0 - (half + points) / reach)
+    return near_high - near_low

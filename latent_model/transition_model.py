@@ -30,7 +30,14 @@ from dlo_env.shapes import TABLE_HALF
 from dlo_env.tasks import DEFAULT_MAX_STEP
 from latent_model.checkpoint import load_checkpoint, save_atomic
 from latent_model.config import config_from_dict
-from latent_model.move_frame import GRASP_CODES, MoveFrame, from_frame, to_frame
+from latent_model.move_frame import (
+    GRASP_CODES,
+    MoveFrame,
+    from_frame,
+    into_frame,
+    rim_vectors,
+    to_frame,
+)
 from latent_model.shape_model import resolve_device
 
 #: Marks a file as a transition-model checkpoint.
@@ -56,6 +63,9 @@ class TransitionModelConfig:
         depth: Hidden layers.
         move_scale: Move lengths are divided by this in the input, metres.
         output_scale: The network's outputs are point displacements in units of this, metres.
+        rim_reach: Points (and the moved end's target) closer than this to the table's edge
+            tell the network where the rim is, metres; farther, the model is exactly
+            equivariant.
     """
 
     n_points: int = 20
@@ -66,6 +76,7 @@ class TransitionModelConfig:
     depth: int = 3
     move_scale: float = 0.35
     output_scale: float = 0.1
+    rim_reach: float = 0.15
 
     def __post_init__(self) -> None:
         for name in ("n_points", "members", "width", "depth"):
@@ -73,15 +84,17 @@ class TransitionModelConfig:
             if not isinstance(value, int) or value < 1:
                 raise ValueError(f"TransitionModelConfig.{name} must be a positive int, "
                                  f"got {value!r}")
-        for name in ("cord_length", "max_step", "move_scale", "output_scale"):
+        for name in ("cord_length", "max_step", "move_scale", "output_scale", "rim_reach"):
             if not getattr(self, name) > 0:
                 raise ValueError(f"TransitionModelConfig.{name} must be > 0, got "
                                  f"{getattr(self, name)!r}")
 
     @property
     def inputs(self) -> int:
-        """Network inputs: the cord in the frame, the lead length, the other move, both-flag."""
-        return 2 * self.n_points + 4
+        """Network inputs: the cord's points and segment directions in the frame, the rim near
+        each point and near the moved end's target, the lead length, the other move, both."""
+        n = self.n_points
+        return 2 * n + 2 * (n - 1) + 2 * (n + 1) + 4
 
 
 class EnsembleMLP(nn.Module):
@@ -150,11 +163,14 @@ class TransitionModel(nn.Module):
 
     # ------------------------------------------------------------- torch core
     def features(self, points: torch.Tensor, lead: torch.Tensor, other: torch.Tensor,
-                 both: torch.Tensor) -> torch.Tensor:
+                 both: torch.Tensor, rim: torch.Tensor) -> torch.Tensor:
         """Network input ``(B, inputs)`` from a batch described in the move frames."""
         c = self.config
-        return torch.cat([points.flatten(1) / c.cord_length, lead[:, None] / c.move_scale,
-                          other / c.move_scale, both[:, None].to(points.dtype)], dim=1)
+        seg = points[:, 1:] - points[:, :-1]
+        seg = seg / seg.norm(dim=-1, keepdim=True).clamp_min(1e-9)
+        return torch.cat([points.flatten(1) / c.cord_length, seg.flatten(1), rim.flatten(1),
+                          lead[:, None] / c.move_scale, other / c.move_scale,
+                          both[:, None].to(points.dtype)], dim=1)
 
     def in_frame(self, shapes: torch.Tensor, grasp: torch.Tensor, moves: torch.Tensor
                  ) -> tuple[torch.Tensor, MoveFrame]:
@@ -172,25 +188,32 @@ class TransitionModel(nn.Module):
             b = shapes.shape[0]
         points, lead, other, frame = to_frame(shapes, grasp, moves)
         both = grasp == GRASP_CODES["both"]
-        moved = self.predict_points(points, lead, other, both, (e, b) if per_member else None)
+        c = self.config
+        target = frame.origin + torch.stack([frame.cos, frame.sin], dim=-1) * lead[:, None]
+        rim = torch.cat([into_frame(rim_vectors(shapes, TABLE_HALF, c.rim_reach), frame),
+                         into_frame(rim_vectors(target[:, None], TABLE_HALF, c.rim_reach),
+                                    frame, reorder=False)], dim=1)  # (B, n + 1, 2)
+        moved = self.predict_points(points, lead, other, both, rim,
+                                    (e, b) if per_member else None)
         if per_member:
             points, lead, other, both = (t.reshape(e, b, *t.shape[1:])
                                          for t in (points, lead, other, both))
         return self._pin_ends(moved, points, lead, other, both), frame
 
     def predict_points(self, points: torch.Tensor, lead: torch.Tensor, other: torch.Tensor,
-                       both: torch.Tensor, members_batch: tuple[int, int] | None
-                       ) -> torch.Tensor:
+                       both: torch.Tensor, rim: torch.Tensor,
+                       members_batch: tuple[int, int] | None) -> torch.Tensor:
         """The members' points in the move frames, ``(members, B, n, 2)``, before the held
         ends are pinned: the one place where a model design differs.
 
         Args:
             points, lead, other, both: The batch in the move frames (flat over members and
                 batch when ``members_batch`` is given, else shared by the members).
+            rim: ``(B, n + 1, 2)`` rim vectors of the points and of the moved end's target.
             members_batch: ``(members, B)`` when every member has its own input.
         """
         n = self.config.n_points
-        x = self.features(points, lead, other, both)
+        x = self.features(points, lead, other, both, rim)
         out = self.net(x.reshape(*members_batch, -1) if members_batch else x)  # (E, B, 2n)
         e, b = out.shape[:2]
         return points.reshape(-1, b, n, 2) + self.config.output_scale * out.reshape(e, b, n, 2)
@@ -224,17 +247,24 @@ class TransitionModel(nn.Module):
     # ------------------------------------------------------------- numpy API
     def reachable_moves(self, shapes: np.ndarray, end: str, displacement: np.ndarray
                         ) -> np.ndarray:
-        """``(B, 2, 2)`` displacement of [head, tail] the grippers really make (``Cord.move``'s
-        rule: targets clipped to the table and the span), zero for an end not held."""
+        """``(B, 2, 2)`` displacement of [head, tail] the grippers really make, zero for an end
+        not held: the move carried out as ``split_move`` actions, each clipped by the rule of
+        ``Cord.move`` (targets on the table, both ends within the span)."""
         ends = {"head": [0], "tail": [-1], "both": [0, -1]}[end]
         start = shapes[:, ends].astype(np.float64)  # (B, k, 2)
-        d = displacement.reshape(len(shapes), len(ends), 2)
-        reached = reachable_targets(start + d, self.cord_params) - start
+        d = displacement.reshape(len(shapes), len(ends), 2).astype(np.float64)
+        longest = np.linalg.norm(d, axis=-1).max(axis=-1, initial=0.0)
+        actions = np.maximum(1, np.ceil(longest / self.config.max_step - 1e-9)).astype(int)
+        step = d / actions[:, None, None]
+        pos = start.copy()
+        for j in range(int(actions.max(initial=0))):
+            going = j < actions
+            pos[going] = reachable_targets(pos[going] + step[going], self.cord_params)
         moves = np.zeros((len(shapes), 2, 2), dtype=np.float32)
         if end == "both":
-            moves[:] = reached
+            moves[:] = pos - start
         else:
-            moves[:, 0 if end == "head" else 1] = reached[:, 0]
+            moves[:, 0 if end == "head" else 1] = (pos - start)[:, 0]
         return moves
 
     def _inputs(self, shapes: Any, end: Any, displacement: Any

@@ -6,9 +6,10 @@ import numpy as np
 import pytest
 import torch
 
-from dlo_env.cord import reachable_targets
+from dlo_env.cord import Cord
 from dlo_env.dataset.transitions import TransitionCollectConfig, collect_transition_chunk
 from dlo_env.shapes import error, random_cord_shape
+from dlo_env.tasks import DEFAULT_MAX_STEP, apply_action, split_move
 from latent_model import TransitionModel
 from latent_model.transition_metrics import transition_report, write_report
 from latent_model.transition_model import TransitionModelConfig
@@ -48,17 +49,26 @@ def _turn(points: np.ndarray, angle: float, shift: np.ndarray) -> np.ndarray:
 
 @pytest.mark.parametrize("end", ["head", "tail", "both"])
 def test_rotating_and_shifting_the_input_rotates_and_shifts_the_output(model, end):
-    shapes = _shapes(16)
+    # Away from the rim (farther than rim_reach from every edge), as the physics is.
+    shapes = _shapes(16, margin=0.5)
     rng = np.random.default_rng(1)
     width = 4 if end == "both" else 2
     d = rng.uniform(-0.1, 0.1, size=(16, width)).astype(np.float32)
     pred = model.predict(shapes, end, d)
-    for angle, shift in ((0.7, (0.1, -0.2)), (-2.5, (-0.15, 0.05)), (np.pi, (0.0, 0.0))):
+    for angle, shift in ((0.7, (0.05, -0.05)), (-2.5, (-0.05, 0.03)), (np.pi, (0.0, 0.0))):
         shift = np.array(shift, dtype=np.float32)
         turned = model.predict(_turn(shapes, angle, shift), end,
                                _turn(d.reshape(16, -1, 2), angle, 0 * shift).reshape(16, -1))
         assert np.abs(turned - _turn(pred, angle, shift)).max() < 1e-5
     assert np.abs(pred - shapes).max() > 0.01  # the model does move the cord
+
+
+def test_near_the_rim_the_model_sees_the_rim(model):
+    shapes = _shapes(4, seed=9, margin=0.5)
+    d = np.full((4, 2), 0.05, dtype=np.float32)
+    shift = np.array([0.45, 0.0], dtype=np.float32)  # some points now within rim_reach
+    moved = model.predict(shapes + shift, "head", d)
+    assert np.abs(moved - (model.predict(shapes, "head", d) + shift)).max() > 1e-4
 
 
 def test_a_tail_move_is_a_head_move_of_the_reversed_cord(model):
@@ -69,15 +79,22 @@ def test_a_tail_move_is_a_head_move_of_the_reversed_cord(model):
     assert np.abs(tail - head).max() < 1e-6
 
 
-def test_the_held_ends_go_exactly_where_they_were_sent(model):
-    shapes = _shapes(8, seed=3)
-    d = np.random.default_rng(3).uniform(-0.1, 0.1, size=(8, 4)).astype(np.float32)
-    both = model.predict(shapes, "both", d)
-    ends = shapes[:, [0, -1]].astype(np.float64)
-    sent = reachable_targets(ends + d.reshape(8, 2, 2), model.cord_params)  # span rule included
-    assert np.allclose(both[:, [0, -1]], sent, atol=1e-6)
-    tail = model.predict(shapes, "tail", d[:, 2:])
-    assert np.allclose(tail[:, -1], shapes[:, -1] + d[:, 2:], atol=1e-6)
+def test_the_held_ends_go_exactly_where_the_simulators_grippers_go(model):
+    shapes = _shapes(4, seed=3)
+    d = np.random.default_rng(3).uniform(-0.3, 0.3, size=(4, 4)).astype(np.float32)
+    d[0] = [-0.3, 0.0, 0.3, 0.0]  # pulls the ends apart beyond the span: the rule clips it
+    for end, width in (("both", 4), ("tail", 2)):
+        move = d[:, :width] if end == "both" else d[:, 2:]
+        pred = model.predict(shapes, end, move)
+        for shape, m, p in zip(shapes, move, pred):
+            cord = Cord(grasp=end)
+            cord.reset(shape)
+            for action in split_move(m, DEFAULT_MAX_STEP):
+                apply_action(cord, action, DEFAULT_MAX_STEP)
+            grips = cord.gripper_positions()
+            assert np.allclose(p[-1], grips["tail"], atol=1e-5)
+            if end == "both":
+                assert np.allclose(p[0], grips["head"], atol=1e-5)
 
 
 def test_no_move_leaves_the_cord_where_it_lies_and_targets_are_clipped_like_the_cord(model):
