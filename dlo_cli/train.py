@@ -7,9 +7,10 @@ import argparse
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     """Flags of ``dlo train``; model and training flags map onto the config dataclasses."""
-    parser.add_argument("--data", required=True,
-                        help="training data: shapes (.npz from dlo collect), or transitions "
-                             "(dlo collect --kind transitions) for --stage transition")
+    parser.add_argument("--data", required=True, nargs="+",
+                        help="training data: shapes (.npz from dlo collect), or transition "
+                             "files (dlo collect --kind transitions; several are joined) for "
+                             "--stage transition")
     parser.add_argument("--out", required=True, help="output folder (resumes if it holds a run)")
     parser.add_argument("--heldout", default=None,
                         help="held-out data collected with another seed (None: 5%% of --data)")
@@ -63,6 +64,10 @@ def run(args: argparse.Namespace) -> int:
     from latent_model.evaluation import quality_report
     from latent_model.training import CHECKPOINT_FILE, train
 
+    if len(args.data) != 1:
+        raise ValueError(f"--data takes one shape dataset for --stage {args.stage}, "
+                         f"got {len(args.data)} files")
+    args.data = args.data[0]
     data = load_shapes(args.data, name="--data")
     if args.heldout is not None:
         heldout = load_shapes(args.heldout, name="--heldout")

@@ -19,7 +19,11 @@ def run(args: argparse.Namespace) -> int:
     import torch
 
     from dlo_bench.progress import progress_bar
-    from dlo_env.dataset.transitions import load_transitions, split_transitions
+    from dlo_env.dataset.transitions import (
+        TransitionDataset,
+        load_transitions,
+        split_transitions,
+    )
     from latent_model.transition_metrics import report_lines, transition_report, write_report
     from latent_model.transition_model import TransitionModelConfig
     from latent_model.transition_training import (
@@ -31,7 +35,13 @@ def run(args: argparse.Namespace) -> int:
 
     if args.threads:
         torch.set_num_threads(args.threads)
-    data = load_transitions(args.data)
+    parts = [load_transitions(path) for path in args.data]
+    data = TransitionDataset.concatenate(parts)
+    data = TransitionDataset(**data.arrays(), metadata={**parts[0].metadata,
+                                                         "files": [str(p) for p in args.data]})
+    for path, part in zip(args.data[1:], parts[1:]):
+        if part.metadata.get("cord") != parts[0].metadata.get("cord"):
+            raise ValueError(f"--data {path} was collected with another cord than {args.data[0]}")
     if args.heldout is not None:
         heldout = load_transitions(args.heldout)
     else:

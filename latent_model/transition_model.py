@@ -357,8 +357,9 @@ class TransitionModel(nn.Module):
             model = cls(config, device="cpu", info=data.get("info"))
             model.net.load_state_dict({k: v.float() for k, v in data["net"].items()})
         except (KeyError, TypeError, RuntimeError, ValueError) as exc:
+            detail = " ".join(str(exc).split())  # torch's messages span several lines
             raise ValueError(f"{name}: the checkpoint's contents do not fit a TransitionModel: "
-                             f"{exc}") from exc
+                             f"{detail}") from exc
         model.device = resolve_device(device)
         return model.to(model.device).eval()
 

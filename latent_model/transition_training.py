@@ -216,7 +216,8 @@ def train_transition_model(
     chains = {k: chain_starts(tr.episode, tr.step, k) for k in range(2, tc.chain_moves + 1)}
     chains = {k: torch.from_numpy(v).to(model.device) for k, v in chains.items() if len(v)}
     gen = torch.Generator(device="cpu").manual_seed(tc.seed * 1_000_003 + step)
-    info = {"data": data.metadata.get("collect", {}), "train_config": asdict(tc),
+    info = {"data": data.metadata.get("collect", {}), "files": data.metadata.get("files"),
+            "train_config": asdict(tc),
             "transitions": len(train)}
     started = time.perf_counter()
     model.train()

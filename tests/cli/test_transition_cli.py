@@ -1,0 +1,41 @@
+"""Specification of ``dlo collect --kind transitions`` and ``dlo train --stage transition``."""
+
+from __future__ import annotations
+
+import pytest
+
+from dlo_cli.main import main
+from dlo_env.dataset.transitions import load_transitions
+from latent_model import TransitionModel
+
+
+@pytest.mark.slow
+def test_collect_then_train_a_transition_model_from_two_files(tmp_path, capsys):
+    first, second = tmp_path / "a.npz", tmp_path / "b.npz"
+    for seed, out in ((0, first), (1, second)):
+        assert main(["collect", "--kind", "transitions", "--num-transitions", "25",
+                     "--seed", str(seed), "--out", str(out)]) == 0
+    text = capsys.readouterr().out
+    assert f"wrote {first}" in text and "transitions: 25" in text and "grasps: head" in text
+    assert len(load_transitions(first)) == 25
+    out = tmp_path / "model"
+    assert main(["train", "--stage", "transition", "--data", str(first), str(second),
+                 "--heldout", str(second), "--out", str(out), "--steps", "20",
+                 "--width", "16", "--members", "2", "--batch-size", "32", "--eval-every", "10",
+                 "--no-progress"]) == 0
+    text = capsys.readouterr().out
+    assert "50 transitions" in text
+    assert "spread-error rank correlation" in text
+    model = TransitionModel.load(out)
+    assert model.config.members == 2 and model.info["steps"] == 20
+    assert model.info["files"] == [str(first), str(second)]
+    for name in ("transition-metrics.csv", "transition-metrics.png", "transition-training.csv"):
+        assert (out / name).is_file()
+
+
+def test_each_kind_needs_its_own_count(tmp_path, capsys):
+    assert main(["collect", "--kind", "transitions", "--num-shapes", "5",
+                 "--out", str(tmp_path / "x.npz")]) == 2
+    assert "--num-transitions is required" in capsys.readouterr().err
+    assert main(["collect", "--num-transitions", "5", "--out", str(tmp_path / "y.npz")]) == 2
+    assert "--num-shapes is required" in capsys.readouterr().err
