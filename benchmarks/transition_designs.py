@@ -3,7 +3,8 @@
 (a) shape space (what ships): the network maps the cord in the move frame to the displacement
     of every point.
 (b) latent space: the shipped GAN's Encoder encodes the cord (in the same move frame), the
-    network predicts the next latent, the frozen Generator decodes it. The loss is on the
+    network predicts the next latent from it, the move and the same rim vectors, and the frozen
+    Generator decodes it. The loss is on the
     decoded points for both, so the comparison is of the representations, not of the losses.
 
 Both train with the same settings, steps, seed and data; the held-out one-move error is printed
@@ -45,15 +46,16 @@ class LatentTransitionModel(TransitionModel):
             p.requires_grad_(False)
         c = self.config
         self.latent_dim = gan.latent_dim
-        self.net = EnsembleMLP(c.members, self.latent_dim + 4, c.width, c.depth,
+        inputs = self.latent_dim + 2 * (c.n_points + 1) + 4  # latent, rim vectors, the move
+        self.net = EnsembleMLP(c.members, inputs, c.width, c.depth,
                                self.latent_dim).to(self.device)
 
-    def predict_points(self, points, lead, other, both, members_batch):  # noqa: D102
+    def predict_points(self, points, lead, other, both, rim, members_batch):  # noqa: D102
         gan = self.shape_model
         c = self.config
         latent = gan.encode_torch(points)  # (E*B or B, L): shape latent and pose in the frame
-        x = torch.cat([latent, lead[:, None] / c.move_scale, other / c.move_scale,
-                       both[:, None].to(points.dtype)], dim=1)
+        x = torch.cat([latent, rim.flatten(1), lead[:, None] / c.move_scale,
+                       other / c.move_scale, both[:, None].to(points.dtype)], dim=1)
         out = self.net(x.reshape(*members_batch, -1) if members_batch else x)  # (E, B, L)
         e, b = out.shape[:2]
         nxt = latent.reshape(-1, b, self.latent_dim) + out
