@@ -21,6 +21,8 @@ EXTRAS = {
     "stable_baselines3": "rl",
     "pygame": "render",
     "PIL": "render",
+    "rl_zoo3": "zoo",
+    "yaml": "zoo",
 }
 
 
