@@ -23,6 +23,8 @@ EXTRAS = {
     "PIL": "render",
     "rl_zoo3": "zoo",
     "yaml": "zoo",
+    "minari": "minari",
+    "h5py": "minari",
 }
 
 
