@@ -25,6 +25,7 @@ EXTRAS = {
     "yaml": "zoo",
     "minari": "minari",
     "h5py": "minari",
+    "ray": "ray",
 }
 
 
