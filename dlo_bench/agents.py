@@ -126,6 +126,13 @@ def _sb3(algo: str) -> Callable[[Any, AgentOptions], Policy]:
     return build
 
 
+def _bc(env: Any, options: AgentOptions) -> Policy:
+    from dlo_bench.behaviour_cloning import load_bc
+
+    folder = options.baseline if options.baseline is not None else shipped_baseline("bc")
+    return load_bc(folder, device=options.device)
+
+
 #: Every agent by name, in the benchmark's table order.
 AGENTS: dict[str, AgentSpec] = {spec.name: spec for spec in (
     AgentSpec("straight-line", "moves the head straight to the goal's head (reference)",
@@ -138,6 +145,8 @@ AGENTS: dict[str, AgentSpec] = {spec.name: spec for spec in (
               _physics_mpc, environments=(ENDPOINT, DUAL_ENDPOINT)),
     AgentSpec("ppo", "the shipped PPO baseline (Stable-Baselines3)", _sb3("ppo"), extra="rl"),
     AgentSpec("sac-her", "the shipped SAC + HER baseline (Stable-Baselines3)", _sb3("sac-her"),
+              extra="rl"),
+    AgentSpec("bc", "behaviour cloning of the oracle demonstrations (Minari datasets)", _bc,
               extra="rl"),
 )}
 

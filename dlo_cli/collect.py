@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import argparse
 
-from dlo_cli.flags import number_in, positive_int
+from dlo_cli.flags import add_backend, backend_of, engine_text, number_in, positive_int
 
 _seed = number_in(int, 0, expected="an integer >= 0")
 _cosine = number_in(float, -1.0, 1.0, expected="a number in [-1, 1]")
@@ -42,6 +42,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help="record a shape every K physics substeps (10: about 1 cm of motion)")
     parser.add_argument("--resume", action="store_true",
                         help="continue an interrupted run from OUT.parts/")
+    add_backend(parser)
 
 
 def run(args: argparse.Namespace) -> int:
@@ -79,7 +80,7 @@ def run(args: argparse.Namespace) -> int:
     started = time.perf_counter()
     try:
         data = collect(args.out, args.num_shapes, config, workers=args.workers,
-                       resume=args.resume, progress=progress)
+                       resume=args.resume, progress=progress, backend=backend_of(args))
     except KeyboardInterrupt:
         print(f"\ninterrupted: finished chunks are kept in {parts_dir(args.out)}; run the same "
               "command with --resume to continue", file=sys.stderr)
@@ -96,7 +97,7 @@ def run(args: argparse.Namespace) -> int:
         print(f"  resumed {meta['chunks_resumed']} of {meta['chunks']} chunks")
     made = meta["accepted"] - meta["shapes_resumed"]
     print(f"  shapes: {meta['accepted']} accepted; {made} made in this run, "
-          f"{made / elapsed:.0f}/s with {args.workers} worker(s)")
+          f"{made / elapsed:.0f}/s {engine_text(args)}")
     print(f"  rejected: {rejected['total']} ({rejected['total'] / max(seen, 1):.2%}): "
           f"{rejected['cosine']} not cord-like (cosine < {config.cosine_threshold}), "
           f"{rejected['stretch']} stretched > {config.max_stretch:.0%}")

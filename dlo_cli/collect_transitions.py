@@ -8,6 +8,8 @@ from __future__ import annotations
 
 import argparse
 
+from dlo_cli.flags import backend_of, engine_text
+
 
 def run(args: argparse.Namespace) -> int:
     """Collect transitions with a progress bar, then print a summary."""
@@ -38,7 +40,8 @@ def run(args: argparse.Namespace) -> int:
     started = time.perf_counter()
     try:
         data = collect_transitions(args.out, args.num_transitions, config,
-                                   workers=args.workers, resume=args.resume, progress=progress)
+                                   workers=args.workers, resume=args.resume, progress=progress,
+                                   backend=backend_of(args))
     except KeyboardInterrupt:
         print(f"\ninterrupted: finished chunks are kept in {parts_dir(args.out)}; run the "
               "same command with --resume to continue", file=sys.stderr)
@@ -52,8 +55,8 @@ def run(args: argparse.Namespace) -> int:
     print(f"wrote {args.out} ({os.path.getsize(args.out) / 1e6:.1f} MB) in {elapsed:.1f} s")
     if meta["chunks_resumed"]:
         print(f"  resumed {meta['chunks_resumed']} of {meta['chunks']} chunks")
-    print(f"  transitions: {len(data)}; {made} made in this run, {made / elapsed:.0f}/s with "
-          f"{args.workers} worker(s); episodes: {meta['episodes']}")
+    print(f"  transitions: {len(data)}; {made} made in this run, {made / elapsed:.0f}/s "
+          f"{engine_text(args)}; episodes: {meta['episodes']}")
     counts = ", ".join(f"{n} {c}" for n, c in zip(GRASP_NAMES, meta["grasp_counts"]))
     lengths = 100 * np.linalg.norm(data.displacement, axis=-1).max(axis=-1)
     print(f"  grasps: {counts}; move length (cm) 5/50/95 %: "

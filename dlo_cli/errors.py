@@ -21,6 +21,11 @@ EXTRAS = {
     "stable_baselines3": "rl",
     "pygame": "render",
     "PIL": "render",
+    "rl_zoo3": "zoo",
+    "yaml": "zoo",
+    "minari": "minari",
+    "h5py": "minari",
+    "ray": "ray",
 }
 
 

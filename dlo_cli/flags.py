@@ -89,3 +89,30 @@ def add_threads(parser: argparse.ArgumentParser, default: int | None = 1) -> Non
     parser.add_argument("--threads", type=positive_int, default=default,
                         help="torch CPU threads (the models are small: more threads mostly "
                              "contend with other work)")
+
+
+def add_backend(parser: argparse.ArgumentParser) -> None:
+    """``--backend`` and ``--address``: local worker processes, or Ray."""
+    parser.add_argument("--backend", choices=("local", "ray"), default="local",
+                        help="where the work runs: local worker processes (--workers), or Ray "
+                             "(a local Ray runtime, or the cluster at --address); the results "
+                             "are the same")
+    parser.add_argument("--address", default=None,
+                        help="with --backend ray: address of a running Ray cluster ('auto', "
+                             "'ray://HOST:10001'); None starts a local Ray runtime")
+
+
+def backend_of(args: argparse.Namespace) -> Any:
+    """The backend the flags of :func:`add_backend` ask for (None: the local process pool)."""
+    if args.backend == "local":
+        if args.address is not None:
+            raise ValueError("--address needs --backend ray")
+        return None
+    from dlo_env.dataset.ray_backend import RayBackend
+
+    return RayBackend(address=args.address)
+
+
+def engine_text(args: argparse.Namespace) -> str:
+    """How the work ran, for summaries: ``with 2 worker(s)`` or ``on Ray``."""
+    return "on Ray" if args.backend == "ray" else f"with {args.workers} worker(s)"

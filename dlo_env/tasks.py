@@ -186,6 +186,11 @@ def _rest(cord: Cord) -> bool:
     return float(np.linalg.norm(cord.point_velocities(), axis=1).max()) < REST_SPEED
 
 
+def at_rest(cord: Cord) -> bool:
+    """Whether every point of ``cord`` is slower than ``REST_SPEED`` (``wait_for_rest``'s test)."""
+    return _rest(cord)
+
+
 def wait_for_rest(cord: Cord, max_step: float = DEFAULT_MAX_STEP) -> int:
     """Zero actions until the cord is at rest, at most ``MAX_SETTLE_ACTIONS``: the rule that
     ends every task goal and every recorded transition.

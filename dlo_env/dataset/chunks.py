@@ -187,8 +187,11 @@ def check_out(out: str | os.PathLike[str], *, resume: bool, workers: object) -> 
 
 
 def run_chunks(job: ChunkJob, out: Path, plan: list[tuple[int, int]], *, workers: int,
-               progress: Progress | None) -> tuple[Path, int, int]:
+               progress: Progress | None, backend: Any = None) -> tuple[Path, int, int]:
     """Make every chunk of ``plan`` that ``OUT.parts/`` does not hold yet.
+
+    ``backend`` (a :class:`dlo_env.dataset.ray_backend.RayBackend`) runs the chunks elsewhere
+    instead of in ``workers`` local processes; the chunks are the same either way.
 
     Returns:
         The parts folder, the number of chunks and of items reused from an earlier run.
@@ -205,7 +208,9 @@ def run_chunks(job: ChunkJob, out: Path, plan: list[tuple[int, int]], *, workers
     reused_items = sum(n for _, n in reused)
     if progress is not None and reused:
         progress(reused_items, 0)
-    if workers == 1 or len(todo) <= 1:
+    if backend is not None:
+        backend.run(job, todo, parts, progress)
+    elif workers == 1 or len(todo) <= 1:
         for i, n in todo:
             job.write(i, n, chunk_path(parts, i), progress)
     else:

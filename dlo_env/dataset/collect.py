@@ -330,6 +330,7 @@ def collect(
     workers: int = 1,
     resume: bool = False,
     progress: Progress | None = None,
+    backend: Any = None,
 ) -> ShapeDataset:
     """Collect ``num_shapes`` cord-like shapes into the ``.npz`` file ``out``.
 
@@ -342,6 +343,8 @@ def collect(
             this with ``workers > 1`` needs the ``if __name__ == "__main__":`` guard.
         resume: Continue an interrupted run from the chunks in ``OUT.parts/``.
         progress: Called as ``progress(accepted, rejected)`` with increments.
+        backend: A :class:`dlo_env.dataset.ray_backend.RayBackend` to make the chunks on Ray
+            instead of in ``workers`` local processes (same arrays).
 
     Returns:
         The dataset as written.
@@ -358,7 +361,7 @@ def collect(
     started = time.perf_counter()
     plan = chunk_plan(int(num_shapes), config.chunk_size)
     parts, reused, reused_shapes = run_chunks(shape_job(config), out, plan, workers=int(workers),
-                                              progress=progress)
+                                              progress=progress, backend=backend)
     dataset, totals = assemble(parts, plan)
     rejected = totals["rejected_cosine"] + totals["rejected_stretch"]
     metadata = {

@@ -347,6 +347,7 @@ def collect_transitions(
     workers: int = 1,
     resume: bool = False,
     progress: Progress | None = None,
+    backend: Any = None,
 ) -> TransitionDataset:
     """Collect ``num_transitions`` transitions into the ``.npz`` file ``out``.
 
@@ -354,6 +355,7 @@ def collect_transitions(
     interrupted run is continued with ``resume=True`` (nothing lost, nothing repeated).
     Workers are spawned, so a script calling this with ``workers > 1`` needs the
     ``if __name__ == "__main__":`` guard.
+    ``backend`` (a :class:`dlo_env.dataset.ray_backend.RayBackend`) makes the chunks on Ray.
 
     Raises:
         ValueError: Bad arguments, an existing ``out``, or leftovers of another run.
@@ -366,7 +368,8 @@ def collect_transitions(
     started = time.perf_counter()
     plan = chunk_plan(int(num_transitions), config.chunk_size)
     parts, reused, reused_items = run_chunks(transition_job(config), out, plan,
-                                             workers=int(workers), progress=progress)
+                                             workers=int(workers), progress=progress,
+                                             backend=backend)
     chunks = []
     compute = 0.0
     for index, size in plan:

@@ -3,19 +3,23 @@
 from __future__ import annotations
 
 import json
+import shutil
 
 import pytest
 
+from dlo_bench.paths import shipped_baseline
 from dlo_cli.main import main
 
-AGENTS = ["straight-line", "latent-tree", "latent-tree-closed", "physics-mpc", "ppo", "sac-her"]
+AGENTS = ["straight-line", "latent-tree", "latent-tree-closed", "physics-mpc", "ppo", "sac-her",
+          "bc"]
 ROW_KEYS = {"agent", "difficulty", "success_rate", "median_error", "seconds_per_episode",
             "training_env_steps", "status"}
 
 
 @pytest.fixture(scope="module")
 def models(tmp_path_factory):
-    """Tiny PPO and SAC + HER baselines and an untrained shape model: plumbing, not quality."""
+    """Tiny PPO and SAC + HER baselines, an untrained shape model and the shipped behaviour
+    cloning model: plumbing, not quality."""
     from dlo_bench.baselines import BaselineConfig, train_baseline
     from latent_model import ShapeModel
     from latent_model.config import ModelConfig
@@ -28,6 +32,7 @@ def models(tmp_path_factory):
     for algo in ("ppo", "sac-her"):
         train_baseline(BaselineConfig(algo=algo, **tiny), root / algo, progress_bar=False)
     ShapeModel(ModelConfig(), Normalisation(), device="cpu").save(root / "shape.pt")
+    shutil.copytree(shipped_baseline("bc"), root / "bc")  # trained offline: no extra needed
     return root
 
 

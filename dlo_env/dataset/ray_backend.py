@@ -1,0 +1,88 @@
+"""Ray as the engine of chunked collection, when one machine is not enough.
+
+:class:`RayBackend` runs the chunks of a :class:`dlo_env.dataset.chunks.ChunkJob` as Ray tasks,
+on a local Ray runtime or on the cluster at ``address``. A task makes its chunk in a temporary
+folder of its own node and returns the file's bytes; the driver writes them atomically into
+``OUT.parts/``, so nodes need no shared file system. Results are identical to the local process
+pool for the same seed, by construction: chunk ``i`` depends only on the seed and ``i``. A task
+whose worker dies (killed, node lost) is run again by Ray (``max_retries``); a chunk is written
+once, when its task returns, so nothing is lost and nothing is made twice. An interrupted run
+resumes from the written chunks as with the local pool.
+
+Every node needs this project installed (the same environment as the driver).
+"""
+
+from __future__ import annotations
+
+import tempfile
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+from dlo_env.atomic import atomic_path
+
+
+@dataclass(frozen=True)
+class RayBackend:
+    """Where and how the chunks run.
+
+    Attributes:
+        address: Address of a running Ray cluster (``"auto"``, ``"ray://HOST:10001"``, ...);
+            None starts a local Ray runtime for the run, unless one is already initialised.
+        num_cpus: CPUs of the local runtime (None: all of this machine's); ignored with an
+            address.
+        max_retries: Times Ray runs a chunk again after its worker died.
+    """
+
+    address: str | None = None
+    num_cpus: int | None = None
+    max_retries: int = 3
+
+    def __post_init__(self) -> None:
+        if not (isinstance(self.max_retries, int) and self.max_retries >= 0):
+            raise ValueError(f"max_retries must be an int >= 0, got {self.max_retries!r}")
+        if self.num_cpus is not None and not (isinstance(self.num_cpus, int)
+                                              and self.num_cpus >= 1):
+            raise ValueError(f"num_cpus must be an int >= 1 or None, got {self.num_cpus!r}")
+
+    def run(self, job: Any, todo: list[tuple[int, int]], parts: Path,
+            progress: Any = None) -> None:
+        """Make the chunks ``todo`` (``(index, size)`` pairs) of ``job`` into ``parts``.
+
+        ``progress(done, 0)`` is told a chunk's size when it is written.
+        """
+        import ray
+
+        from dlo_env.dataset.chunks import chunk_path
+
+        started_here = not ray.is_initialized()
+        if started_here:
+            options = {} if self.address else {"num_cpus": self.num_cpus}
+            ray.init(address=self.address, include_dashboard=False, logging_level="warning",
+                     **options)
+        try:
+            make = ray.remote(num_cpus=1, max_retries=self.max_retries)(make_chunk_bytes)
+            pending = {make.remote(job, i, n): (i, n) for i, n in todo}
+            while pending:
+                done, _ = ray.wait(list(pending), num_returns=1)
+                for ref in done:
+                    index, size = pending.pop(ref)
+                    with atomic_path(chunk_path(parts, index)) as tmp:
+                        tmp.write_bytes(ray.get(ref))
+                    if progress is not None:
+                        progress(size, 0)
+        except KeyboardInterrupt:
+            for ref in pending:
+                ray.cancel(ref)
+            raise
+        finally:
+            if started_here:
+                ray.shutdown()
+
+
+def make_chunk_bytes(job: Any, index: int, size: int) -> bytes:
+    """Make chunk ``index`` of ``job`` in a temporary folder; the bytes of its file."""
+    with tempfile.TemporaryDirectory(prefix="dlo-chunk-") as folder:
+        path = Path(folder) / f"chunk-{index:06d}.npz"
+        job.write(index, size, path, None)
+        return path.read_bytes()
