@@ -5,7 +5,8 @@
 2. the moves of the linear-3 test tasks chained from the start (three predictions in a row)
    against the task goals, next to the simulator itself replaying them rest to rest;
 3. transitions from analytic shapes the data never holds as such (arcs, S-curves, spirals,
-   zigzags): each settled in the simulator, then one random move of 1-35 cm;
+   zigzags): each settled in the simulator, then one random move of 1-35 cm (with both ends
+   held, only shapes whose ends are within the grippers' span, as every dual-arm start);
 4. throughput: one batch of 1024 predictions against simulating the same 1024 moves, as a ratio
    per transition (torch on 1 thread and on all threads; the simulator in one process);
 5. predictions off the table where the simulator stays on it.
@@ -25,13 +26,15 @@ from pathlib import Path
 import numpy as np
 import torch
 
+from dlo_bench.report import json_ready
 from dlo_env.atomic import write_text_atomic
-from dlo_env.cord import Cord
+from dlo_env.cord import Cord, CordParams
 from dlo_env.dataset.transitions import GRASP_NAMES, load_transitions
 from dlo_env.shapes import ANALYTIC_KINDS, analytic_shape, error, on_table
 from dlo_env.tasks import (
     DEFAULT_MAX_STEP,
     GRASP_ENDS,
+    SPAN_MARGIN,
     apply_action,
     load_suite,
     split_move,
@@ -40,6 +43,8 @@ from dlo_env.tasks import (
 from latent_model.transition_metrics import report_lines, transition_report
 from latent_model.transition_model import TransitionModel
 
+#: With both ends held the grippers stay this close (``max_span * length - SPAN_MARGIN``).
+SPAN = CordParams().max_span * CordParams().length - SPAN_MARGIN
 FLOORS = {"single_mean_cm": 0.15, "single_within": 0.995, "both_mean_cm": 0.25,
           "both_within": 0.99, "chain_cm": 0.5, "curves_cm": 0.3, "speedup": 1000.0}
 
@@ -99,7 +104,10 @@ def analytic_curves(model: TransitionModel, count: int, seed: int
         errors = []
         for i in range(count // len(ANALYTIC_KINDS)):
             end = GRASP_NAMES[i % 3]
-            start = settled(analytic_shape(kind, rng), end)
+            shape = analytic_shape(kind, rng)
+            while end == "both" and np.linalg.norm(shape[-1] - shape[0]) >= SPAN:
+                shape = analytic_shape(kind, rng)  # as every dual-arm start: ends within reach
+            start = settled(shape, end)
             move = random_move(rng, end)
             truth = simulate(start, end, move)
             pred = model.predict(start, end, move)
@@ -217,11 +225,11 @@ def main() -> None:
         shown = f"{value:.4f}" if isinstance(value, float) else str(value)
         print(f"   {name:<48} {shown:>10}  {'PASS' if ok else 'FAIL'}")
     out = Path(args.out)
-    write_text_atomic(out / "transition-benchmark.json", json.dumps({
+    write_text_atomic(out / "transition-benchmark.json", json.dumps(json_ready({
         "heldout": [r.__dict__ for r in rows], "spread_rank": rank, "chained_linear3": chain,
         "analytic": curves, "off_table": off, "throughput": speed,
         "speedup_one_thread": one_thread, "speedup_best": best,
-        "floors": [{"name": n, "value": v, "pass": p} for n, v, p in checks]}, indent=1))
+        "floors": [{"name": n, "value": v, "pass": p} for n, v, p in checks]}), indent=1))
     print(f"\nwrote {out / 'transition-benchmark.json'}")
 
 

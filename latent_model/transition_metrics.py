@@ -140,7 +140,10 @@ def write_report(rows: list[ErrorRow], rank: float, out: str | os.PathLike[str])
         axes[0].scatter(x, [got[g].p99_cm if g in got else 0 for g in groups], marker="_",
                         s=120, color="k", zorder=3, label="99th percentile" if k == 1 else None)
     axes[0].set_xticks(np.arange(len(groups)), groups)
-    axes[0].set_ylabel("error (cm)")
+    axes[0].set_ylabel("error (cm, log scale)")
+    for ax in axes:
+        ax.set_yscale("log")
+        ax.axhline(1.0, color="0.6", lw=0.8, ls="--")
     axes[0].set_title("held-out error by grasp and chain length")
     axes[0].legend(fontsize=8)
     bins = [r for r in rows if r.moves == 1 and r.group.endswith("cm")]
@@ -148,7 +151,7 @@ def write_report(rows: list[ErrorRow], rank: float, out: str | os.PathLike[str])
                 label="mean")
     axes[1].scatter([r.group for r in bins], [r.p99_cm for r in bins], marker="_", s=120,
                     color="k", zorder=3, label="99th percentile")
-    axes[1].set_xlabel("move length")
+    axes[1].set_xlabel("move length (dashed: 1 cm)")
     axes[1].set_title(f"one move by length (spread-error rank corr. {rank:.2f})")
     axes[1].legend(fontsize=8)
     fig.tight_layout()
