@@ -30,6 +30,8 @@ import os
 import resource
 import tempfile
 import time
+from collections.abc import Iterator
+from contextlib import contextmanager
 from dataclasses import dataclass
 
 import pymunk
@@ -52,8 +54,9 @@ class Args:
     single_shapes: int = 4000
 
 
-def single_process(config: CollectConfig, shapes: int) -> tuple[float, float]:
-    """Accepted shapes/s of one chunk in this process, and the share of time in physics."""
+@contextmanager
+def physics_timer() -> Iterator[list[float]]:
+    """Time spent in pymunk's ``Space.step`` while the block runs: ``[seconds]``."""
     original = pymunk.Space.step
     spent = [0.0]
 
@@ -62,14 +65,20 @@ def single_process(config: CollectConfig, shapes: int) -> tuple[float, float]:
         original(space, dt)
         spent[0] += time.perf_counter() - t
 
-    collect_chunk(config, 10_000, 50)  # warm-up
     pymunk.Space.step = timed
     try:
+        yield spent
+    finally:
+        pymunk.Space.step = original
+
+
+def single_process(config: CollectConfig, shapes: int) -> tuple[float, float]:
+    """Accepted shapes/s of one chunk in this process, and the share of time in physics."""
+    collect_chunk(config, 10_000, 50)  # warm-up
+    with physics_timer() as spent:
         t = time.perf_counter()
         data = collect_chunk(config, 10_001, shapes)
         total = time.perf_counter() - t
-    finally:
-        pymunk.Space.step = original
     return data.num_shapes / total, spent[0] / total
 
 

@@ -16,7 +16,7 @@ import resource
 import tempfile
 import time
 
-import pymunk
+from collect_throughput import physics_timer  # the script beside this one
 
 from dlo_env.dataset.transitions import (
     TransitionCollectConfig,
@@ -29,22 +29,11 @@ RATE_FLOOR = 150.0
 
 def single_process(config: TransitionCollectConfig, count: int) -> tuple[float, float]:
     """Transitions/s of one chunk in this process, and the share of time in physics."""
-    original = pymunk.Space.step
-    spent = [0.0]
-
-    def timed(space: pymunk.Space, dt: float) -> None:
-        t = time.perf_counter()
-        original(space, dt)
-        spent[0] += time.perf_counter() - t
-
     collect_transition_chunk(config, 10_000, 10)  # warm-up
-    pymunk.Space.step = timed
-    try:
+    with physics_timer() as spent:
         t = time.perf_counter()
         data = collect_transition_chunk(config, 10_001, count)
         total = time.perf_counter() - t
-    finally:
-        pymunk.Space.step = original
     return len(data) / total, spent[0] / total
 
 

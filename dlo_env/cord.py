@@ -24,6 +24,7 @@ import numpy as np
 import pymunk
 import pymunk.batch
 
+from dlo_env.checks import fractions, non_negative, positive, positive_ints
 from dlo_env.shapes import TABLE_HALF, validate_shape
 
 Grasp = Literal["head", "tail", "both", "none"]
@@ -84,23 +85,12 @@ class CordParams:
     max_span: float = 0.9
 
     def __post_init__(self) -> None:
-        positive = ("length", "mass", "gravity", "inertia_scale", "dt", "max_speed")
-        for name in positive:
-            if not getattr(self, name) > 0:
-                raise ValueError(f"CordParams.{name} must be > 0, got {getattr(self, name)!r}")
-        for name in ("friction", "bending_stiffness", "bending_damping", "rim_margin"):
-            if not getattr(self, name) >= 0:
-                raise ValueError(f"CordParams.{name} must be >= 0, got {getattr(self, name)!r}")
-        for name in ("velocity_retention", "joint_error_bias"):
-            value = getattr(self, name)
-            if not 0 < value <= 1:
-                raise ValueError(f"CordParams.{name} must be in (0, 1], got {value!r}")
+        positive(self, "length", "mass", "gravity", "inertia_scale", "dt", "max_speed")
+        non_negative(self, "friction", "bending_stiffness", "bending_damping", "rim_margin")
+        fractions(self, "velocity_retention", "joint_error_bias", "max_span")
         if self.n_points < 3:
             raise ValueError(f"CordParams.n_points must be >= 3, got {self.n_points!r}")
-        if self.substeps < 1 or self.iterations < 1:
-            raise ValueError("CordParams.substeps and CordParams.iterations must be >= 1")
-        if not 0 < self.max_span <= 1:
-            raise ValueError(f"CordParams.max_span must be in (0, 1], got {self.max_span!r}")
+        positive_ints(self, "substeps", "iterations")
 
     @property
     def segment(self) -> float:

@@ -10,6 +10,8 @@ from __future__ import annotations
 from dataclasses import dataclass, fields
 from typing import Any
 
+from dlo_env.checks import positive_ints
+
 REPRESENTATIONS = ("canonical", "world")
 OUTPUTS = ("points", "angles")
 LR_SCHEDULES = ("cosine", "constant")
@@ -139,10 +141,7 @@ class TrainConfig:
     threads: int = 2
 
     def __post_init__(self) -> None:
-        for name in ("batch_size", "d_steps", "encoder_batch_size", "eval_every"):
-            value = getattr(self, name)
-            if not isinstance(value, int) or value < 1:
-                raise ValueError(f"TrainConfig.{name} must be a positive int, got {value!r}")
+        positive_ints(self, "batch_size", "d_steps", "encoder_batch_size", "eval_every")
         if not 0.0 <= self.spacing_weight <= 1.0:
             raise ValueError(
                 f"TrainConfig.spacing_weight must be in [0, 1], got {self.spacing_weight!r}"

@@ -25,6 +25,7 @@ import numpy as np
 import torch
 from torch import nn
 
+from dlo_env.checks import positive, positive_ints
 from dlo_env.cord import CordParams, reachable_targets
 from dlo_env.shapes import TABLE_HALF
 from dlo_env.tasks import DEFAULT_MAX_STEP
@@ -79,15 +80,8 @@ class TransitionModelConfig:
     rim_reach: float = 0.15
 
     def __post_init__(self) -> None:
-        for name in ("n_points", "members", "width", "depth"):
-            value = getattr(self, name)
-            if not isinstance(value, int) or value < 1:
-                raise ValueError(f"TransitionModelConfig.{name} must be a positive int, "
-                                 f"got {value!r}")
-        for name in ("cord_length", "max_step", "move_scale", "output_scale", "rim_reach"):
-            if not getattr(self, name) > 0:
-                raise ValueError(f"TransitionModelConfig.{name} must be > 0, got "
-                                 f"{getattr(self, name)!r}")
+        positive_ints(self, "n_points", "members", "width", "depth")
+        positive(self, "cord_length", "max_step", "move_scale", "output_scale", "rim_reach")
 
     @property
     def inputs(self) -> int:

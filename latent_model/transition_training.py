@@ -25,6 +25,7 @@ import numpy as np
 import torch
 
 from dlo_env.atomic import atomic_path
+from dlo_env.checks import non_negative, positive, positive_ints
 from dlo_env.dataset.transitions import GRASP_NAMES, TransitionDataset, split_transitions
 from latent_model.checkpoint import load_checkpoint, save_atomic
 from latent_model.config import LR_SCHEDULES, config_from_dict
@@ -66,19 +67,9 @@ class TransitionTrainConfig:
     seed: int = 0
 
     def __post_init__(self) -> None:
-        for name in ("steps", "batch_size", "eval_every"):
-            value = getattr(self, name)
-            if not isinstance(value, int) or value < 1:
-                raise ValueError(f"TransitionTrainConfig.{name} must be a positive int, "
-                                 f"got {value!r}")
-        if not isinstance(self.chain_moves, int) or self.chain_moves < 1:
-            raise ValueError(f"TransitionTrainConfig.chain_moves must be an int >= 1, "
-                             f"got {self.chain_moves!r}")
-        if not isinstance(self.chain_batch, int) or self.chain_batch < 0:
-            raise ValueError(f"TransitionTrainConfig.chain_batch must be an int >= 0, "
-                             f"got {self.chain_batch!r}")
-        if not (self.lr > 0 and self.chain_weight >= 0):
-            raise ValueError("TransitionTrainConfig.lr must be > 0 and chain_weight >= 0")
+        positive_ints(self, "steps", "batch_size", "eval_every", "chain_moves")
+        non_negative(self, "chain_batch", "chain_weight")
+        positive(self, "lr")
         if self.lr_schedule not in LR_SCHEDULES:
             raise ValueError(f"TransitionTrainConfig.lr_schedule must be one of {LR_SCHEDULES}, "
                              f"got {self.lr_schedule!r}")

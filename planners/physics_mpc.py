@@ -17,6 +17,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from dlo_env.checks import positive_ints
 from dlo_env.cord import Cord, CordParams
 from dlo_env.shapes import error
 from planners.interfaces import EpisodeStats, Observation
@@ -49,9 +50,7 @@ class PhysicsMPCConfig:
     seed: int = 0
 
     def __post_init__(self) -> None:
-        for name in ("moves", "samples", "elites", "iterations", "replan_every"):
-            if getattr(self, name) < 1:
-                raise ValueError(f"PhysicsMPCConfig.{name} must be >= 1, got {getattr(self, name)}")
+        positive_ints(self, "moves", "samples", "elites", "iterations", "replan_every")
         if self.elites > self.samples:
             raise ValueError(
                 f"PhysicsMPCConfig.elites must be <= samples ({self.samples}), got {self.elites}"

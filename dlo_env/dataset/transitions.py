@@ -50,6 +50,7 @@ from typing import Any
 
 import numpy as np
 
+from dlo_env.checks import fractions, positive, positive_ints
 from dlo_env.cord import Cord, CordParams
 from dlo_env.dataset.chunks import (
     ChunkJob,
@@ -128,10 +129,7 @@ class TransitionCollectConfig:
     def __post_init__(self) -> None:
         if not isinstance(self.seed, (int, np.integer)) or self.seed < 0:
             raise ValueError(f"seed must be an integer >= 0, got {self.seed!r}")
-        for name in ("moves_per_episode", "chunk_size"):
-            value = getattr(self, name)
-            if not isinstance(value, (int, np.integer)) or value < 1:
-                raise ValueError(f"{name} must be an integer >= 1, got {value!r}")
+        positive_ints(self, "moves_per_episode", "chunk_size")
         weights = np.asarray(self.grasp_weights, dtype=np.float64)
         if weights.shape != (3,) or (weights < 0).any() or weights.sum() <= 0:
             raise ValueError("grasp_weights must be 3 non-negative weights (head, tail, both) "
@@ -139,14 +137,12 @@ class TransitionCollectConfig:
         if not 0.0 < self.min_move <= self.max_move:
             raise ValueError("min_move and max_move must satisfy 0 < min_move <= max_move, "
                              f"got {self.min_move!r} and {self.max_move!r}")
-        fractions = (self.push_fraction, self.rim_fraction)
-        if min(fractions) < 0 or sum(fractions) > 1:
+        aims = (self.push_fraction, self.rim_fraction)
+        if min(aims) < 0 or sum(aims) > 1:
             raise ValueError("push_fraction and rim_fraction must be >= 0 with a sum <= 1, "
                              f"got {self.push_fraction!r} and {self.rim_fraction!r}")
-        if not 0.0 <= self.log_fraction <= 1.0:
-            raise ValueError(f"log_fraction must be in [0, 1], got {self.log_fraction!r}")
-        if not self.max_step > 0:
-            raise ValueError(f"max_step must be > 0, got {self.max_step!r}")
+        fractions(self, "log_fraction", closed_low=True)
+        positive(self, "max_step")
 
     def to_json(self) -> dict[str, Any]:
         """The configuration as JSON-compatible values (tuples become lists)."""

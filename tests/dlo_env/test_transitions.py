@@ -136,7 +136,7 @@ def test_split_keeps_each_episode_on_one_side(small):
 
 
 @pytest.mark.parametrize(("field", "value", "message"), [
-    ("moves_per_episode", 0, "moves_per_episode must be an integer >= 1"),
+    ("moves_per_episode", 0, "moves_per_episode must be an int >= 1"),
     ("min_move", 0.5, "min_move and max_move"),
     ("grasp_weights", (0.0, 0.0, 0.0), "grasp_weights"),
     ("push_fraction", 0.95, "push_fraction and rim_fraction"),
