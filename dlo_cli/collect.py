@@ -8,6 +8,8 @@ Example:
 from __future__ import annotations
 
 import argparse
+from collections.abc import Callable
+from typing import Any
 
 from dlo_cli.flags import add_backend, backend_of, engine_text, number_in, positive_int
 
@@ -45,6 +47,61 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     add_backend(parser)
 
 
+class RejectedShare:
+    """Progress-bar text: the share of shapes rejected so far."""
+
+    def __init__(self) -> None:
+        self.accepted = self.rejected = 0
+
+    def __call__(self, accepted: int, rejected: int) -> str:
+        self.accepted += accepted
+        self.rejected += rejected
+        return f"rejected {self.rejected / max(self.accepted + self.rejected, 1):.1%}"
+
+
+def run_chunked(args: argparse.Namespace, job: Callable[[Callable[[int, int], None]], Any],
+                total: int, unit: str,
+                postfix: Callable[[int, int], str] | None = None) -> tuple[Any, float] | None:
+    """Run a chunked collection ``job(progress)`` with a progress bar; print what was written.
+
+    Returns:
+        ``(dataset, seconds)``, or None after Ctrl-C (the kept chunks and ``--resume`` are
+        named on stderr).
+    """
+    import os
+    import sys
+    import time
+
+    from dlo_bench.progress import progress_bar
+    from dlo_env.dataset.chunks import parts_dir
+
+    bars: list = []  # opened on the first report, so argument errors print no bar
+
+    def progress(done: int, rejected: int) -> None:
+        if not bars:
+            bars.append(progress_bar(total, desc="collect", unit=unit))
+        if postfix is not None:
+            bars[0].set_postfix_str(postfix(done, rejected), refresh=False)
+        bars[0].update(done)
+
+    started = time.perf_counter()
+    try:
+        data = job(progress)
+    except KeyboardInterrupt:
+        print(f"\ninterrupted: finished chunks are kept in {parts_dir(args.out)}; run the same "
+              "command with --resume to continue", file=sys.stderr)
+        return None
+    finally:
+        for bar in bars:
+            bar.close()
+    elapsed = time.perf_counter() - started
+    meta = data.metadata
+    print(f"wrote {args.out} ({os.path.getsize(args.out) / 1e6:.1f} MB) in {elapsed:.1f} s")
+    if meta["chunks_resumed"]:
+        print(f"  resumed {meta['chunks_resumed']} of {meta['chunks']} chunks")
+    return data, elapsed
+
+
 def run(args: argparse.Namespace) -> int:
     """Collect the dataset with a progress bar, then print a summary."""
     if args.kind == "transitions":
@@ -53,48 +110,24 @@ def run(args: argparse.Namespace) -> int:
         return run_transitions(args)
     if args.num_shapes is None:
         raise ValueError("--num-shapes is required with --kind shapes")
-    import os
-    import sys
-    import time
 
-    from dlo_bench.progress import progress_bar
-    from dlo_env.dataset.chunks import parts_dir
     from dlo_env.dataset.collect import CollectConfig, collect
     from dlo_env.dataset.diversity import diversity_report
 
     config = CollectConfig(seed=args.seed, cosine_threshold=args.cosine_threshold,
                            record_every=args.record_every)
-    counts = {"accepted": 0, "rejected": 0}
-    bars: list = []  # opened on the first report, so argument errors print no bar
-
-    def progress(accepted: int, rejected: int) -> None:
-        if not bars:
-            bars.append(progress_bar(args.num_shapes, desc="collect", unit="shape"))
-        bar = bars[0]
-        counts["accepted"] += accepted
-        counts["rejected"] += rejected
-        seen = counts["accepted"] + counts["rejected"]
-        bar.set_postfix_str(f"rejected {counts['rejected'] / max(seen, 1):.1%}", refresh=False)
-        bar.update(accepted)
-
-    started = time.perf_counter()
-    try:
-        data = collect(args.out, args.num_shapes, config, workers=args.workers,
-                       resume=args.resume, progress=progress, backend=backend_of(args))
-    except KeyboardInterrupt:
-        print(f"\ninterrupted: finished chunks are kept in {parts_dir(args.out)}; run the same "
-              "command with --resume to continue", file=sys.stderr)
+    rejected_share = RejectedShare()
+    result = run_chunked(
+        args, lambda progress: collect(args.out, args.num_shapes, config, workers=args.workers,
+                                       resume=args.resume, progress=progress,
+                                       backend=backend_of(args)),
+        args.num_shapes, "shape", postfix=rejected_share)
+    if result is None:
         return 130
-    finally:
-        for bar in bars:
-            bar.close()
-    elapsed = time.perf_counter() - started
+    data, elapsed = result
     meta = data.metadata
     rejected = meta["rejected"]
     seen = meta["accepted"] + rejected["total"]
-    print(f"wrote {args.out} ({os.path.getsize(args.out) / 1e6:.1f} MB) in {elapsed:.1f} s")
-    if meta["chunks_resumed"]:
-        print(f"  resumed {meta['chunks_resumed']} of {meta['chunks']} chunks")
     made = meta["accepted"] - meta["shapes_resumed"]
     print(f"  shapes: {meta['accepted']} accepted; {made} made in this run, "
           f"{made / elapsed:.0f}/s {engine_text(args)}")

@@ -13,14 +13,9 @@ from dlo_cli.flags import backend_of, engine_text
 
 def run(args: argparse.Namespace) -> int:
     """Collect transitions with a progress bar, then print a summary."""
-    import os
-    import sys
-    import time
-
     import numpy as np
 
-    from dlo_bench.progress import progress_bar
-    from dlo_env.dataset.chunks import parts_dir
+    from dlo_cli.collect import run_chunked
     from dlo_env.dataset.transitions import (
         GRASP_NAMES,
         TransitionCollectConfig,
@@ -30,31 +25,16 @@ def run(args: argparse.Namespace) -> int:
     if args.num_transitions is None:
         raise ValueError("--num-transitions is required with --kind transitions")
     config = TransitionCollectConfig(seed=args.seed)
-    bars: list = []  # opened on the first report, so argument errors print no bar
-
-    def progress(done: int, rejected: int) -> None:
-        if not bars:
-            bars.append(progress_bar(args.num_transitions, desc="collect", unit="transition"))
-        bars[0].update(done)
-
-    started = time.perf_counter()
-    try:
-        data = collect_transitions(args.out, args.num_transitions, config,
-                                   workers=args.workers, resume=args.resume, progress=progress,
-                                   backend=backend_of(args))
-    except KeyboardInterrupt:
-        print(f"\ninterrupted: finished chunks are kept in {parts_dir(args.out)}; run the "
-              "same command with --resume to continue", file=sys.stderr)
+    result = run_chunked(
+        args, lambda progress: collect_transitions(
+            args.out, args.num_transitions, config, workers=args.workers, resume=args.resume,
+            progress=progress, backend=backend_of(args)),
+        args.num_transitions, "transition")
+    if result is None:
         return 130
-    finally:
-        for bar in bars:
-            bar.close()
-    elapsed = time.perf_counter() - started
+    data, elapsed = result
     meta = data.metadata
     made = meta["num_transitions"] - meta["transitions_resumed"]
-    print(f"wrote {args.out} ({os.path.getsize(args.out) / 1e6:.1f} MB) in {elapsed:.1f} s")
-    if meta["chunks_resumed"]:
-        print(f"  resumed {meta['chunks_resumed']} of {meta['chunks']} chunks")
     print(f"  transitions: {len(data)}; {made} made in this run, {made / elapsed:.0f}/s "
           f"{engine_text(args)}; episodes: {meta['episodes']}")
     counts = ", ".join(f"{n} {c}" for n, c in zip(GRASP_NAMES, meta["grasp_counts"]))
