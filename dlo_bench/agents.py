@@ -116,6 +116,12 @@ def _physics_mpc(env: Any, options: AgentOptions) -> Policy:
     return PhysicsMPCPolicy.for_env(env, PhysicsMPCConfig(seed=options.seed))
 
 
+def _latent_mpc(env: Any, options: AgentOptions) -> Policy:
+    from planners.latent_mpc import LatentMPCConfig, LatentMPCPolicy
+
+    return LatentMPCPolicy.for_env(env, LatentMPCConfig(seed=options.seed))
+
+
 def _sb3(algo: str) -> Callable[[Any, AgentOptions], Policy]:
     def build(env: Any, options: AgentOptions) -> Policy:
         from dlo_bench.baselines import load_baseline
@@ -143,6 +149,8 @@ AGENTS: dict[str, AgentSpec] = {spec.name: spec for spec in (
               _latent_tree(closed=True), extra="model", shape_model=True),
     AgentSpec("physics-mpc", "CEM over straight moves with the simulator as the model",
               _physics_mpc, environments=(ENDPOINT, DUAL_ENDPOINT)),
+    AgentSpec("latent-mpc", "CEM over straight moves scored by the learned transition model",
+              _latent_mpc, environments=(ENDPOINT, DUAL_ENDPOINT), extra="model"),
     AgentSpec("ppo", "the shipped PPO baseline (Stable-Baselines3)", _sb3("ppo"), extra="rl"),
     AgentSpec("sac-her", "the shipped SAC + HER baseline (Stable-Baselines3)", _sb3("sac-her"),
               extra="rl"),

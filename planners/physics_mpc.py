@@ -149,6 +149,11 @@ class PhysicsMPCPolicy:
         cord.wait(self.config.settle_periods)
         return cord.shape
 
+    def _score(self, shape: np.ndarray, goal: np.ndarray, candidates: np.ndarray) -> np.ndarray:
+        """Errors ``(S,)`` to ``goal`` of candidate plans ``(S, moves, ends, 2)`` from ``shape``:
+        the one place where planning on another model differs."""
+        return np.array([error(self._rollout(shape, c), goal) for c in candidates])
+
     def plan(self, shape: np.ndarray, goal: np.ndarray) -> tuple[np.ndarray, float]:
         """CEM over straight-move sequences from ``shape`` towards ``goal``.
 
@@ -173,7 +178,7 @@ class PhysicsMPCPolicy:
             candidates[0] = mean  # always re-score the current mean
             norms = np.linalg.norm(candidates, axis=-1, keepdims=True)
             candidates *= np.minimum(1.0, cfg.max_move / np.maximum(norms, 1e-12))
-            errors = np.array([error(self._rollout(shape, c), goal) for c in candidates])
+            errors = self._score(shape, goal, candidates)
             self.stats.rollouts += cfg.samples
             order = np.argsort(errors)
             if errors[order[0]] < best_err:
@@ -186,6 +191,10 @@ class PhysicsMPCPolicy:
         self.stats.seconds += time.perf_counter() - t0
         self.stats.predicted_errors.append(best_err)
         return best_plan, best_err
+
+    def _execute(self, plan: np.ndarray) -> list[np.ndarray]:
+        """The actions run before the next planning call: ``replan_every`` steps of the plan."""
+        return self._actions(plan)[: self.config.replan_every]
 
     def _actions(self, plan: np.ndarray) -> list[np.ndarray]:
         """Split each move into equal actions no longer than ``max_step`` (as the env runs them)."""
@@ -220,7 +229,7 @@ class PhysicsMPCPolicy:
         else:
             if not self._queue:
                 plan, _ = self.plan(shape, goal)
-                self._queue = self._actions(plan)[: self.config.replan_every]
+                self._queue = self._execute(plan)
             action = self._queue.pop(0) if self._queue else np.zeros(action_dim, np.float32)
         action = np.clip(action, -1.0, 1.0)
         return (action[None] if batched else action), state

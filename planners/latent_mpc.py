@@ -1,0 +1,110 @@
+"""latent-mpc: CEM over straight moves, every candidate scored by the learned transition model.
+
+The planner of ``PhysicsMPCPolicy`` (the cross-entropy method over sequences of straight moves
+of the held end(s), warm-started from the previous plan), with the simulator replaced by
+``latent_model.TransitionModel``: all candidates of an iteration are rolled out in one batched
+call, move after move, and scored by the error of the predicted final shape to the goal (plus,
+optionally, the ensemble's spread). The first move is executed as ``split_move`` actions,
+followed by zero actions while the cord comes to rest, and the policy plans again from the
+observed shape (closed loop) until the goal is reached.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from dlo_env.checks import non_negative, positive_ints
+from dlo_env.shapes import error
+from planners.physics_mpc import PhysicsMPCConfig, PhysicsMPCPolicy
+
+
+@dataclass(frozen=True)
+class LatentMPCConfig(PhysicsMPCConfig):
+    """CEM budget of latent-mpc (the model is cheap: many more samples than physics-mpc).
+
+    Attributes:
+        spread_weight: Weight of the ensemble's spread of the final shape in the cost.
+        settle_actions: Zero actions after each executed move, for the cord to come to rest
+            (the model predicts shapes at rest).
+    """
+
+    moves: int = 3
+    samples: int = 256
+    elites: int = 24
+    iterations: int = 5
+    init_std: float = 0.08
+    max_move: float = 0.35
+    spread_weight: float = 0.0
+    settle_actions: int = 3
+
+    def __post_init__(self) -> None:
+        super().__post_init__()
+        non_negative(self, "spread_weight", "settle_actions")
+        positive_ints(self, "moves")
+
+
+class LatentMPCPolicy(PhysicsMPCPolicy):
+    """CEM model-predictive control on the learned transition model.
+
+    Args:
+        model: A ``latent_model.TransitionModel`` (its cord and ``max_step`` must match the
+            environment's).
+        grasp: ``"head"`` for ``DLOEndpoint-v0``, ``"both"`` for ``DLODualEndpoint-v0``.
+        success_threshold: Shape error (metres) below which the policy holds still.
+        config: CEM budget.
+    """
+
+    def __init__(self, model: Any, grasp: str = "head", success_threshold: float = 0.02,
+                 config: LatentMPCConfig | None = None) -> None:
+        self.model = model
+        super().__init__(params=model.cord_params, grasp=grasp, max_step=model.config.max_step,
+                         success_threshold=success_threshold,
+                         config=config if config is not None else LatentMPCConfig())
+
+    @classmethod
+    def for_env(cls, env: object, config: LatentMPCConfig | None = None,
+                model: Any = None) -> LatentMPCPolicy:
+        """Build the policy for a ``dlo_env`` environment; refuses a mismatched model."""
+        if model is None:
+            from latent_model import TransitionModel
+
+            model = TransitionModel.load_or_pretrained(device="cpu")
+        base = getattr(env, "unwrapped", env)
+        policy = cls(model, grasp=base.cord.grasp, success_threshold=base.success_threshold,
+                     config=config)
+        policy.check_env(env)
+        return policy
+
+    def check_env(self, env: object) -> None:
+        """Raise ``ValueError`` unless the environment's cord, grasp and step fit the model."""
+        base = getattr(env, "unwrapped", env)
+        p = base.params
+        if (p.n_points, p.length) != (self.params.n_points, self.params.length):
+            raise ValueError(
+                f"the transition model was trained for a cord of {self.params.n_points} points "
+                f"and {self.params.length} m, but the environment's cord has {p.n_points} "
+                f"points and {p.length} m: train a model for this cord")
+        if abs(base.max_step - self.max_step) > 1e-12:
+            raise ValueError(
+                f"the transition model was trained with max_step={self.max_step} m, but the "
+                f"environment has max_step={base.max_step} m")
+        if base.cord.grasp != self.grasp:
+            raise ValueError(f"the policy moves grasp {self.grasp!r} but the environment holds "
+                             f"{base.cord.grasp!r}")
+
+    def _score(self, shape: np.ndarray, goal: np.ndarray, candidates: np.ndarray) -> np.ndarray:
+        shapes = np.broadcast_to(shape, (len(candidates),) + shape.shape)
+        spread = np.zeros(len(candidates))
+        for k in range(candidates.shape[1]):
+            shapes, spread = self.model.predict(shapes, self.grasp,
+                                                candidates[:, k].reshape(len(candidates), -1),
+                                                return_std=True)
+        return error(shapes, goal) + self.config.spread_weight * spread
+
+    def _execute(self, plan: np.ndarray) -> list[np.ndarray]:
+        """The first move, then zero actions while the cord comes to rest."""
+        zero = np.zeros(2 * len(self.ends), dtype=np.float32)
+        return self._actions(plan[:1]) + [zero] * self.config.settle_actions

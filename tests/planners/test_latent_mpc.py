@@ -1,0 +1,68 @@
+"""Specification of latent-mpc (planners.latent_mpc): CEM on the learned transition model."""
+
+from __future__ import annotations
+
+import gymnasium as gym
+import numpy as np
+import pytest
+import torch
+
+import dlo_env  # noqa: F401  (registers the environments)
+from dlo_bench import build_agent
+from dlo_env.cord import CordParams
+from dlo_env.tasks import load_suite
+from latent_model import TransitionModel, TransitionModelConfig
+from planners.interfaces import PlanningPolicy
+from planners.latent_mpc import LatentMPCConfig, LatentMPCPolicy
+
+TINY = TransitionModelConfig(width=8, depth=1, members=2)
+
+
+@pytest.fixture(autouse=True)
+def _one_thread():
+    before = torch.get_num_threads()
+    torch.set_num_threads(1)
+    yield
+    torch.set_num_threads(before)
+
+
+def test_it_is_a_planning_policy_registered_for_both_environments():
+    for env_id, width in (("dlo_env/DLOEndpoint-v0", 2), ("dlo_env/DLODualEndpoint-v0", 4)):
+        env = gym.make(env_id)
+        policy = LatentMPCPolicy.for_env(env, LatentMPCConfig(samples=8, elites=2, iterations=1),
+                                         model=TransitionModel(TINY, device="cpu"))
+        assert isinstance(policy, PlanningPolicy)
+        obs, _ = env.reset(seed=1)
+        action, _ = policy.predict(obs)
+        assert action.shape == (width,) and np.abs(action).max() <= 1.0
+        assert policy.episode_stats().plans == 1
+    assert build_agent("latent-mpc", gym.make("dlo_env/DLODualEndpoint-v0")).grasp == "both"
+
+
+def test_a_model_for_another_cord_or_step_is_refused_in_one_line():
+    other = TransitionModel(TransitionModelConfig(n_points=12, width=8, depth=1, members=2),
+                            device="cpu")
+    with pytest.raises(ValueError, match="cord of 12 points") as info:
+        LatentMPCPolicy.for_env(gym.make("dlo_env/DLOEndpoint-v0"), model=other)
+    assert "\n" not in str(info.value)
+    coarse = gym.make("dlo_env/DLOEndpoint-v0", max_step=0.03)
+    with pytest.raises(ValueError, match="max_step=0.02 m"):
+        LatentMPCPolicy.for_env(coarse, model=TransitionModel(TINY, device="cpu"))
+    assert CordParams().n_points == 20
+
+
+@pytest.mark.slow
+def test_the_shipped_model_solves_train_tasks_of_difficulty_two_closed_loop():
+    env = gym.make("dlo_env/DLOEndpoint-v0")
+    policy = build_agent("latent-mpc", env)
+    solved = 0
+    for task in load_suite("linear-2", "train", limit=3):
+        obs, info = env.reset(options={"start": task.start, "goal": task.goal})
+        policy.reset()
+        for _ in range(100):
+            action, _ = policy.predict(obs)
+            obs, _, terminated, truncated, info = env.step(action)
+            if terminated or truncated:
+                break
+        solved += bool(info["is_success"])
+    assert solved == 3
