@@ -30,6 +30,8 @@ class AgentOptions:
     Attributes:
         model: Shape model of the latent-tree agents: a loaded model, a file or folder, or None
             for the shipped one.
+        transition_model: Transition model of latent-mpc and latent-tree-kino: a loaded
+            ``TransitionModel``, a file or folder, or None for the shipped one.
         baseline: Folder of a ``dlo baseline`` run for the RL agents (None: the shipped one).
         seed: Seed of the planner's sampling.
         replan_every: Steps between the checks of ``latent-tree-closed``.
@@ -38,6 +40,7 @@ class AgentOptions:
     """
 
     model: ShapeSurrogate | str | Path | None = None
+    transition_model: Any = None
     baseline: str | Path | None = None
     seed: int = 0
     replan_every: int = DEFAULT_REPLAN_EVERY
@@ -56,6 +59,7 @@ class AgentSpec:
         environments: Environment ids it acts in.
         extra: The ``pip install "dlo[EXTRA]"`` it needs beyond the core ("" for none).
         shape_model: Whether it plans on a shape model (``options.model``).
+        transition_model: Whether it plans on a transition model (``options.transition_model``).
         defaults: ``AgentOptions`` fields this agent sets differently.
     """
 
@@ -65,6 +69,7 @@ class AgentSpec:
     environments: tuple[str, ...] = (ENDPOINT,)
     extra: str = ""
     shape_model: bool = False
+    transition_model: bool = False
     defaults: Mapping[str, Any] = field(default_factory=dict)
 
 
@@ -88,6 +93,23 @@ def load_shape_model(model: ShapeSurrogate | str | Path | None) -> ShapeSurrogat
         raise FileNotFoundError(f"no shape model: {exc} (train one with `dlo train`)") from exc
 
 
+def load_transition_model(model: Any) -> Any:
+    """``model`` itself when it is loaded, else ``TransitionModel.load_or_pretrained(model)``.
+
+    Raises:
+        FileNotFoundError: Saying "no transition model" and where, when the file is missing.
+    """
+    from latent_model import TransitionModel
+
+    if isinstance(model, TransitionModel):
+        return model
+    try:
+        return TransitionModel.load_or_pretrained(model, device="cpu")
+    except FileNotFoundError as exc:
+        raise FileNotFoundError(f"no transition model: {exc} (train one with `dlo train "
+                                "--stage transition`)") from exc
+
+
 def _latent_tree(closed: bool) -> Callable[[Any, AgentOptions], Policy]:
     def build(env: Any, options: AgentOptions) -> Policy:
         from planners.latent_tree import LatentTreePlanner
@@ -107,7 +129,7 @@ def _latent_tree(closed: bool) -> Callable[[Any, AgentOptions], Policy]:
 def _straight_line(env: Any, options: AgentOptions) -> Policy:
     from planners.straight_line import StraightLinePolicy
 
-    return StraightLinePolicy(max_step=_max_step(env))
+    return StraightLinePolicy(max_step=_max_step(env), grasp=env.unwrapped.cord.grasp)
 
 
 def _physics_mpc(env: Any, options: AgentOptions) -> Policy:
@@ -119,14 +141,16 @@ def _physics_mpc(env: Any, options: AgentOptions) -> Policy:
 def _latent_mpc(env: Any, options: AgentOptions) -> Policy:
     from planners.latent_mpc import LatentMPCConfig, LatentMPCPolicy
 
-    return LatentMPCPolicy.for_env(env, LatentMPCConfig(seed=options.seed))
+    return LatentMPCPolicy.for_env(env, LatentMPCConfig(seed=options.seed),
+                                   model=load_transition_model(options.transition_model))
 
 
 def _sb3(algo: str) -> Callable[[Any, AgentOptions], Policy]:
     def build(env: Any, options: AgentOptions) -> Policy:
         from dlo_bench.baselines import load_baseline
 
-        folder = options.baseline if options.baseline is not None else shipped_baseline(algo)
+        folder = (options.baseline if options.baseline is not None
+                  else shipped_baseline(algo, env.unwrapped.spec.id))
         return load_baseline(folder, device=options.device, algo=algo)
 
     return build
@@ -141,8 +165,8 @@ def _bc(env: Any, options: AgentOptions) -> Policy:
 
 #: Every agent by name, in the benchmark's table order.
 AGENTS: dict[str, AgentSpec] = {spec.name: spec for spec in (
-    AgentSpec("straight-line", "moves the head straight to the goal's head (reference)",
-              _straight_line),
+    AgentSpec("straight-line", "moves the held end(s) straight to the goal's (reference)",
+              _straight_line, environments=(ENDPOINT, DUAL_ENDPOINT)),
     AgentSpec("latent-tree", "the paper's latent tree, planned once (open loop)",
               _latent_tree(closed=False), extra="model", shape_model=True),
     AgentSpec("latent-tree-closed", "the latent tree, checked and replanned every few steps",
@@ -150,10 +174,12 @@ AGENTS: dict[str, AgentSpec] = {spec.name: spec for spec in (
     AgentSpec("physics-mpc", "CEM over straight moves with the simulator as the model",
               _physics_mpc, environments=(ENDPOINT, DUAL_ENDPOINT)),
     AgentSpec("latent-mpc", "CEM over straight moves scored by the learned transition model",
-              _latent_mpc, environments=(ENDPOINT, DUAL_ENDPOINT), extra="model"),
-    AgentSpec("ppo", "the shipped PPO baseline (Stable-Baselines3)", _sb3("ppo"), extra="rl"),
+              _latent_mpc, environments=(ENDPOINT, DUAL_ENDPOINT), extra="model",
+              transition_model=True),
+    AgentSpec("ppo", "the shipped PPO baseline (Stable-Baselines3)", _sb3("ppo"),
+              environments=(ENDPOINT, DUAL_ENDPOINT), extra="rl"),
     AgentSpec("sac-her", "the shipped SAC + HER baseline (Stable-Baselines3)", _sb3("sac-her"),
-              extra="rl"),
+              environments=(ENDPOINT, DUAL_ENDPOINT), extra="rl"),
     AgentSpec("bc", "behaviour cloning of the oracle demonstrations (Minari datasets)", _bc,
               extra="rl"),
 )}
@@ -185,8 +211,8 @@ def build_agent(name: str, env: Any, **options: Any) -> Policy:
     Args:
         name: A key of ``AGENTS``, or ``sb3:PATH`` with a folder written by ``dlo baseline``.
         env: The environment the agent will act in (wrapped or not).
-        **options: ``AgentOptions`` fields (``model``, ``baseline``, ``seed``,
-            ``replan_every``, ``max_seconds``, ``device``); None keeps the default.
+        **options: ``AgentOptions`` fields (``model``, ``transition_model``, ``baseline``,
+            ``seed``, ``replan_every``, ``max_seconds``, ``device``); None keeps the default.
 
     Returns:
         A policy with SB3's ``predict``.

@@ -1,13 +1,14 @@
-"""The comparison benchmark: every agent on the test suites, one table.
+"""The comparison benchmark: every agent on the test suites of both environments, one table.
 
-``run_benchmark`` evaluates the registered agents (``dlo_bench.agents.AGENTS``: the
-straight-line reference, the latent-tree planner open and closed loop, the physics-in-the-loop
-planner and the Stable-Baselines3 baselines) on the test split of the suites ``linear-1``,
-``linear-2`` and ``linear-3`` (fixed tasks, so every agent sees the same episodes) with
-:func:`dlo_bench.evaluation.evaluate`. An agent whose model is missing gets a row that says so,
-never silently none. Every finished (agent, difficulty) cell is written at once, so an
-interrupted run resumes; :func:`dlo_bench.benchmark_report.write_results` then writes the table
-(Markdown), the rows (JSON) and a bar chart (PNG), all atomically.
+``run_benchmark`` evaluates the registered agents (``dlo_bench.agents.AGENTS``) on the test
+split of the suites ``linear-1`` to ``linear-5`` in ``DLOEndpoint-v0`` and ``linear-1`` to
+``linear-3`` in ``DLODualEndpoint-v0`` (fixed tasks, so every agent sees the same episodes) with
+:func:`dlo_bench.evaluation.evaluate`. An agent that does not act in an environment, or whose
+model is missing, gets a row that says so, never silently none. Every row states the agent's
+sample cost: the data its model or policy was trained on. Every finished (agent, environment,
+difficulty) cell is written at once, so an interrupted run resumes;
+:func:`dlo_bench.benchmark_report.write_results` then writes the table (Markdown), the rows
+(JSON) and a bar chart (PNG), all atomically.
 """
 
 from __future__ import annotations
@@ -23,16 +24,30 @@ from typing import Any
 
 import numpy as np
 
-from dlo_bench.agents import AGENTS, build_agent
+from dlo_bench.agents import (
+    AGENTS,
+    DUAL_ENDPOINT,
+    ENDPOINT,
+    build_agent,
+    load_transition_model,
+)
 from dlo_bench.evaluation import EpisodeRecord, Evaluation, evaluate, summarise
-from dlo_bench.paths import shape_model_file, shipped_baseline
+from dlo_bench.paths import (
+    baseline_folder_name,
+    shape_model_file,
+    shipped_baseline,
+    transition_model_file,
+)
 from dlo_bench.report import json_ready, write_evaluation
+from dlo_env.envs import ENVIRONMENTS
 from dlo_env.tasks import SPLIT_SIZES, SUITES
 from planners.interfaces import Policy, ShapeSurrogate
 from planners.policy import DEFAULT_REPLAN_EVERY
 
 #: The test suite of every difficulty: ``linear-K`` holds tasks of K straight moves.
 SUITE_OF_DIFFICULTY = {difficulty: name for name, difficulty in SUITES.items()}
+#: The difficulties each environment is benchmarked on by default.
+DEFAULT_DIFFICULTIES = {ENDPOINT: (1, 2, 3, 4, 5), DUAL_ENDPOINT: (1, 2, 3)}
 #: Episodes of every cell in ``--quick`` runs.
 QUICK_EPISODES = 2
 #: Subfolder of the output folder holding one CSV/JSON of episodes per cell.
@@ -45,25 +60,30 @@ class BenchmarkConfig:
 
     Attributes:
         agents: Agent names (keys of ``dlo_bench.agents.AGENTS``), in table order.
-        difficulties: Difficulties; each is the test split of its suite ``linear-K``.
+        envs: Environment ids, in table order.
+        difficulties: Difficulties of every environment, each the test split of its suite
+            ``linear-K``; None: ``DEFAULT_DIFFICULTIES`` of each environment.
         episodes: Episodes per cell (the first tasks of the split; the split has 50).
         seed: Seed of the planners' sampling.
-        env_id: The environment.
-        baselines: Folder with one ``dlo baseline`` output folder per RL agent (``ppo/``,
-            ``sac-her/``); None: the shipped ones in ``dlo_bench/pretrained``.
+        baselines: Folder with one ``dlo baseline`` output folder per RL agent and environment
+            (``ppo/``, ``sac-her/``, ``bc/`` for ``DLOEndpoint-v0``; ``ppo-dual-endpoint/``...
+            for ``DLODualEndpoint-v0``); None: the shipped ones in ``dlo_bench/pretrained``.
         model: Shape model file or folder of the latent-tree agents (None: the shipped one).
+        transition_model: Transition model file or folder of latent-mpc and latent-tree-kino
+            (None: the shipped one).
         replan_every: Steps between replans of ``latent-tree-closed``.
         max_seconds: Time budget of one latent-tree plan (None: the planner's default).
         fidelity: Compute the transition fidelity of each first latent-tree plan.
     """
 
     agents: tuple[str, ...] = tuple(AGENTS)
-    difficulties: tuple[int, ...] = tuple(SUITE_OF_DIFFICULTY)
+    envs: tuple[str, ...] = tuple(DEFAULT_DIFFICULTIES)
+    difficulties: tuple[int, ...] | None = None
     episodes: int = SPLIT_SIZES["test"]
     seed: int = 0
-    env_id: str = "dlo_env/DLOEndpoint-v0"
     baselines: str | None = None
     model: str | None = None
+    transition_model: str | None = None
     replan_every: int = DEFAULT_REPLAN_EVERY
     max_seconds: float | None = None
     fidelity: bool = True
@@ -73,14 +93,28 @@ class BenchmarkConfig:
         if unknown or not self.agents:
             raise ValueError(f"agents must be a non-empty tuple of {tuple(AGENTS)}, "
                              f"got {self.agents!r}")
-        bad = [d for d in self.difficulties if d not in SUITE_OF_DIFFICULTY]
-        if bad or not self.difficulties:
-            raise ValueError(f"difficulties must be some of {tuple(SUITE_OF_DIFFICULTY)}, "
-                             f"got {self.difficulties!r}")
+        bad_envs = [e for e in self.envs if e not in ENVIRONMENTS]
+        if bad_envs or not self.envs:
+            raise ValueError(f"envs must be some of {tuple(ENVIRONMENTS)}, got {self.envs!r}")
+        if self.difficulties is not None:
+            bad = [d for d in self.difficulties if d not in SUITE_OF_DIFFICULTY]
+            if bad or not self.difficulties:
+                raise ValueError(f"difficulties must be some of {tuple(SUITE_OF_DIFFICULTY)}, "
+                                 f"got {self.difficulties!r}")
         size = SPLIT_SIZES["test"]
         if not (isinstance(self.episodes, int) and 1 <= self.episodes <= size):
             raise ValueError(f"episodes must be an int in 1..{size} (the test split), "
                              f"got {self.episodes!r}")
+
+    def cells(self) -> list[tuple[str, int]]:
+        """``(env_id, difficulty)`` of every column of the table, in order."""
+        return [(env, d) for env in self.envs
+                for d in (self.difficulties or DEFAULT_DIFFICULTIES.get(env, (1, 2, 3)))]
+
+
+def env_label(env_id: str) -> str:
+    """The short name of an environment in tables and file names (``endpoint``...)."""
+    return ENVIRONMENTS[env_id][1]
 
 
 @dataclass(frozen=True)
@@ -91,7 +125,9 @@ class LoadedAgent:
         name: Agent name.
         policy: The policy, or None when ``missing`` says why not.
         missing: Why the agent has no policy (empty when it has one).
-        training_env_steps: Environment steps of training (RL agents), else None.
+        training_env_steps: Environment steps of the data its model or policy was trained on
+            (None: not trained on environment steps; ``sample_cost`` says what instead).
+        sample_cost: What it was trained on, in words.
         model: Where its model came from ("" for model-free planners).
     """
 
@@ -99,7 +135,20 @@ class LoadedAgent:
     policy: Policy | None
     missing: str = ""
     training_env_steps: int | None = None
+    sample_cost: str = ""
     model: str = ""
+
+
+def _baseline_folder(name: str, config: BenchmarkConfig, env_id: str) -> Path:
+    """Where the RL agent ``name`` for ``env_id`` is read: ``ppo/`` for ``DLOEndpoint-v0``,
+    ``ppo-dual-endpoint/`` for ``DLODualEndpoint-v0`` (in ``config.baselines`` or shipped)."""
+    if config.baselines:
+        return Path(config.baselines) / baseline_folder_name(name, env_id)
+    return shipped_baseline(name, env_id)
+
+
+def _steps(count: int) -> str:
+    return f"{count / 1e6:.2f}M" if count >= 1e6 else f"{count / 1e3:.0f}k"
 
 
 def load_agent(name: str, config: BenchmarkConfig, env: Any,
@@ -108,30 +157,60 @@ def load_agent(name: str, config: BenchmarkConfig, env: Any,
 
     Args:
         name: A key of ``AGENTS``.
-        config: The benchmark (baselines folder, replanning, time budget, seed).
-        env: The environment (for the cord and ``max_step``).
+        config: The benchmark (baselines folder, models, replanning, time budget, seed).
+        env: The environment (for its id, the cord and ``max_step``).
         shape_model: The loaded shape model for the latent-tree agents (None: missing).
     """
     spec = AGENTS[name]
+    env_id = env.unwrapped.spec.id
+    if env_id not in spec.environments:
+        return LoadedAgent(name, None, missing=f"acts only in {', '.join(spec.environments)}")
     if spec.extra == "rl":
         from dlo_bench.baselines import read_baseline_metadata
 
-        folder = Path(config.baselines) / name if config.baselines else shipped_baseline(name)
+        folder = _baseline_folder(name, config, env_id)
         try:
             meta = read_baseline_metadata(folder)
             policy = build_agent(name, env, baseline=folder)
         except (FileNotFoundError, ValueError) as exc:
-            return LoadedAgent(name, None, missing=f"no trained model: {exc}".splitlines()[0])
-        return LoadedAgent(name, policy, training_env_steps=int(meta["trained_timesteps"]),
+            return LoadedAgent(name, None, missing=f"no trained model for {env_id}: "
+                                                   f"{exc}".splitlines()[0])
+        steps = int(meta["trained_timesteps"])
+        if name == "bc":  # trained offline on the oracle's demonstrations
+            cost = f"{_steps(steps)} demonstration steps"
+            return LoadedAgent(name, policy, training_env_steps=steps, sample_cost=cost,
+                               model=str(folder / "model.zip"))
+        return LoadedAgent(name, policy, training_env_steps=steps,
+                           sample_cost=f"{_steps(steps)} env steps",
                            model=str(folder / "model.zip"))
+    options: dict[str, Any] = {"seed": config.seed}
+    costs, steps, model = [], None, ""
     if spec.shape_model:
         if shape_model is None:
             return LoadedAgent(name, None, missing="no shape model (pass --model, or ship "
                                                    "latent_model/pretrained/model.pt)")
-        policy = build_agent(name, env, model=shape_model, seed=config.seed,
-                             replan_every=config.replan_every, max_seconds=config.max_seconds)
-        return LoadedAgent(name, policy, model=str(shape_model_file(config.model)))
-    return LoadedAgent(name, build_agent(name, env, seed=config.seed))
+        options.update(model=shape_model, replan_every=config.replan_every,
+                       max_seconds=config.max_seconds)
+        model = str(shape_model_file(config.model))
+        shapes = getattr(shape_model, "info", {}).get("n_train")
+        costs.append(f"{_steps(shapes)} simulated shapes" if shapes else "simulated shapes")
+    if spec.transition_model:
+        try:
+            transition = load_transition_model(config.transition_model)
+        except (FileNotFoundError, ValueError) as exc:
+            return LoadedAgent(name, None, missing=str(exc).splitlines()[0])
+        options.update(transition_model=transition)
+        model = str(transition_model_file(config.transition_model))
+        steps = transition.info.get("env_steps")
+        moves = transition.info.get("transitions")
+        costs.insert(0, f"{_steps(steps)} env steps ({_steps(moves)} moves)" if steps
+                     else "unknown (the model does not record its data)")
+    try:
+        policy = build_agent(name, env, **options)
+    except ValueError as exc:  # e.g. a model made for another cord
+        return LoadedAgent(name, None, missing=str(exc).splitlines()[0])
+    return LoadedAgent(name, policy, training_env_steps=steps,
+                       sample_cost=" + ".join(costs) or "none (no learned model)", model=model)
 
 
 def load_shape_model(path: str | None) -> tuple[ShapeSurrogate | None, str]:
@@ -152,20 +231,23 @@ def file_digest(path: str | os.PathLike) -> str:
     return hashlib.sha256(p.read_bytes()).hexdigest()[:16]
 
 
-def cell_key(config: BenchmarkConfig, agent: LoadedAgent, difficulty: int) -> dict[str, Any]:
+def cell_key(config: BenchmarkConfig, agent: LoadedAgent, env_id: str,
+             difficulty: int) -> dict[str, Any]:
     """What a cell's result depends on; a saved cell is reused only when its key matches."""
     key = asdict(config)
-    key.pop("agents")
-    key.pop("difficulties")
-    return {**key, "agent": agent.name, "difficulty": difficulty,
+    for name in ("agents", "envs", "difficulties"):
+        key.pop(name)
+    return {**key, "agent": agent.name, "env_id": env_id, "difficulty": difficulty,
             "model_digest": file_digest(agent.model) if agent.model else ""}
 
 
-def row_of(agent: LoadedAgent, difficulty: int, evaluation: Evaluation | None,
+def row_of(agent: LoadedAgent, env_id: str, difficulty: int, evaluation: Evaluation | None,
            episodes: int) -> dict[str, Any]:
     """One row of the results: the summary of a cell, or a row saying the agent is missing."""
     row: dict[str, Any] = {
         "agent": agent.name,
+        "env": env_label(env_id),
+        "env_id": env_id,
         "difficulty": difficulty,
         "suite": f"{SUITE_OF_DIFFICULTY[difficulty]}/test",
         "status": "ok" if not agent.missing else "missing",
@@ -181,6 +263,7 @@ def row_of(agent: LoadedAgent, difficulty: int, evaluation: Evaluation | None,
         "planning_failures": None,
         "mean_fidelity": None,
         "training_env_steps": agent.training_env_steps,
+        "sample_cost": agent.sample_cost,
         "model": agent.model,
         "wall_seconds": None,
         "commit": "",
@@ -251,57 +334,62 @@ def _warm_up(policy: Policy, env: Any) -> None:
 
 def run_benchmark(config: BenchmarkConfig, out_dir: str | os.PathLike, *,
                   resume: bool = False, progress: bool = True) -> list[dict[str, Any]]:
-    """Evaluate every agent on every difficulty's test suite; write each cell as it finishes.
+    """Evaluate every agent on every cell (environment, difficulty); write each as it finishes.
 
     Args:
         config: What to run.
-        out_dir: Output folder; cells go to ``out_dir/results_episodes/<agent>-d<K>.csv/.json``.
+        out_dir: Output folder; cells go to
+            ``out_dir/results_episodes/<agent>-<env>-d<K>.csv/.json``.
         resume: Reuse cells already written by a run with the same settings.
         progress: Show progress bars.
 
     Returns:
-        The rows, agents in ``config.agents`` order, difficulties ascending within an agent.
+        The rows: agents in ``config.agents`` order, then the cells in ``config.cells()`` order.
     """
     import gymnasium as gym
 
     import dlo_env  # noqa: F401  (registers the environments)
 
-    cells = Path(out_dir) / CELLS_DIR
+    folder = Path(out_dir) / CELLS_DIR
     shape_model, why = (None, "")
     if any(AGENTS[a].shape_model for a in config.agents):
         shape_model, why = load_shape_model(config.model)
     rows = []
     for name in config.agents:
-        env = gym.make(config.env_id)
-        try:
-            agent = load_agent(name, config, env, shape_model)
-            if agent.policy is not None:
-                _warm_up(agent.policy, env)
-        finally:
-            env.close()
-        if agent.missing and AGENTS[name].shape_model and why:
-            agent = LoadedAgent(name, None, missing=f"no shape model: {why}")
-        for difficulty in config.difficulties:
+        agents: dict[str, LoadedAgent] = {}
+        for env_id in config.envs:
+            env = gym.make(env_id)
+            try:
+                agent = load_agent(name, config, env, shape_model)
+                if agent.policy is not None:
+                    _warm_up(agent.policy, env)
+            finally:
+                env.close()
+            if agent.missing.startswith("no shape model") and why:
+                agent = LoadedAgent(name, None, missing=f"no shape model: {why}")
+            agents[env_id] = agent
+        for env_id, difficulty in config.cells():
+            agent = agents[env_id]
+            cell = f"{name}-{env_label(env_id)}-d{difficulty}"
             if agent.policy is None:
-                rows.append(row_of(agent, difficulty, None, 0))
+                rows.append(row_of(agent, env_id, difficulty, None, 0))
                 if progress:
-                    print(f"{name} d{difficulty}: missing ({agent.missing})", flush=True)
+                    print(f"{cell}: missing ({agent.missing})", flush=True)
                 continue
-            key = cell_key(config, agent, difficulty)
-            path = cells / f"{name}-d{difficulty}.json"
+            key = cell_key(config, agent, env_id, difficulty)
+            path = folder / f"{cell}.json"
             loaded = _load_cell(path, key) if resume else None
             if loaded is None:
                 t0 = time.perf_counter()
                 suite = SUITE_OF_DIFFICULTY[difficulty]
-                result = evaluate(agent.policy, config.env_id, suite=suite,
-                                  episodes=config.episodes, seed=config.seed, split="test",
-                                  agent=name, fidelity=config.fidelity, progress=progress)
+                result = evaluate(agent.policy, env_id, suite=suite, episodes=config.episodes,
+                                  seed=config.seed, split="test", agent=name,
+                                  fidelity=config.fidelity, progress=progress)
                 facts = {"wall_seconds": time.perf_counter() - t0, "commit": code_version()}
-                write_evaluation(result, cells, f"{name}-d{difficulty}",
-                                 extra={"benchmark_key": key, **facts})
+                write_evaluation(result, folder, cell, extra={"benchmark_key": key, **facts})
             else:
                 result, facts = loaded
                 if progress:
-                    print(f"{name} d{difficulty}: reused {path}", flush=True)
-            rows.append({**row_of(agent, difficulty, result, config.episodes), **facts})
+                    print(f"{cell}: reused {path}", flush=True)
+            rows.append({**row_of(agent, env_id, difficulty, result, config.episodes), **facts})
     return rows

@@ -17,26 +17,68 @@ from dlo_bench.report import json_ready
 from dlo_env.atomic import write_text_atomic
 
 
+def cell_label(row: dict[str, Any]) -> str:
+    """A cell's short name in tables and charts: ``endpoint d3``, ``dual-endpoint d1``."""
+    return f"{row.get('env', 'endpoint')} d{row['difficulty']}"
+
+
 def planning_time_ratios(rows: list[dict[str, Any]], slow: str = "physics-mpc",
                          fast: str = "latent-tree") -> dict[str, float]:
-    """Total planning seconds of ``slow`` over ``fast`` on the same episodes, per difficulty.
+    """Total planning seconds of ``slow`` over ``fast`` on the same episodes, per cell.
 
     Returns:
-        ``{"d1": ratio, ..., "all": ratio}`` for the difficulties both agents ran.
+        ``{"endpoint d1": ratio, ..., "all": ratio}`` for the cells both agents ran.
     """
-    by = {(r["agent"], r["difficulty"]): r for r in rows if r["status"] == "ok"}
+    by = {(r["agent"], cell_label(r)): r for r in rows if r["status"] == "ok"}
     ratios, slow_total, fast_total = {}, 0.0, 0.0
-    for (agent, difficulty), row in sorted(by.items(), key=lambda kv: kv[0][1]):
-        other = by.get((fast, difficulty))
-        if agent != slow or other is None or other["episodes"] != row["episodes"]:
+    for r in rows:
+        if r["agent"] != slow or r["status"] != "ok":
+            continue
+        other = by.get((fast, cell_label(r)))
+        if other is None or other["episodes"] != r["episodes"]:
             continue
         if other["total_seconds"] > 0:
-            ratios[f"d{difficulty}"] = row["total_seconds"] / other["total_seconds"]
-        slow_total += row["total_seconds"]
+            ratios[cell_label(r)] = r["total_seconds"] / other["total_seconds"]
+        slow_total += r["total_seconds"]
         fast_total += other["total_seconds"]
     if ratios and fast_total > 0:
         ratios["all"] = slow_total / fast_total
     return ratios
+
+
+#: The planning-time ratios the report states: physics-mpc over each cheaper planner.
+RATIO_PAIRS = (("physics-mpc", "latent-mpc"), ("physics-mpc", "latent-tree-kino"),
+               ("physics-mpc", "latent-tree"), ("physics-mpc", "latent-tree-closed"))
+
+
+def ratio_lines(rows: list[dict[str, Any]]) -> list[str]:
+    """One sentence per pair of ``RATIO_PAIRS`` that both ran."""
+    lines = []
+    for slow, fast in RATIO_PAIRS:
+        ratios = planning_time_ratios(rows, slow, fast)
+        if ratios:
+            parts = ", ".join(f"{k} {v:.0f}x" for k, v in ratios.items() if k != "all")
+            lines.append(f"Planning time {slow} / {fast} on the same episodes: "
+                         f"{ratios['all']:.0f}x overall ({parts}).")
+    return lines
+
+
+def success_table(rows: list[dict[str, Any]]) -> list[str]:
+    """Markdown: one row per agent, one column per cell, success rate (– when missing)."""
+    cells = list(dict.fromkeys(cell_label(r) for r in rows))
+    agents = list(dict.fromkeys(r["agent"] for r in rows))
+    by = {(r["agent"], cell_label(r)): r for r in rows}
+    lines = ["| agent | " + " | ".join(cells) + " | sample cost |",
+             "|---|" + "---|" * (len(cells) + 1)]
+    for agent in agents:
+        values, cost = [], ""
+        for cell in cells:
+            r = by.get((agent, cell))
+            ok = r is not None and r["status"] == "ok"
+            values.append(_fmt(r["success_rate"], "{:.0%}") if ok else "–")
+            cost = cost or (r.get("sample_cost", "") if ok else "")
+        lines.append(f"| {agent} | " + " | ".join(values) + f" | {cost or '–'} |")
+    return lines
 
 
 def machine_description() -> dict[str, Any]:
@@ -67,50 +109,52 @@ def _fmt(value: Any, fmt: str, scale: float = 1.0) -> str:
     return fmt.format(value * scale)
 
 
-def results_markdown(rows: list[dict[str, Any]], ratios: dict[str, float],
-                     machine: dict[str, Any], command: str, seconds: float) -> str:
-    """The Markdown report: the table, the speed ratio, missing agents, machine and command."""
+def results_markdown(rows: list[dict[str, Any]], machine: dict[str, Any], command: str,
+                     seconds: float) -> str:
+    """The Markdown report: success per cell, the detailed table, the speed ratios, missing
+    agents, machine and command."""
+    episodes = max((r["episodes"] for r in rows), default=0)
     lines = [
         "# Benchmark results",
         "",
-        "Every agent on the first N tasks of the test split of `linear-1`, `linear-2`, "
-        "`linear-3` (fixed tasks: every agent sees the same episodes) in "
-        "`dlo_env/DLOEndpoint-v0`; success means `error <= 2 cm` (mean point distance). "
+        f"Every agent on the first {episodes} tasks of the test split of the suites `linear-K` "
+        "(fixed tasks: every agent sees the same episodes) in `dlo_env/DLOEndpoint-v0` "
+        "(*endpoint*) and `dlo_env/DLODualEndpoint-v0` (*dual-endpoint*); *dK* is difficulty "
+        "K (K straight moves from start to goal). Success means `error <= 2 cm` (mean point "
+        "distance). *Sample cost* is the data the agent's model or policy was trained on.",
+        "",
+        "## Success",
+        "",
+        *success_table(rows),
+        "",
+        "## Every cell",
+        "",
         "*seconds/episode* is planning (planners) or policy inference (RL) time, mean over "
         "episodes; the simulator's own stepping is not counted.",
         "",
-        "| agent | difficulty | episodes | success | median error (cm) | seconds/episode "
-        "| training env steps | fidelity (cm) |",
+        "| agent | environment | difficulty | episodes | success | median error (cm) "
+        "| seconds/episode | fidelity (cm) |",
         "|---|---|---|---|---|---|---|---|",
     ]
     for r in rows:
+        env = r.get("env", "endpoint")
         if r["status"] != "ok":
-            lines.append(f"| {r['agent']} | {r['difficulty']} | – | missing | – | – | – | – |")
+            lines.append(f"| {r['agent']} | {env} | {r['difficulty']} | – | missing | – | – "
+                         "| – |")
             continue
-        steps = r["training_env_steps"]
         lines.append(
-            f"| {r['agent']} | {r['difficulty']} | {r['episodes']} | "
+            f"| {r['agent']} | {env} | {r['difficulty']} | {r['episodes']} | "
             f"{_fmt(r['success_rate'], '{:.0%}')} | {_fmt(r['median_error'], '{:.2f}', 100)} | "
             f"{_fmt(r['seconds_per_episode'], '{:.3f}')} | "
-            f"{'–' if steps is None else f'{steps:,}'} | "
             f"{_fmt(r['mean_fidelity'], '{:.2f}', 100)} |"
         )
     lines.append("")
-    if ratios:
-        parts = ", ".join(f"{k} {v:.1f}x" for k, v in ratios.items() if k != "all")
-        lines.append(f"**Planning time, physics-mpc / latent-tree on the same episodes:** "
-                     f"{ratios.get('all', float('nan')):.1f}x ({parts}).")
-        closed = planning_time_ratios(rows, fast="latent-tree-closed")
-        if closed:
-            parts = ", ".join(f"{k} {v:.1f}x" for k, v in closed.items() if k != "all")
-            lines.append(f"Against the closed loop (latent-tree-closed, which replans): "
-                         f"{closed.get('all', float('nan')):.1f}x ({parts}).")
-    else:
-        lines.append("**Planning time ratio:** not measured (physics-mpc and latent-tree did "
-                     "not both run).")
+    ratios = ratio_lines(rows)
+    lines += ratios if ratios else ["Planning time ratios: not measured (physics-mpc did not "
+                                    "run with a cheaper planner)."]
     missing = sorted({(r["agent"], r["note"]) for r in rows if r["status"] != "ok"})
     if missing:
-        lines += ["", "Missing agents:"]
+        lines += ["", "Missing cells:"]
         lines += [f"- `{agent}`: {note}" for agent, note in missing]
     models = sorted({(r["agent"], r["model"]) for r in rows if r["model"]})
     if models:
@@ -142,11 +186,10 @@ def write_results(rows: list[dict[str, Any]], out_dir: str | os.PathLike, comman
     """
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
-    ratios = planning_time_ratios(rows)
     machine = machine_description()
     paths = {"json": out / "results.json", "md": out / "results.md", "png": out / "results.png"}
     write_text_atomic(paths["json"], json.dumps(json_ready(rows), indent=2) + "\n")
-    write_text_atomic(paths["md"], results_markdown(rows, ratios, machine, command, seconds))
+    write_text_atomic(paths["md"], results_markdown(rows, machine, command, seconds))
     from dlo_bench.charts import plot_results
 
     plot_results(rows, paths["png"])

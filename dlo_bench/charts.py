@@ -103,23 +103,25 @@ def plot_results(rows: list[dict[str, Any]], png: str | os.PathLike) -> None:
     """Bar charts of success rate, median error and seconds per episode (missing rows skipped)."""
     plt = _pyplot()
 
+    from dlo_bench.benchmark_report import cell_label
+
     agents = list(dict.fromkeys(r["agent"] for r in rows))
-    difficulties = sorted({r["difficulty"] for r in rows})
-    by = {(r["agent"], r["difficulty"]): r for r in rows}
+    cells = list(dict.fromkeys(cell_label(r) for r in rows))
+    by = {(r["agent"], cell_label(r)): r for r in rows}
     panels = (("success_rate", "success rate", 1.0, False),
               ("median_error", "median final error (cm)", 100.0, False),
               ("seconds_per_episode", "seconds per episode", 1.0, True))
-    fig, axes = plt.subplots(1, 3, figsize=(13, 4.2))
+    fig, axes = plt.subplots(3, 1, figsize=(max(8.0, 1.3 * len(cells)), 9.5))
     width = 0.8 / max(1, len(agents))
-    x = np.arange(len(difficulties))
+    x = np.arange(len(cells))
     for ax, (key, label, scale, log) in zip(axes, panels):
         for i, agent in enumerate(agents):
             values = []
-            for d in difficulties:
-                v = by.get((agent, d), {}).get(key)
+            for cell in cells:
+                v = by.get((agent, cell), {}).get(key)
                 values.append(np.nan if v is None else v * scale)
             ax.bar(x + (i - (len(agents) - 1) / 2) * width, values, width, label=agent)
-        ax.set_xticks(x, [f"difficulty {d}" for d in difficulties])
+        ax.set_xticks(x, cells, fontsize=8)
         ax.set_ylabel(label)
         if log:
             ax.set_yscale("log")
@@ -128,14 +130,13 @@ def plot_results(rows: list[dict[str, Any]], png: str | os.PathLike) -> None:
         if key == "median_error":
             ax.axhline(2.0, color="k", lw=0.8, ls="--")  # the success threshold
     handles, labels = axes[0].get_legend_handles_labels()
-    fig.legend(handles, labels, loc="lower center", ncol=len(agents), fontsize=8,
+    fig.legend(handles, labels, loc="lower center", ncol=min(len(agents), 5), fontsize=8,
                frameon=False)
-    missing = sorted({r["agent"] for r in rows if r["status"] != "ok"})
     title = "dlo benchmark (test suites)"
-    if missing:
-        title += " — missing: " + ", ".join(missing)
+    if any(r["status"] != "ok" for r in rows):
+        title += ": a missing cell has no bar (results.md says why)"
     fig.suptitle(title)
-    fig.tight_layout(rect=(0, 0.07, 1, 1))
+    fig.tight_layout(rect=(0, 0.06, 1, 1))
     _save(fig, png, dpi=100)
 
 

@@ -22,15 +22,37 @@ def default_out(command: str) -> Path:
     return RUNS_DIR / command
 
 
-def shipped_baseline(name: str) -> Path:
-    """The folder of the shipped baseline ``name`` (``ppo``, ``sac-her``)."""
-    return PRETRAINED_BASELINES / name
+def baseline_folder_name(name: str, env_id: str = "dlo_env/DLOEndpoint-v0") -> str:
+    """The folder of an RL agent for an environment in a baselines folder: ``ppo`` for
+    ``DLOEndpoint-v0``, ``ppo-dual-endpoint`` for ``DLODualEndpoint-v0``."""
+    from dlo_env.envs import ENVIRONMENTS
+
+    if env_id not in ENVIRONMENTS:
+        raise ValueError(f"env_id must be one of {tuple(ENVIRONMENTS)}, got {env_id!r}")
+    return name if env_id == "dlo_env/DLOEndpoint-v0" else f"{name}-{ENVIRONMENTS[env_id][1]}"
+
+
+def shipped_baseline(name: str, env_id: str = "dlo_env/DLOEndpoint-v0") -> Path:
+    """The folder of the shipped baseline ``name`` (``ppo``, ``sac-her``, ``bc``) for
+    ``env_id``."""
+    return PRETRAINED_BASELINES / baseline_folder_name(name, env_id)
 
 
 def shape_model_file(path: str | os.PathLike | None) -> Path:
     """The file of a shape model: ``path`` (a file, or a folder holding ``model.pt``), or the
     shipped ``latent_model/pretrained/model.pt`` when None or empty."""
     from latent_model.shape_model import MODEL_FILE
+
+    if not path:
+        return Path(str(resources.files("latent_model") / "pretrained" / MODEL_FILE))
+    p = Path(path)
+    return p / MODEL_FILE if p.is_dir() else p
+
+
+def transition_model_file(path: str | os.PathLike | None) -> Path:
+    """The file of a transition model: ``path`` (a file, or a folder holding
+    ``transition.pt``), or the shipped ``latent_model/pretrained/transition.pt`` when None."""
+    from latent_model.transition_model import MODEL_FILE
 
     if not path:
         return Path(str(resources.files("latent_model") / "pretrained" / MODEL_FILE))

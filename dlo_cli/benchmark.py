@@ -1,4 +1,4 @@
-"""``dlo benchmark``: every agent on the test suites of difficulty 1-3, one table."""
+"""``dlo benchmark``: every agent on the test suites of both environments, one table."""
 
 from __future__ import annotations
 
@@ -18,13 +18,25 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help="episodes per agent and difficulty, the first tasks of each test "
                              f"split (None: {BenchmarkConfig.episodes}, the whole split; "
                              f"{QUICK_EPISODES} with --quick)")
+    from dlo_bench.benchmark import DEFAULT_DIFFICULTIES
+    from dlo_env.envs import ENVIRONMENTS
+
     add_agent(parser, default=list(BenchmarkConfig.agents))
-    add_difficulty(parser, list(BenchmarkConfig.difficulties),
-                   "each runs the test split of suite linear-K")
+    parser.add_argument("--env", nargs="+", default=list(BenchmarkConfig.envs),
+                        choices=list(ENVIRONMENTS), metavar="ENV_ID",
+                        help="environments, one or several: " + ", ".join(ENVIRONMENTS))
+    defaults = "; ".join(f"{e.split('/')[-1]}: {' '.join(map(str, d))}"
+                         for e, d in DEFAULT_DIFFICULTIES.items())
+    add_difficulty(parser, None, "each runs the test split of suite linear-K in every "
+                                 f"--env (None: {defaults})")
     parser.add_argument("--baselines", default=BenchmarkConfig.baselines,
                         help="folder with one `dlo baseline` output folder per RL agent "
                              "(BASELINES/ppo, BASELINES/sac-her; None: the shipped ones)")
     add_model(parser)
+    parser.add_argument("--transition-model", default=None,
+                        help="transition model file, or folder holding transition.pt, for "
+                             "latent-mpc and latent-tree-kino (None: the shipped "
+                             "latent_model/pretrained/transition.pt)")
     add_planner_flags(parser)
     parser.add_argument("--seed", type=int, default=BenchmarkConfig.seed,
                         help="seed of the planners' sampling (the tasks are the suites')")
@@ -57,34 +69,35 @@ def run(args: argparse.Namespace) -> int:
     import torch
 
     from dlo_bench.benchmark import QUICK_EPISODES, BenchmarkConfig, run_benchmark
-    from dlo_bench.benchmark_report import planning_time_ratios, write_results
+    from dlo_bench.benchmark_report import ratio_lines, write_results
 
     torch.set_num_threads(args.threads)
     episodes = args.episodes if args.episodes is not None else (
         QUICK_EPISODES if args.quick else BenchmarkConfig.episodes)
     config = BenchmarkConfig(
-        agents=tuple(args.agent), difficulties=tuple(args.difficulty), episodes=episodes,
+        agents=tuple(args.agent), envs=tuple(args.env),
+        difficulties=tuple(args.difficulty) if args.difficulty else None, episodes=episodes,
         seed=args.seed, baselines=args.baselines, model=args.model,
+        transition_model=args.transition_model,
         replan_every=args.replan_every, max_seconds=args.max_seconds,
         fidelity=not args.no_fidelity,
     )
-    print(f"benchmark: {len(config.agents)} agents x difficulties {config.difficulties} x "
-          f"{config.episodes} episodes -> {args.out}", flush=True)
+    cells = ", ".join(f"{e.split('/')[-1]} d{d}" for e, d in config.cells())
+    print(f"benchmark: {len(config.agents)} agents x ({cells}) x {config.episodes} episodes "
+          f"-> {args.out}", flush=True)
     t0 = time.perf_counter()
     rows = run_benchmark(config, args.out, resume=args.resume, progress=True)
     seconds = time.perf_counter() - t0
     parser = argparse.ArgumentParser()
     add_arguments(parser)
     paths = write_results(rows, args.out, _command(args, vars(parser.parse_args([]))), seconds)
-    print(paths["md"].read_text().split("\n\n", 2)[2].split("\n\n")[0])  # the table
-    ratios = planning_time_ratios(rows)
-    if ratios:
-        print(f"planning time physics-mpc / latent-tree on the same {config.episodes} episodes "
-              f"per difficulty: " + ", ".join(f"{k} {v:.1f}x" for k, v in ratios.items()))
-    else:
-        print("planning time ratio not measured: physics-mpc and latent-tree did not both run")
+    from dlo_bench.benchmark_report import success_table
+
+    print("\n".join(success_table(rows)))
+    print("\n".join(ratio_lines(rows)) or "planning time ratios not measured: physics-mpc did "
+                                          "not run with a cheaper planner")
     missing = sorted({r["agent"] for r in rows if r["status"] != "ok"})
     if missing:
-        print("missing agents (reported in the table): " + ", ".join(missing))
+        print("agents with missing cells (reported in the table): " + ", ".join(missing))
     print(f"wrote {paths['md']}, {paths['json']}, {paths['png']} in {seconds:.0f} s")
     return 0

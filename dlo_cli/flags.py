@@ -58,7 +58,7 @@ def add_agent(parser: argparse.ArgumentParser, default: list[str] | None) -> Non
 
 
 def add_difficulty(parser: argparse.ArgumentParser | argparse._MutuallyExclusiveGroup,
-                   default: list[int], what: str) -> None:
+                   default: list[int] | None, what: str) -> None:
     """``--difficulty``: one or several task difficulties (straight moves from start to goal)."""
     parser.add_argument("--difficulty", type=positive_int, nargs="+", default=default,
                         metavar="K", help=f"difficulty, one or several: K straight moves from "

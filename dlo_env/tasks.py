@@ -8,7 +8,7 @@ actions follow the last move until the cord is at rest. Because ``Cord.reset`` r
 simulation from scratch, replaying ``reference_actions`` through ``env.step`` from the reset
 state reproduces the goal bitwise: they are an oracle and a source of demonstrations.
 
-Named suites (``linear-1``, ``linear-2``, ``linear-3``: difficulty 1, 2, 3) fix the seeds of a
+Named suites (``linear-1`` to ``linear-5``: difficulty 1 to 5) fix the seeds of a
 train and a test split so results are comparable. Task lists are saved as ``.npz`` data files.
 """
 
@@ -59,7 +59,7 @@ GRASP_ENDS: dict[str, tuple[str, ...]] = {
     "both": ("head", "tail"),
 }
 #: Named suites: name -> difficulty.
-SUITES = {"linear-1": 1, "linear-2": 2, "linear-3": 3}
+SUITES = {f"linear-{k}": k for k in range(1, MAX_DIFFICULTY + 1)}
 #: Tasks per split of every suite.
 SPLIT_SIZES = {"train": 200, "test": 50}
 _SPLIT_OFFSETS = {"train": 0, "test": 50_000}
@@ -357,7 +357,7 @@ def load_suite(
     """The tasks of a named suite (generated from its fixed seeds on the default cord).
 
     Args:
-        name: ``"linear-1"``, ``"linear-2"`` or ``"linear-3"`` (difficulty 1, 2, 3).
+        name: ``"linear-K"``, K = 1..5 (difficulty K).
         split: ``"train"`` (200 tasks) or ``"test"`` (50 tasks); their seeds never overlap.
         grasp: ``"head"`` for ``DLOEndpoint-v0``, ``"both"`` for ``DLODualEndpoint-v0``.
         limit: Only the first ``limit`` tasks.

@@ -1,5 +1,6 @@
-"""planners: the agents. Latent interpolation, the latent-tree planner, the physics-in-the-loop
-planner and the straight-line reference, each an SB3-style policy.
+"""planners: the agents. Latent interpolation, the latent-tree planner, CEM over straight moves on
+the simulator (physics-mpc) or on the learned transition model (latent-mpc), and the
+straight-line reference, each an SB3-style policy.
 
 The interfaces they share are ``typing.Protocol``s in :mod:`planners.interfaces`: the
 ``ShapeSurrogate`` a latent planner plans on, and the ``Policy`` / ``PlanningPolicy`` a harness
@@ -8,15 +9,21 @@ The interfaces they share are ``typing.Protocol``s in :mod:`planners.interfaces`
 
 from __future__ import annotations
 
+from planners.cem import CEMConfig, CEMPolicy
 from planners.interfaces import EpisodeStats, PlanningPolicy, Policy, ShapeSurrogate
 from planners.interpolation import interpolate
+from planners.latent_mpc import LatentMPCConfig, LatentMPCPolicy
 from planners.latent_tree import LatentTreePlanner, Plan, TreeConfig
 from planners.physics_mpc import PhysicsMPCConfig, PhysicsMPCPolicy
 from planners.policy import PlannerPolicy
 from planners.straight_line import StraightLinePolicy
 
 __all__ = [
+    "CEMConfig",
+    "CEMPolicy",
     "EpisodeStats",
+    "LatentMPCConfig",
+    "LatentMPCPolicy",
     "LatentTreePlanner",
     "PhysicsMPCConfig",
     "PhysicsMPCPolicy",

@@ -1,12 +1,12 @@
 """latent-mpc: CEM over straight moves, every candidate scored by the learned transition model.
 
-The planner of ``PhysicsMPCPolicy`` (the cross-entropy method over sequences of straight moves
-of the held end(s), warm-started from the previous plan), with the simulator replaced by
-``latent_model.TransitionModel``: all candidates of an iteration are rolled out in one batched
-call, move after move, and scored by the error of the predicted final shape to the goal (plus,
-optionally, the ensemble's spread). The first move is executed as ``split_move`` actions,
-followed by zero actions while the cord comes to rest, and the policy plans again from the
-observed shape (closed loop) until the goal is reached.
+The planner ``planners.cem.CEMPolicy`` shared with physics-mpc (the cross-entropy method over
+straight moves of the held end(s), warm-started from the previous plan), with the simulator
+replaced by ``latent_model.TransitionModel``: all candidates of an iteration are rolled out in
+one batched call, move after move, and scored by the error of the predicted final shape to the
+goal (plus, optionally, the ensemble's spread). The first move is executed as ``split_move``
+actions, followed by zero actions while the cord comes to rest, and the policy plans again
+from the observed shape (closed loop) until the goal is reached.
 """
 
 from __future__ import annotations
@@ -18,14 +18,17 @@ import numpy as np
 
 from dlo_env.checks import non_negative, positive_ints
 from dlo_env.shapes import error
-from planners.physics_mpc import PhysicsMPCConfig, PhysicsMPCPolicy
+from planners.cem import CEMConfig, CEMPolicy
 
 
 @dataclass(frozen=True)
-class LatentMPCConfig(PhysicsMPCConfig):
-    """CEM budget of latent-mpc (the model is cheap: many more samples than physics-mpc).
+class LatentMPCConfig(CEMConfig):
+    """CEM budget of latent-mpc (the model is cheap: many more samples than physics-mpc) and
+    how it uses the model.
 
     Attributes:
+        members: Ensemble members that score the candidates (the first ones; None: all).
+            Fewer is proportionally faster; the spread needs at least two.
         spread_weight: Weight of the ensemble's spread of the final shape in the cost.
         settle_actions: Zero actions after each executed move, for the cord to come to rest
             (the model predicts shapes at rest).
@@ -37,22 +40,28 @@ class LatentMPCConfig(PhysicsMPCConfig):
     iterations: int = 5
     init_std: float = 0.08
     max_move: float = 0.35
+    members: int | None = None
     spread_weight: float = 0.0
     settle_actions: int = 3
 
     def __post_init__(self) -> None:
         super().__post_init__()
         non_negative(self, "spread_weight", "settle_actions")
-        positive_ints(self, "moves")
+        if self.members is not None:
+            positive_ints(self, "members")
+        if self.spread_weight > 0 and self.members == 1:
+            raise ValueError("LatentMPCConfig.spread_weight > 0 needs members >= 2 (the spread "
+                             "of one member is zero), got members=1")
 
 
-class LatentMPCPolicy(PhysicsMPCPolicy):
+class LatentMPCPolicy(CEMPolicy):
     """CEM model-predictive control on the learned transition model.
 
     Args:
         model: A ``latent_model.TransitionModel`` (its cord and ``max_step`` must match the
             environment's).
-        grasp: ``"head"`` for ``DLOEndpoint-v0``, ``"both"`` for ``DLODualEndpoint-v0``.
+        grasp: ``"head"`` for ``DLOEndpoint-v0``, ``"both"`` for ``DLODualEndpoint-v0``
+            (``"tail"`` for a cord held at the tail).
         success_threshold: Shape error (metres) below which the policy holds still.
         config: CEM budget.
     """
@@ -60,9 +69,13 @@ class LatentMPCPolicy(PhysicsMPCPolicy):
     def __init__(self, model: Any, grasp: str = "head", success_threshold: float = 0.02,
                  config: LatentMPCConfig | None = None) -> None:
         self.model = model
-        super().__init__(params=model.cord_params, grasp=grasp, max_step=model.config.max_step,
-                         success_threshold=success_threshold,
-                         config=config if config is not None else LatentMPCConfig())
+        config = config if config is not None else LatentMPCConfig()
+        total = model.config.members
+        if config.members is not None and config.members > total:
+            raise ValueError(f"LatentMPCConfig.members must be <= the model's {total} members, "
+                             f"got {config.members}")
+        super().__init__(model.cord_params, grasp, model.config.max_step, success_threshold,
+                         config)
 
     @classmethod
     def for_env(cls, env: object, config: LatentMPCConfig | None = None,
@@ -96,13 +109,17 @@ class LatentMPCPolicy(PhysicsMPCPolicy):
                              f"{base.cord.grasp!r}")
 
     def _score(self, shape: np.ndarray, goal: np.ndarray, candidates: np.ndarray) -> np.ndarray:
+        cfg = self.config
         shapes = np.broadcast_to(shape, (len(candidates),) + shape.shape)
         spread = np.zeros(len(candidates))
         for k in range(candidates.shape[1]):
-            shapes, spread = self.model.predict(shapes, self.grasp,
-                                                candidates[:, k].reshape(len(candidates), -1),
-                                                return_std=True)
-        return error(shapes, goal) + self.config.spread_weight * spread
+            moves = candidates[:, k].reshape(len(candidates), -1)
+            if cfg.spread_weight > 0:
+                shapes, spread = self.model.predict(shapes, self.grasp, moves, return_std=True,
+                                                    members=cfg.members)
+            else:
+                shapes = self.model.predict(shapes, self.grasp, moves, members=cfg.members)
+        return error(shapes, goal) + cfg.spread_weight * spread
 
     def _execute(self, plan: np.ndarray) -> list[np.ndarray]:
         """The first move, then zero actions while the cord comes to rest."""

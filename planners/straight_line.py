@@ -6,27 +6,35 @@ from typing import Any
 
 import numpy as np
 
+from dlo_env.tasks import GRASP_ENDS, split_move
 from planners.interfaces import Observation
 from planners.moves import actions_through
 from planners.observation import read_observation
 
 
 class StraightLinePolicy:
-    """Move the head in one straight line to the goal's head position, then hold still.
+    """Move the held end(s) in one straight line to where the goal has them, then hold still.
 
     This solves every difficulty-1 task up to the discretisation of the move (the goal was
     made by one straight head move) and is the reference every planner has to beat at higher
     difficulties, where friction makes the result depend on the path. Same interface as
     Stable-Baselines3 models: ``predict(obs, state, episode_start, deterministic)``.
 
+    With both ends held (``DLODualEndpoint-v0``) both move at once, each on its own straight
+    line, as one move of ``split_move``.
+
     Args:
         max_step: The environment's ``max_step`` (metres per unit action).
+        grasp: ``"head"``, ``"tail"`` or ``"both"``: the end(s) the environment holds.
     """
 
-    def __init__(self, max_step: float = 0.02) -> None:
+    def __init__(self, max_step: float = 0.02, grasp: str = "head") -> None:
         if not max_step > 0:
             raise ValueError(f"max_step must be > 0, got {max_step!r}")
+        if grasp not in GRASP_ENDS:
+            raise ValueError(f"grasp must be one of {tuple(GRASP_ENDS)}, got {grasp!r}")
         self.max_step = float(max_step)
+        self.grasp = grasp
         self.reset()
 
     def reset(self) -> None:
@@ -46,6 +54,12 @@ class StraightLinePolicy:
         n = np.asarray(observation["achieved_goal"]).reshape(-1).size // 2
         obs = read_observation(observation, n)
         if self._queue is None:
-            self._queue = actions_through(obs.head, obs.goal[:1], self.max_step)
-        action = self._queue.pop(0) if self._queue else np.zeros(2, dtype=np.float32)
+            if self.grasp == "head":
+                self._queue = actions_through(obs.head, obs.goal[:1], self.max_step)
+            else:
+                index = [0 if end == "head" else -1 for end in GRASP_ENDS[self.grasp]]
+                move = (obs.goal[index] - obs.shape[index]).reshape(-1)
+                self._queue = list(split_move(move, self.max_step))
+        width = 2 * len(GRASP_ENDS[self.grasp])
+        action = self._queue.pop(0) if self._queue else np.zeros(width, dtype=np.float32)
         return (action[None] if obs.batched else action), state

@@ -38,15 +38,11 @@ import gymnasium as gym
 import numpy as np
 
 from dlo_env.dataset.transitions import GRASP_NAMES, load_transitions
+from dlo_env.envs import ENVIRONMENTS
 from dlo_env.shapes import error
 from dlo_env.straight_moves import StraightMoves
 from dlo_env.tasks import SUITES, load_suite
 
-#: Environment id -> (grasp of its tasks, the name in dataset ids).
-ENVIRONMENTS = {
-    "dlo_env/DLOEndpoint-v0": ("head", "endpoint"),
-    "dlo_env/DLODualEndpoint-v0": ("both", "dual-endpoint"),
-}
 #: Namespace of every exported dataset.
 NAMESPACE = "dlo"
 #: The infos recorded at every step.
@@ -152,7 +148,7 @@ def export_demonstrations(
 
     Args:
         env_id: ``"dlo_env/DLOEndpoint-v0"`` or ``"dlo_env/DLODualEndpoint-v0"``.
-        suite: A named suite (``linear-1``, ``linear-2``, ``linear-3``).
+        suite: A named suite (``linear-1`` to ``linear-5``).
         root: Minari dataset root (None: Minari's own).
         limit: Only the first ``limit`` train tasks (all 200 if None).
         progress: ``progress(done, 0)`` after every episode.

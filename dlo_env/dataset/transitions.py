@@ -192,6 +192,16 @@ class TransitionDataset:
         d = self.displacement[index]
         return {0: d[:, 0], 1: d[:, 1], 2: d.reshape(-1, 4)}[int(grasp[0])]
 
+    def env_steps(self, max_step: float | None = None) -> int:
+        """Environment steps the transitions took to collect: each move's ``split_move``
+        actions plus the zero actions of its settle (the sample cost of a model trained on
+        them). ``max_step`` defaults to the collection's."""
+        if max_step is None:
+            max_step = float(self.metadata.get("collect", {}).get("max_step", DEFAULT_MAX_STEP))
+        longest = np.linalg.norm(self.displacement.astype(np.float64), axis=-1).max(axis=-1)
+        actions = np.maximum(1, np.ceil(longest / max_step - 1e-9))
+        return int(actions.sum() + self.settle.astype(np.int64).sum())
+
     @staticmethod
     def concatenate(parts: list[TransitionDataset]) -> TransitionDataset:
         """One dataset of ``parts`` in order; episodes are renumbered to stay distinct."""

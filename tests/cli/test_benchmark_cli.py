@@ -42,12 +42,13 @@ def test_quick_benchmark_writes_every_agent_and_difficulty(models, tmp_path, cap
     # Difficulty 1 only: the physics planner is the slow agent (the other suites run the same
     # code, and the missing-agent test covers all three).
     code = main(["benchmark", "--quick", "--episodes", "1", "--difficulty", "1",
-                 "--baselines", str(models),
+                 "--env", "dlo_env/DLOEndpoint-v0", "--baselines", str(models),
                  "--model", str(models / "shape.pt"), "--max-seconds", "0.05",
                  "--replan-every", "50", "--out", str(out)])
     assert code == 0
     printed = capsys.readouterr().out
-    assert "planning time physics-mpc / latent-tree on the same 1 episodes" in printed
+    assert "Planning time physics-mpc / latent-tree on the same episodes" in printed
+    assert "Planning time physics-mpc / latent-mpc on the same episodes" in printed
     rows = json.loads((out / "results.json").read_text())
     assert [r["agent"] for r in rows] == AGENTS and {r["difficulty"] for r in rows} == {1}
     for row in rows:
@@ -55,38 +56,53 @@ def test_quick_benchmark_writes_every_agent_and_difficulty(models, tmp_path, cap
         assert 0.0 <= row["success_rate"] <= 1.0 and row["median_error"] > 0
         assert row["seconds_per_episode"] > 0
     assert {r["training_env_steps"] for r in rows if r["agent"] in ("ppo", "sac-her")} == {256}
+    costs = {r["agent"]: r["sample_cost"] for r in rows}
+    assert costs["sac-her"] == "0k env steps" or costs["sac-her"].endswith("env steps")
+    assert "env steps" in costs["latent-mpc"] and "simulated shapes" in costs["latent-tree"]
+    assert costs["physics-mpc"].startswith("none")
     table = (out / "results.md").read_text()
-    assert "| physics-mpc | 1 | 1 |" in table and "Machine:" in table
+    assert "| physics-mpc | endpoint | 1 | 1 |" in table and "Machine:" in table
+    assert "| agent | endpoint d1 | sample cost |" in table
     assert "Command: `dlo benchmark --quick --episodes 1" in table
     assert (out / "results.png").stat().st_size > 0
-    assert (out / "results_episodes" / "sac-her-d1.csv").is_file()
+    assert (out / "results_episodes" / "sac-her-endpoint-d1.csv").is_file()
 
 
 def test_agents_without_a_model_are_reported_not_dropped(tmp_path, capsys):
     out = tmp_path / "bench"
     code = main(["benchmark", "--quick", "--agent", "straight-line", "ppo", "sac-her",
-                 "--episodes", "1", "--baselines", str(tmp_path / "none"), "--out", str(out)])
+                 "latent-tree", "--difficulty", "1", "2", "--episodes", "1",
+                 "--baselines", str(tmp_path / "none"), "--out", str(out)])
     assert code == 0
     rows = json.loads((out / "results.json").read_text())
-    assert [(r["agent"], r["difficulty"]) for r in rows] == [
-        (a, d) for a in ("straight-line", "ppo", "sac-her") for d in (1, 2, 3)]
-    rows = {r["agent"]: r for r in rows}
-    assert rows["straight-line"]["status"] == "ok"
-    for agent in ("ppo", "sac-her"):
-        assert rows[agent]["status"] == "missing" and rows[agent]["success_rate"] is None
-        assert "no trained model" in rows[agent]["note"]
-    assert "| ppo | 3 | – | missing |" in (out / "results.md").read_text()
-    assert "missing agents (reported in the table): ppo, sac-her" in capsys.readouterr().out
+    assert [(r["agent"], r["env"], r["difficulty"]) for r in rows] == [
+        (a, e, d) for a in ("straight-line", "ppo", "sac-her", "latent-tree")
+        for e in ("endpoint", "dual-endpoint") for d in (1, 2)]
+    for r in rows:
+        if r["agent"] == "straight-line" or (r["agent"], r["env"]) == ("latent-tree",
+                                                                         "endpoint"):
+            assert r["status"] == "ok"
+            continue
+        assert r["status"] == "missing" and r["success_rate"] is None
+        if r["agent"] == "latent-tree":
+            assert r["note"] == "acts only in dlo_env/DLOEndpoint-v0"
+        else:
+            assert r["note"].startswith(f"no trained model for {r['env_id']}")
+    table = (out / "results.md").read_text()
+    assert "| ppo | dual-endpoint | 2 | – | missing |" in table
+    assert "| ppo | – | – | – | – |" in table  # the success table
+    assert "with missing cells (reported in the table): latent-tree, ppo, sac-her" in \
+        capsys.readouterr().out
 
 
 def test_resume_reuses_finished_cells(tmp_path, capsys):
     args = ["benchmark", "--agent", "straight-line", "--difficulty", "1", "--episodes", "1",
-            "--out", str(tmp_path)]
+            "--env", "dlo_env/DLOEndpoint-v0", "--out", str(tmp_path)]
     assert main(args) == 0
     first = json.loads((tmp_path / "results.json").read_text())
     capsys.readouterr()
     assert main([*args, "--resume"]) == 0
-    assert "straight-line d1: reused" in capsys.readouterr().out
+    assert "straight-line-endpoint-d1: reused" in capsys.readouterr().out
     assert json.loads((tmp_path / "results.json").read_text())[0]["median_error"] == \
         first[0]["median_error"]
 

@@ -48,9 +48,13 @@ def test_quick_benchmark_in_a_clean_checkout_writes_under_runs_and_changes_no_tr
                            cwd=checkout, env=env, capture_output=True, text=True, timeout=120)
     assert Path(where.stdout.strip()).is_relative_to(checkout)  # the checkout's own code runs
     code = "import sys; from dlo_cli.main import main; sys.exit(main(sys.argv[1:]))"
-    done = subprocess.run([sys.executable, "-c", code, "benchmark", "--quick"], cwd=checkout,
-                          env=env, capture_output=True, text=True, timeout=900)
+    done = subprocess.run([sys.executable, "-c", code, "benchmark", "--quick", "--difficulty",
+                           "1"], cwd=checkout, env=env, capture_output=True, text=True,
+                          timeout=900)
     assert done.returncode == 0, done.stderr[-2000:]
     assert _git("status", "--porcelain", "--untracked-files=all", cwd=checkout) == ""
     rows = json.loads((checkout / "runs" / "benchmark" / "results.json").read_text())
-    assert all(row["status"] == "ok" for row in rows), [r["note"] for r in rows]
+    endpoint = [r for r in rows if r["env"] == "endpoint"]
+    assert endpoint and all(r["status"] == "ok" for r in endpoint), [r["note"] for r in rows]
+    for r in rows:  # the dual environment: a shipped agent runs, the others say why not
+        assert r["status"] == "ok" or r["note"].startswith(("acts only in", "no trained model")), r

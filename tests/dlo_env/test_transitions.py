@@ -159,3 +159,15 @@ def test_reachable_targets_is_the_rule_the_cord_follows():
     got = np.stack(list(cord.gripper_positions().values()))
     assert np.allclose(got, expected, atol=1e-9)
     assert np.linalg.norm(expected[1] - expected[0]) <= params.max_span * params.length + 1e-9
+
+
+def test_env_steps_count_every_action_and_settle_of_the_moves():
+    from dlo_env.dataset.transitions import TransitionCollectConfig, collect_transition_chunk
+    from dlo_env.tasks import DEFAULT_MAX_STEP, split_move
+
+    data = collect_transition_chunk(TransitionCollectConfig(seed=5), 0, 12)
+    by_hand = 0
+    for d, held, settle in zip(data.displacement, data.grasp, data.settle):
+        ends = {0: [0], 1: [1], 2: [0, 1]}[int(held)]
+        by_hand += len(split_move(d[ends].reshape(-1), DEFAULT_MAX_STEP)) + int(settle)
+    assert data.env_steps() == by_hand

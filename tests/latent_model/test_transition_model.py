@@ -125,6 +125,26 @@ def test_single_shapes_batches_and_the_ensemble_spread(model):
     assert np.allclose(one, batch[0], atol=1e-6)
 
 
+def test_the_first_members_alone_are_the_first_members_of_the_ensemble(model):
+    shapes = _shapes(4, seed=8)
+    d = np.full((4, 2), -0.07, dtype=np.float32)
+    with torch.no_grad():
+        first = model.net.weights[0][:1].clone(), model.net.biases[0][:1].clone()
+    solo = TransitionModel(TransitionModelConfig(**{**TINY.__dict__, "members": 1}), device="cpu")
+    with torch.no_grad():
+        for dst, src in zip(list(solo.net.weights) + list(solo.net.biases),
+                            list(model.net.weights) + list(model.net.biases)):
+            dst.copy_(src[:1])
+    assert torch.equal(first[0], solo.net.weights[0]) and torch.equal(first[1], solo.net.biases[0])
+    one, spread = model.predict(shapes, "tail", d, return_std=True, members=1)
+    assert np.allclose(one, solo.predict(shapes, "tail", d), atol=1e-6)
+    assert np.all(spread == 0)
+    assert not np.allclose(one, model.predict(shapes, "tail", d), atol=1e-4)
+    for bad in (0, 4, 1.5):
+        with pytest.raises(ValueError, match="members must be an int in 1..3"):
+            model.predict(shapes, "tail", d, members=bad)
+
+
 @pytest.mark.parametrize(("args", "message"), [
     ((np.zeros((3, 19, 2)), "head", np.zeros((3, 2))), "shapes must have shape"),
     ((np.zeros((3, 20, 2)), "middle", np.zeros((3, 2))), "end must be one of"),
@@ -181,6 +201,7 @@ def test_training_learns_resumes_and_reports(data, tmp_path):
         train_transition_model(data, tmp_path, longer, TINY, device="cpu", resume=True)
     again = train_transition_model(data, tmp_path, tc, TINY, device="cpu", resume=True)
     assert again.info["steps"] == 60  # the checkpoint was at the end: nothing more to do
+    assert model.info["env_steps"] == data.env_steps() > len(data)  # the sample cost
     rows, rank = transition_report(model, data, max_moves=2)
     assert {r.group for r in rows} >= {"all", "head", "tail", "both", "0-5 cm"}
     assert -1.0 <= rank <= 1.0

@@ -66,3 +66,28 @@ def test_the_shipped_model_solves_train_tasks_of_difficulty_two_closed_loop():
                 break
         solved += bool(info["is_success"])
     assert solved == 3
+
+
+def test_a_cord_held_at_the_tail_is_planned_with_tail_moves():
+    # No environment holds the tail alone; the policy drives a tail-held Cord as env.step does.
+    from dlo_env.cord import Cord
+    from dlo_env.shapes import error
+    from dlo_env.tasks import DEFAULT_MAX_STEP, apply_action, make_task
+
+    model = TransitionModel.load_or_pretrained(device="cpu")
+    policy = LatentMPCPolicy(model, grasp="tail", config=LatentMPCConfig(samples=64, elites=8,
+                                                                         iterations=3))
+    solved = 0
+    for seed in (3, 4, 5):
+        task = make_task(seed, 1, "tail")
+        cord = Cord(model.cord_params, grasp="tail")
+        cord.reset(task.start)
+        policy.reset()
+        for _ in range(60):
+            obs = {"achieved_goal": cord.shape.reshape(-1), "desired_goal": task.goal.reshape(-1)}
+            action, _ = policy.predict(obs)
+            assert action.shape == (2,)
+            apply_action(cord, action, DEFAULT_MAX_STEP)
+        solved += error(cord.shape, task.goal) <= 0.02
+    assert policy.grasp == "tail" and policy.ends == ("tail",)
+    assert solved >= 2

@@ -1,0 +1,199 @@
+"""The cross-entropy method over straight moves: the planner shared by physics-mpc and latent-mpc.
+
+``CEMPolicy`` plans sequences of ``moves`` straight moves of the held end(s) with the
+cross-entropy method (CEM), warm-started from the rest of the previous plan, executes part of
+the best plan and plans again from the observed cord (model-predictive control). What a
+candidate plan does to the cord is the one thing a subclass decides (``_score``), and what it
+executes before planning again (``_execute``): the simulator in ``PhysicsMPCPolicy``, the
+learned transition model in ``LatentMPCPolicy``.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from dlo_env.checks import non_negative, positive, positive_ints
+from dlo_env.cord import CordParams
+from dlo_env.shapes import error
+from dlo_env.tasks import GRASP_ENDS
+from planners.interfaces import EpisodeStats, Observation
+
+
+@dataclass(frozen=True)
+class CEMConfig:
+    """The search budget of a CEM planner over straight moves.
+
+    Attributes:
+        moves: Straight moves per candidate plan (the horizon).
+        samples: Candidates scored per CEM iteration.
+        elites: Best candidates the next sampling distribution is fitted to.
+        iterations: CEM iterations per planning call (at most).
+        init_std: Initial standard deviation of every displacement coordinate, metres.
+        max_move: Largest displacement of one move, metres (per end).
+        stop_error: Stop iterating once the best predicted error is at most this, metres
+            (0: always run every iteration).
+        seed: Seed of the sampling.
+    """
+
+    moves: int = 2
+    samples: int = 32
+    elites: int = 6
+    iterations: int = 3
+    init_std: float = 0.08
+    max_move: float = 0.4
+    stop_error: float = 0.0
+    seed: int = 0
+
+    def __post_init__(self) -> None:
+        name = type(self).__name__
+        positive_ints(self, "moves", "samples", "elites", "iterations")
+        positive(self, "init_std", "max_move")
+        non_negative(self, "stop_error")
+        if self.elites > self.samples:
+            raise ValueError(f"{name}.elites must be <= samples ({self.samples}), "
+                             f"got {self.elites}")
+
+
+@dataclass
+class CEMStats:
+    """What the policy did in the current episode."""
+
+    plans: int = 0
+    rollouts: int = 0
+    seconds: float = 0.0
+    predicted_errors: list[float] = field(default_factory=list)
+
+
+class CEMPolicy:
+    """CEM model-predictive control over straight moves; subclasses give the model.
+
+    Same interface as Stable-Baselines3 models and ``planners.PlannerPolicy``: ``predict`` maps a
+    Dict observation of a ``dlo_env`` environment to an action in ``[-1, 1]^d``.
+
+    Args:
+        params: The cord's parameters (those of the environment it acts in).
+        grasp: The held end(s): ``"head"`` (``DLOEndpoint-v0``), ``"tail"`` or ``"both"``
+            (``DLODualEndpoint-v0``).
+        max_step: The environment's ``max_step`` (metres per unit action).
+        success_threshold: Shape error (metres) below which the policy holds still.
+        config: CEM budget.
+    """
+
+    def __init__(self, params: CordParams | None, grasp: str, max_step: float,
+                 success_threshold: float, config: CEMConfig) -> None:
+        if grasp not in GRASP_ENDS:
+            raise ValueError(f"grasp must be one of {tuple(GRASP_ENDS)}, got {grasp!r}")
+        if not max_step > 0:
+            raise ValueError(f"max_step must be > 0, got {max_step!r}")
+        self.params = params if params is not None else CordParams()
+        self.grasp = grasp
+        self.ends = GRASP_ENDS[grasp]
+        self.max_step = float(max_step)
+        self.success_threshold = float(success_threshold)
+        self.config = config
+        self._rng = np.random.default_rng(config.seed)
+        self.reset()
+
+    def episode_stats(self) -> EpisodeStats:
+        """Planning calls and seconds of this episode (it never fails to return a plan)."""
+        return EpisodeStats(plans=self.stats.plans, seconds=self.stats.seconds)
+
+    def reset(self) -> None:
+        """Forget the current plan and the episode's statistics."""
+        self._queue: list[np.ndarray] = []
+        self._mean: np.ndarray | None = None
+        self.stats = CEMStats()
+
+    # ------------------------------------------------------------------ to override
+    def _score(self, shape: np.ndarray, goal: np.ndarray, candidates: np.ndarray) -> np.ndarray:
+        """Errors ``(S,)`` to ``goal`` of candidate plans ``(S, moves, ends, 2)`` from ``shape``."""
+        raise NotImplementedError
+
+    def _execute(self, plan: np.ndarray) -> list[np.ndarray]:
+        """The actions of ``plan`` run before the next planning call."""
+        raise NotImplementedError
+
+    # ------------------------------------------------------------------ planning
+    def _end_points(self, shape: np.ndarray) -> np.ndarray:
+        """``(ends, 2)`` positions of the held ends."""
+        return np.stack([shape[0] if end == "head" else shape[-1] for end in self.ends])
+
+    def plan(self, shape: np.ndarray, goal: np.ndarray) -> tuple[np.ndarray, float]:
+        """CEM over straight-move sequences from ``shape`` towards ``goal``.
+
+        Returns:
+            The best plan ``(moves, ends, 2)`` of displacements (metres) and its scored error.
+        """
+        cfg = self.config
+        t0 = time.perf_counter()
+        dims = (cfg.moves, len(self.ends), 2)
+        if self._mean is None:
+            # Warm start: every end goes straight to where the goal has it, in equal moves.
+            straight = (self._end_points(goal) - self._end_points(shape)) / cfg.moves
+            mean = np.broadcast_to(straight, dims).astype(np.float64)
+        else:
+            mean = self._mean
+        std = np.full(dims, cfg.init_std)
+        best_plan, best_err = mean.copy(), math.inf
+        for _ in range(cfg.iterations):
+            candidates = mean + std * self._rng.standard_normal((cfg.samples,) + dims)
+            candidates[0] = mean  # always re-score the current mean
+            norms = np.linalg.norm(candidates, axis=-1, keepdims=True)
+            candidates *= np.minimum(1.0, cfg.max_move / np.maximum(norms, 1e-12))
+            errors = self._score(shape, goal, candidates)
+            self.stats.rollouts += cfg.samples
+            order = np.argsort(errors)
+            if errors[order[0]] < best_err:
+                best_err, best_plan = float(errors[order[0]]), candidates[order[0]].copy()
+            if best_err <= cfg.stop_error:
+                break
+            elite = candidates[order[: cfg.elites]]
+            mean, std = elite.mean(axis=0), elite.std(axis=0) + 1e-3
+        # Next call starts from the rest of this plan (shifted), the usual MPC warm start.
+        self._mean = np.concatenate([best_plan[1:], np.zeros((1,) + dims[1:])])
+        self.stats.plans += 1
+        self.stats.seconds += time.perf_counter() - t0
+        self.stats.predicted_errors.append(best_err)
+        return best_plan, best_err
+
+    def _actions(self, plan: np.ndarray) -> list[np.ndarray]:
+        """Split each move into equal actions no longer than ``max_step`` (as the env runs them)."""
+        actions = []
+        for move in plan:
+            longest = float(np.linalg.norm(move, axis=-1).max())
+            k = max(1, math.ceil(longest / self.max_step - 1e-9))
+            step = (move / (k * self.max_step)).reshape(-1).astype(np.float32)
+            actions.extend([step] * k)
+        return actions
+
+    # ------------------------------------------------------------------ policy
+    def predict(
+        self,
+        observation: Observation,
+        state: object = None,
+        episode_start: np.ndarray | None = None,
+        deterministic: bool = True,
+    ) -> tuple[np.ndarray, object]:
+        """Next action for one observation (SB3 signature; unbatched or batch of one)."""
+        if episode_start is not None and bool(np.asarray(episode_start).reshape(-1)[0]):
+            self.reset()
+        n = self.params.n_points
+        achieved = np.asarray(observation["achieved_goal"], dtype=np.float64)
+        desired = np.asarray(observation["desired_goal"], dtype=np.float64)
+        batched = achieved.ndim == 2
+        shape = achieved.reshape(-1, n, 2)[0]
+        goal = desired.reshape(-1, n, 2)[0]
+        action_dim = 2 * len(self.ends)
+        if error(shape, goal) <= self.success_threshold:
+            action = np.zeros(action_dim, dtype=np.float32)
+        else:
+            if not self._queue:
+                plan, _ = self.plan(shape, goal)
+                self._queue = self._execute(plan)
+            action = self._queue.pop(0) if self._queue else np.zeros(action_dim, np.float32)
+        action = np.clip(action, -1.0, 1.0)
+        return (action[None] if batched else action), state
