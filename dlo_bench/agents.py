@@ -126,6 +126,23 @@ def _latent_tree(closed: bool) -> Callable[[Any, AgentOptions], Policy]:
     return build
 
 
+def _latent_tree_kino(env: Any, options: AgentOptions) -> Policy:
+    from dataclasses import replace as with_fields
+
+    from planners.latent_tree import KINO_CONFIG, LatentTreePlanner
+    from planners.policy import PlannerPolicy
+
+    model = load_shape_model(options.model)
+    config = KINO_CONFIG if options.max_seconds is None else with_fields(
+        KINO_CONFIG, max_seconds=options.max_seconds)
+    planner = LatentTreePlanner(model, config, seed=options.seed,
+                                transition_model=load_transition_model(options.transition_model))
+    policy = PlannerPolicy(model, planner, max_step=_max_step(env), moves_per_plan=1,
+                           partial_plans=True)
+    policy.check_env(env)
+    return policy
+
+
 def _straight_line(env: Any, options: AgentOptions) -> Policy:
     from planners.straight_line import StraightLinePolicy
 
@@ -171,6 +188,9 @@ AGENTS: dict[str, AgentSpec] = {spec.name: spec for spec in (
               _latent_tree(closed=False), extra="model", shape_model=True),
     AgentSpec("latent-tree-closed", "the latent tree, checked and replanned every few steps",
               _latent_tree(closed=True), extra="model", shape_model=True),
+    AgentSpec("latent-tree-kino", "the latent tree with straight-move edges predicted by the "
+              "transition model, one move per plan (closed loop)", _latent_tree_kino,
+              extra="model", shape_model=True, transition_model=True),
     AgentSpec("physics-mpc", "CEM over straight moves with the simulator as the model",
               _physics_mpc, environments=(ENDPOINT, DUAL_ENDPOINT)),
     AgentSpec("latent-mpc", "CEM over straight moves scored by the learned transition model",

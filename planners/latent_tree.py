@@ -36,6 +36,8 @@ from planners.observation import as_shape
 from planners.surrogate import Surrogate
 
 ENDS = {"head": 0, "tail": -1}
+#: The edge types of the tree (``TreeConfig.edges``).
+EDGES = ("latent", "moves")
 
 
 @dataclass(frozen=True)
@@ -77,6 +79,15 @@ class TreeConfig:
             ``model.invert(steps=...)``; ``None`` keeps the model's default. Inversion is most
             of a plan's time: 60 steps cost a quarter of the default 150 for ~0.3 mm more error.
         invert_restarts: Restarts of the inversion (``model.invert(restarts=...)``).
+        edges: What an edge of the tree is. ``"latent"`` (the paper's): a straight line in
+            latent space, decoded and checked. ``"moves"`` (kinodynamic): one straight move of
+            the held end whose outcome the transition model predicts; the GAN proposes the
+            targets and is the space in which nearest nodes are found. Needs a
+            ``transition_model``.
+        move_samples: ``"moves"`` edges: moves tried per extension (around the one that takes
+            the end to the target's end) and per goal connection.
+        move_noise: ``"moves"`` edges: standard deviation of the sampled moves, metres.
+        max_move: ``"moves"`` edges: longest straight move of the end, metres.
     """
 
     step_length: float = 0.15
@@ -100,16 +111,20 @@ class TreeConfig:
     end: str = "head"
     invert_steps: int | None = 60
     invert_restarts: int | None = 2
+    edges: str = "latent"
+    move_samples: int = 32
+    move_noise: float = 0.05
+    max_move: float = 0.3
 
     def __post_init__(self) -> None:
         positive = ("step_length", "similarity", "straightness", "goal_threshold", "max_seconds",
-                    "sample_margin")
+                    "sample_margin", "move_noise", "max_move")
         for name in positive:
             value = getattr(self, name)
             if not (isinstance(value, (int, float)) and value > 0):
                 raise ValueError(f"TreeConfig.{name} must be a number > 0, got {value!r}")
         for name in ("edge_points", "connect_attempts", "batch_size", "max_nodes",
-                     "max_edge_points"):
+                     "max_edge_points", "move_samples"):
             value = getattr(self, name)
             if not (isinstance(value, int) and value >= 1):
                 raise ValueError(f"TreeConfig.{name} must be an int >= 1, got {value!r}")
@@ -140,6 +155,13 @@ class TreeConfig:
                 raise ValueError(f"TreeConfig.{name} must be None or an int >= 0, got {value!r}")
         if self.end not in ENDS:
             raise ValueError(f"TreeConfig.end must be one of {tuple(ENDS)}, got {self.end!r}")
+        if self.edges not in EDGES:
+            raise ValueError(f"TreeConfig.edges must be one of {EDGES}, got {self.edges!r}")
+
+
+#: The kinodynamic tree of the ``latent-tree-kino`` agent: straight-move edges predicted by the
+#: transition model (defaults chosen on the train splits: docs/planners.md).
+KINO_CONFIG = TreeConfig(edges="moves")
 
 
 @dataclass(frozen=True)
@@ -249,6 +271,7 @@ class LatentTreePlanner:
         config: Parameters; ``None`` uses ``TreeConfig()``.
         seed: Seed of the sampling; ``plan`` starts from it on every call, so a plan is a
             function of (start, goal, seed).
+        transition_model: A ``latent_model.TransitionModel`` (needed by ``edges="moves"``).
         **overrides: Any ``TreeConfig`` field, overriding ``config``
             (``LatentTreePlanner(model, step_length=0.1)``).
 
@@ -259,7 +282,7 @@ class LatentTreePlanner:
 
     def __init__(
         self, model: ShapeSurrogate, config: TreeConfig | None = None, *, seed: int = 0,
-        **overrides: Any,
+        transition_model: Any = None, **overrides: Any,
     ) -> None:
         known = {f.name for f in fields(TreeConfig)}
         unknown = sorted(set(overrides) - known)
@@ -271,6 +294,14 @@ class LatentTreePlanner:
         self.model = model
         self.seed = int(seed)
         self._end = ENDS[self.config.end]
+        self.transition_model = transition_model
+        if self.config.edges == "moves":
+            if transition_model is None:
+                raise ValueError('edges="moves" needs a transition_model (a '
+                                 'latent_model.TransitionModel)')
+            if transition_model.config.n_points != self.n_points:
+                raise ValueError(f"transition_model must be for {self.n_points} points, got "
+                                 f"{transition_model.config.n_points}")
 
     @property
     def n_points(self) -> int:
@@ -373,6 +404,8 @@ class LatentTreePlanner:
         start = as_shape(start, n, "start")
         goal = as_shape(goal, n, "goal")
         rng = np.random.default_rng(self.seed if seed is None else seed)
+        if cfg.edges == "moves":
+            return self._plan_moves(start, goal, goal_latent, rng, t0, calls0)
         counts = {"similarity": 0, "straightness": 0, "follow": 0, "cord": 0}
         if goal_latent is None:
             z, inv_err, inv_ok = self.invert(np.stack([start, goal]))
@@ -391,14 +424,7 @@ class LatentTreePlanner:
         limits = _CordLimits.of(start, ends, cfg.max_stretch)
         tree = _Tree(cfg.max_nodes + 1, self.surrogate.latent_dim, n)
         tree.add(z_start[None], ends[:1], np.array([-1]), np.zeros(1), np.zeros(1, np.int64))
-        spread = np.abs(z_goal - z_start)
-        margin = max(cfg.sample_margin, float(np.linalg.norm(spread)))
-        low = np.minimum(z_start, z_goal) - margin
-        high = np.maximum(z_start, z_goal) + margin
-        bounds = self.surrogate.latent_bounds()
-        if bounds is not None:  # stay where the model was trained (but keep start and goal)
-            low = np.minimum(np.maximum(low, bounds[0]), np.minimum(z_start, z_goal))
-            high = np.maximum(np.minimum(high, bounds[1]), np.maximum(z_start, z_goal))
+        low, high = self._sample_box(z_start, z_goal)
 
         goal_edge: tuple[int, int] | None = None  # (node, points) connected to the goal
         reached: int | None = None  # a node within goal_threshold (the paper's stop)
@@ -488,6 +514,146 @@ class LatentTreePlanner:
             "rejected": dict(counts),
         }
         return self._build_plan(path_latents, path_points, start, goal, success, stats, t0, calls0)
+
+    def _sample_box(self, z_start: np.ndarray, z_goal: np.ndarray
+                    ) -> tuple[np.ndarray, np.ndarray]:
+        """The box latent targets are drawn from: around start and goal, within the model's
+        training range when it reports one (but always holding start and goal)."""
+        spread = np.abs(z_goal - z_start)
+        margin = max(self.config.sample_margin, float(np.linalg.norm(spread)))
+        low = np.minimum(z_start, z_goal) - margin
+        high = np.maximum(z_start, z_goal) + margin
+        bounds = self.surrogate.latent_bounds()
+        if bounds is not None:  # stay where the model was trained (but keep start and goal)
+            low = np.minimum(np.maximum(low, bounds[0]), np.minimum(z_start, z_goal))
+            high = np.maximum(np.minimum(high, bounds[1]), np.maximum(z_start, z_goal))
+        return low, high
+
+    # ------------------------------------------------------------------ kinodynamic edges
+    def _encode(self, shapes: np.ndarray) -> np.ndarray:
+        """Latents of predicted shapes for the nearest-node search: the encoder alone."""
+        z, _, _ = self.surrogate.invert(shapes, steps=0, restarts=1)
+        return np.asarray(z, dtype=np.float32)
+
+    def _best_moves(self, shapes: np.ndarray, targets: np.ndarray, rng: np.random.Generator
+                    ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """For each ``(shape, target)`` pair, the best of ``move_samples`` straight moves.
+
+        The moves are the one that takes the end to the target's end, and samples around it,
+        all predicted in one batched call of the transition model.
+
+        Returns:
+            ``(B, 2)`` moves, ``(B, n, 2)`` predicted shapes, ``(B,)`` their errors to the
+            targets.
+        """
+        cfg = self.config
+        b, m = len(shapes), cfg.move_samples
+        toward = targets[:, self._end] - shapes[:, self._end]  # (B, 2)
+        moves = toward[:, None] + rng.normal(0.0, cfg.move_noise, (b, m, 2))
+        moves[:, 0] = toward
+        norms = np.linalg.norm(moves, axis=-1, keepdims=True)
+        moves *= np.minimum(1.0, cfg.max_move / np.maximum(norms, 1e-12))
+        flat = moves.reshape(b * m, 2)
+        predicted = self.transition_model.predict(np.repeat(shapes, m, axis=0), self.config.end,
+                                                  flat).reshape(b, m, self.n_points, 2)
+        errs = np.asarray(error(predicted, targets[:, None])).reshape(b, m)
+        pick = errs.argmin(axis=1)
+        rows = np.arange(b)
+        return moves[rows, pick], predicted[rows, pick], errs[rows, pick]
+
+    def _plan_moves(self, start: np.ndarray, goal: np.ndarray, goal_latent: np.ndarray | None,
+                    rng: np.random.Generator, t0: float, calls0: int) -> Plan:
+        """RRT with straight-move edges predicted by the transition model (``edges="moves"``).
+
+        Targets are drawn from the GAN's latent box around start and goal (or are the goal),
+        the nearest node in latent space is extended by the best of a batch of moves towards
+        the decoded target, and after every batch the nodes nearest the goal try to reach it
+        in one move. Nodes are predicted shapes at rest; the plan is the moves from the start.
+        """
+        cfg = self.config
+        n = self.n_points
+        if goal_latent is None:
+            goal_latent = self._encode(goal[None])[0]
+        z_goal = np.asarray(goal_latent, dtype=np.float32).reshape(-1)
+        z_start = self._encode(start[None])[0]
+        low, high = self._sample_box(z_start, z_goal)
+        tree = _Tree(cfg.max_nodes + 1, len(z_goal), n)
+        tree.add(z_start[None], start[None], np.array([-1]), np.zeros(1), np.zeros(1, np.int64))
+        moves = np.zeros((cfg.max_nodes + 1, 2))
+        best_node, best_err = 0, float(error(start, goal))
+        found: tuple[int, np.ndarray, np.ndarray] | None = None  # (node, move, shape)
+        candidates = np.array([0])
+        iterations, stop = 0, "goal"
+        while True:
+            # Goal connection: the new nodes nearest the goal try to reach it in one move.
+            if len(candidates):
+                gaps = np.asarray(error(tree.shapes[candidates], goal)).reshape(-1)
+                candidates = candidates[np.argsort(gaps)[: cfg.connect_attempts]]
+                move, shape, err = self._best_moves(
+                    tree.shapes[candidates], np.broadcast_to(goal, (len(candidates), n, 2)), rng)
+                k = int(np.argmin(err))
+                if err[k] <= cfg.goal_threshold:
+                    found = (int(candidates[k]), move[k], shape[k])
+                    break
+            if time.perf_counter() - t0 > cfg.max_seconds:
+                stop = "time"
+                break
+            if tree.size > cfg.max_nodes:
+                stop = "nodes"
+                break
+            iterations += 1
+            samples = rng.uniform(low, high, size=(cfg.batch_size, len(z_goal)))
+            samples[rng.random(cfg.batch_size) < cfg.goal_bias] = z_goal
+            nodes = tree.latents[: tree.size]
+            nearest = ((samples[:, None, :] - nodes[None]) ** 2).sum(axis=-1).argmin(axis=1)
+            targets = self.surrogate.decode(samples.astype(np.float32))
+            move, shape, _ = self._best_moves(tree.shapes[nearest], targets, rng)
+            # A node must change the cord: moves that leave it where it was add nothing.
+            new = np.asarray(error(shape, tree.shapes[nearest])).reshape(-1) > 0.005
+            parents = nearest[new]
+            added = tree.add(self._encode(shape[new]) if new.any() else np.zeros((0, len(z_goal))),
+                             shape[new], parents, tree.cost[parents] + 1,
+                             np.ones(len(parents), np.int64))
+            moves[added] = move[new][: len(added)]
+            candidates = added
+            if len(added):
+                gaps = np.asarray(error(tree.shapes[added], goal)).reshape(-1)
+                if gaps.min() < best_err:
+                    best_node, best_err = int(added[np.argmin(gaps)]), float(gaps.min())
+                if gaps.min() <= cfg.goal_threshold:
+                    found = (best_node, np.zeros(2), tree.shapes[best_node])
+                    break
+        if found is not None:
+            node, last_move, last_shape = found
+            path = tree.path(node)
+            path_moves = [moves[i] for i in path[1:]]
+            path_shapes = [tree.shapes[i] for i in path]
+            if np.any(last_move):
+                path_moves.append(last_move)
+                path_shapes.append(last_shape)
+            success = True
+        else:
+            path = tree.path(best_node)
+            path_moves = [moves[i] for i in path[1:]]
+            path_shapes = [tree.shapes[i] for i in path]
+            success = False
+        shapes = np.array(path_shapes, dtype=np.float32)
+        corners = np.concatenate([start[self._end][None], shapes[1:, self._end]])
+        stats = {
+            "nodes": int(tree.size),
+            "iterations": iterations,
+            "stop": stop if not success else "goal",
+            "edges": "moves",
+            "path_nodes": len(shapes),
+            "direct": len(shapes) == 2,
+            "predicted_error": float(error(shapes[-1], goal)),
+            "moves": np.array(path_moves).reshape(-1, 2).tolist(),
+            "decoder_calls": self.surrogate.decoder_calls - calls0,
+            "seconds": time.perf_counter() - t0,
+        }
+        return Plan(shapes=shapes, latents=self._encode(shapes), waypoints=corners.astype(
+            np.float32), nodes=np.arange(len(shapes), dtype=np.int64), success=success,
+            stats=stats, end=cfg.end)
 
     def _shortcut(
         self, latents: np.ndarray, points: list[int], limits: _CordLimits, counts: dict[str, int]

@@ -94,6 +94,14 @@ class PlannerPolicy:
         patience: Closed loop: replans in a row without progress after which the policy holds
             still (``None``: never).
         min_progress: Metres by which the real error must beat its best to count as progress.
+        moves_per_plan: Closed loop by moves: execute only the first ``moves_per_plan``
+            straight moves of each plan, let the cord come to rest, and plan again from it
+            (``None``: the whole plan, checked every ``replan_every`` steps). The kinodynamic
+            tree, whose plans are moves predicted at rest, uses 1.
+        partial_plans: On a failed plan, follow its path to the node nearest the goal (when
+            that node is predicted nearer the goal than the cord is now) instead of the
+            straight-line fallback. Worth it when the planner's edges are moves the cord can
+            make (the kinodynamic tree), not with latent-line edges.
 
     Attributes:
         stats: ``PolicyStats`` of the current episode.
@@ -113,6 +121,8 @@ class PlannerPolicy:
         settle_steps: int = 10,
         patience: int | None = 3,
         min_progress: float = 0.002,
+        moves_per_plan: int | None = None,
+        partial_plans: bool = False,
     ) -> None:
         n = model_n_points(model)
         if planner is None:
@@ -130,6 +140,12 @@ class PlannerPolicy:
             raise ValueError(f"patience must be None or an int >= 1, got {patience!r}")
         if not min_progress >= 0:
             raise ValueError(f"min_progress must be >= 0, got {min_progress!r}")
+        if moves_per_plan is not None and not (isinstance(moves_per_plan, int)
+                                               and moves_per_plan >= 1):
+            raise ValueError(f"moves_per_plan must be None or an int >= 1, got "
+                             f"{moves_per_plan!r}")
+        self.moves_per_plan = moves_per_plan
+        self.partial_plans = bool(partial_plans)
         self.wait_for_corner = bool(wait_for_corner)
         if not (isinstance(settle_steps, int) and settle_steps >= 0):
             raise ValueError(f"settle_steps must be an int >= 0, got {settle_steps!r}")
@@ -162,6 +178,12 @@ class PlannerPolicy:
                 f"policy max_step={self.max_step} m differs from the environment's "
                 f"max_step={step} m: pass max_step=env.unwrapped.max_step"
             )
+        transition = getattr(self.planner, "transition_model", None)
+        if transition is not None and step is not None and abs(
+                float(step) - transition.config.max_step) > 1e-12:
+            raise ValueError(
+                f"the transition model was trained with max_step={transition.config.max_step} "
+                f"m, but the environment has max_step={step} m")
         grasp = getattr(getattr(base, "cord", None), "grasp", "head")
         if grasp != self.planner.config.end:
             raise ValueError(
@@ -227,13 +249,17 @@ class PlannerPolicy:
         self.plans.append(plan)
         self.stats.plans += 1
         self.stats.decoder_calls += int(plan.stats.get("decoder_calls", 0))
-        if plan.success:
-            corners = plan.corners[1:]
-        else:
+        follow = plan.success or (self.partial_plans and len(plan.shapes) > 1 and float(
+            error(plan.shapes[-1], goal)) < float(error(shape, goal)))
+        if not plan.success:
             self.stats.failures += 1
-            end = 0 if self.planner.config.end == "head" else -1
-            corners = goal[end][None]  # the fallback: straight to the goal's end position
+        if follow:
+            corners = plan.corners[1:]
+        else:  # the fallback: straight to the goal's end position
+            corners = goal[0 if self.planner.config.end == "head" else -1][None]
         moves = actions_by_move(head, corners, self.max_step)
+        if self.moves_per_plan is not None:
+            moves = moves[: self.moves_per_plan]
         self._queue = [action for move in moves for action in move]
         self._corners = set(np.cumsum([len(move) for move in moves]).tolist())
         self._expected = (expected_shapes(plan, self._queue, self.max_step) if plan.success
@@ -272,7 +298,7 @@ class PlannerPolicy:
         if episode_start is not None and bool(np.asarray(episode_start).reshape(-1)[0]):
             self.reset()
         obs = read_observation(observation, self.n_points)
-        closed = self.replan_every is not None
+        closed = self.replan_every is not None or self.moves_per_plan is not None
         moving = self._previous is not None and float(
             np.abs(obs.shape - self._previous).max()) > REST_MOTION
         self._previous = obs.shape
@@ -282,7 +308,7 @@ class PlannerPolicy:
             action = np.zeros(2, dtype=np.float32)
             return (action[None] if obs.batched else action), state
         due = not self.plans or (closed and (not self._queue or (
-            self._since_plan >= self.replan_every
+            self.moves_per_plan is None and self._since_plan >= self.replan_every
             and (self._done in self._corners or not self.wait_for_corner)
         )))
         if due and closed and self._on_track(obs.shape):
