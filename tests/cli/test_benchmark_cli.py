@@ -10,7 +10,8 @@ import pytest
 from dlo_bench.paths import shipped_baseline
 from dlo_cli.main import main
 
-AGENTS = ["straight-line", "latent-tree", "latent-tree-closed", "physics-mpc", "latent-mpc", "ppo",
+AGENTS = ["straight-line", "latent-tree", "latent-tree-closed", "latent-tree-kino", "physics-mpc",
+          "latent-mpc", "ppo",
           "sac-her", "bc"]
 ROW_KEYS = {"agent", "difficulty", "success_rate", "median_error", "seconds_per_episode",
             "training_env_steps", "status"}
