@@ -21,6 +21,12 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help="--stage transition: optimiser steps (None: TransitionTrainConfig's)")
     parser.add_argument("--members", type=int, default=None,
                         help="--stage transition: networks in the ensemble (None: 5)")
+    parser.add_argument("--init", default=None,
+                        help="--stage transition: start from this transition model file "
+                             "(fine-tuning; same architecture), None: random weights")
+    parser.add_argument("--lr", type=float, default=None,
+                        help="--stage transition: starting learning rate (None: "
+                             "TransitionTrainConfig's; lower it when fine-tuning with --init)")
     parser.add_argument("--minutes", type=float, default=30.0,
                         help="training wall time of the run, evaluations excluded")
     parser.add_argument("--gan-steps", type=int, default=None,

@@ -48,7 +48,8 @@ def run(args: argparse.Namespace) -> int:
         print("no --heldout file: holding out 5% of --data's episodes for the report")
         data, heldout = split_transitions(data, 0.05, seed=args.seed)
     train_kw = {k: v for k, v in {"steps": args.steps, "batch_size": args.batch_size,
-                                  "eval_every": args.eval_every, "seed": args.seed}.items()
+                                  "eval_every": args.eval_every, "seed": args.seed,
+                                  "init": args.init, "lr": args.lr}.items()
                 if v is not None}
     model_kw = {k: v for k, v in {"width": args.width, "members": args.members}.items()
                 if v is not None}

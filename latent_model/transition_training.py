@@ -53,6 +53,8 @@ class TransitionTrainConfig:
         validation_fraction: Share of the training episodes kept out to watch progress.
         eval_every: Steps between validation, checkpoint and a row of the training curve.
         seed: Seed of the initialisation, the split and the batches.
+        init: Start from the weights of this transition model file (fine-tuning, e.g. after
+            adding data); its architecture must be the one trained. None: random weights.
     """
 
     steps: int = 20_000
@@ -65,6 +67,7 @@ class TransitionTrainConfig:
     validation_fraction: float = 0.05
     eval_every: int = 1000
     seed: int = 0
+    init: str | None = None
 
     def __post_init__(self) -> None:
         positive_ints(self, "steps", "batch_size", "eval_every", "chain_moves")
@@ -192,6 +195,12 @@ def train_transition_model(
                                       "max_step", mc.max_step))})
     torch.manual_seed(tc.seed)
     model = model_class(mc, device=device)
+    if tc.init:
+        start = TransitionModel.load(tc.init, device="cpu")
+        if asdict(start.config) != asdict(mc):
+            raise ValueError(f"init {tc.init!r} is a model of another architecture or cord "
+                             f"({start.config}) than the one trained ({mc})")
+        model.net.load_state_dict(start.net.state_dict())
     optimiser = torch.optim.Adam(model.net.parameters(), lr=tc.lr)
     step = 0
     if resume and checkpoint.is_file():

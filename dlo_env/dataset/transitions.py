@@ -242,6 +242,34 @@ def _draw_move(rng: np.random.Generator, cord: Cord, config: TransitionCollectCo
     return np.concatenate(moves)
 
 
+def carry_out(cord: Cord, move: np.ndarray, max_step: float
+              ) -> tuple[np.ndarray, np.ndarray, np.ndarray, int]:
+    """One transition on ``cord`` (at rest): the move as ``split_move`` actions through
+    ``apply_action``, then zero actions until the cord is at rest.
+
+    Args:
+        cord: The cord, at rest; it is left at rest after the move.
+        move: ``(2 * ends,)`` commanded displacement of the held ends (head first).
+        max_step: Metres per unit action.
+
+    Returns:
+        The shape after, the commanded and the real displacement of [head, tail] ``(2, 2)``
+        (zero for an end not held), and the zero actions the settle took.
+    """
+    before = cord.gripper_positions()
+    for action in split_move(move, max_step):
+        apply_action(cord, action, max_step)
+    settle = wait_for_rest(cord, max_step)
+    after = cord.gripper_positions()
+    commanded = np.zeros((2, 2), dtype=np.float32)
+    moved = np.zeros((2, 2), dtype=np.float32)
+    for k, end in enumerate(GRASP_ENDS[cord.grasp]):
+        row = 0 if end == "head" else 1
+        commanded[row] = move[2 * k: 2 * k + 2]
+        moved[row] = after[end] - before[end]
+    return cord.shape, commanded, moved, settle
+
+
 def collect_transition_chunk(config: TransitionCollectConfig, index: int, size: int,
                              progress: Progress | None = None) -> TransitionDataset:
     """Generate chunk ``index``: exactly ``size`` transitions (a prefix of a larger chunk)."""
@@ -263,18 +291,7 @@ def collect_transition_chunk(config: TransitionCollectConfig, index: int, size: 
             if len(rows["grasp"]) == size:
                 break
             move = _draw_move(rng, cord, config)
-            before = cord.gripper_positions()
-            for action in split_move(move, config.max_step):
-                apply_action(cord, action, config.max_step)
-            settle = wait_for_rest(cord, config.max_step)
-            after = cord.gripper_positions()
-            nxt = cord.shape
-            commanded = np.zeros((2, 2), dtype=np.float32)
-            moved = np.zeros((2, 2), dtype=np.float32)
-            for k, end in enumerate(GRASP_ENDS[GRASP_NAMES[grasp]]):
-                row = 0 if end == "head" else 1
-                commanded[row] = move[2 * k: 2 * k + 2]
-                moved[row] = after[end] - before[end]
+            nxt, commanded, moved, settle = carry_out(cord, move, config.max_step)
             for name, value in (("start", start), ("next", nxt), ("grasp", grasp),
                                 ("displacement", commanded), ("moved", moved),
                                 ("episode", episode), ("step", step), ("settle", settle),

@@ -208,3 +208,19 @@ def test_training_learns_resumes_and_reports(data, tmp_path):
     write_report(rows, rank, tmp_path)
     assert (tmp_path / "transition-metrics.png").stat().st_size > 1000
     assert (tmp_path / "transition-metrics.csv").read_text().startswith("moves,group,count")
+
+
+def test_training_can_start_from_a_saved_model(data, tmp_path):
+    tc = TransitionTrainConfig(steps=30, batch_size=64, chain_batch=16, eval_every=30,
+                               validation_fraction=0.2)
+    first = train_transition_model(data, tmp_path / "a", tc, TINY, device="cpu")
+    still = TransitionTrainConfig(**{**tc.__dict__, "steps": 1, "lr": 1e-12,
+                                     "init": str(tmp_path / "a" / "transition.pt")})
+    tuned = train_transition_model(data, tmp_path / "b", still, TINY, device="cpu")
+    shapes = _shapes(3, seed=9)
+    d = np.full((3, 2), 0.06, dtype=np.float32)
+    assert np.allclose(tuned.predict(shapes, "head", d), first.predict(shapes, "head", d),
+                       atol=1e-3)  # float16 weights on disk
+    wider = TransitionModelConfig(**{**TINY.__dict__, "width": 16})
+    with pytest.raises(ValueError, match="another architecture"):
+        train_transition_model(data, tmp_path / "c", still, wider, device="cpu")
