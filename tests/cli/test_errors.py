@@ -51,7 +51,7 @@ def test_an_unknown_agent_is_one_line_naming_the_agents(tmp_path, capsys):
 
 
 def test_an_agent_in_an_environment_it_does_not_act_in_is_one_line(tmp_path, capsys):
-    line = _one_line_error(capsys, main(["evaluate", "--agent", "straight-line", "--env-id",
+    line = _one_line_error(capsys, main(["evaluate", "--agent", "latent-tree", "--env-id",
                                          "dlo_env/DLODualEndpoint-v0", "--out", str(tmp_path)]))
     assert "acts in dlo_env/DLOEndpoint-v0" in line
 
