@@ -332,8 +332,52 @@ def _warm_up(policy: Policy, env: Any) -> None:
     policy.predict(obs, episode_start=np.array([True]), deterministic=True)
 
 
+def run_cell(name: str, env_id: str, difficulty: int, config: BenchmarkConfig, *,
+             shape_model: ShapeSurrogate | None = None, threads: int | None = None,
+             progress: bool = False) -> tuple[Evaluation, float]:
+    """Evaluate one cell with an agent built for it (and warmed up) from scratch.
+
+    A cell depends only on its arguments, so it gives the same result in any process, in any
+    order, and after an interrupted run: what lets the benchmark resume cell by cell and run its
+    cells on Ray.
+
+    Args:
+        name, env_id, difficulty: The cell.
+        config: The benchmark (models, seed, episodes...).
+        shape_model: The loaded shape model of the latent-tree agents (None: loaded here).
+        threads: Torch threads (None: leave as they are).
+        progress: Show a progress bar.
+
+    Returns:
+        The evaluation and its wall time, seconds.
+    """
+    import gymnasium as gym
+
+    import dlo_env  # noqa: F401  (registers the environments)
+
+    if threads is not None:
+        import torch
+
+        torch.set_num_threads(threads)
+    if shape_model is None and AGENTS[name].shape_model:
+        shape_model, why = load_shape_model(config.model)
+        if shape_model is None:
+            raise FileNotFoundError(f"no shape model: {why}")
+    with gym.make(env_id) as env:
+        agent = load_agent(name, config, env, shape_model)
+        if agent.policy is None:
+            raise ValueError(f"agent {name!r} is missing in {env_id}: {agent.missing}")
+        _warm_up(agent.policy, env)
+    t0 = time.perf_counter()
+    result = evaluate(agent.policy, env_id, suite=SUITE_OF_DIFFICULTY[difficulty],
+                      episodes=config.episodes, seed=config.seed, split="test", agent=name,
+                      fidelity=config.fidelity, progress=progress)
+    return result, time.perf_counter() - t0
+
+
 def run_benchmark(config: BenchmarkConfig, out_dir: str | os.PathLike, *,
-                  resume: bool = False, progress: bool = True) -> list[dict[str, Any]]:
+                  resume: bool = False, progress: bool = True,
+                  backend: Any = None) -> list[dict[str, Any]]:
     """Evaluate every agent on every cell (environment, difficulty); write each as it finishes.
 
     Args:
@@ -342,6 +386,9 @@ def run_benchmark(config: BenchmarkConfig, out_dir: str | os.PathLike, *,
             ``out_dir/results_episodes/<agent>-<env>-d<K>.csv/.json``.
         resume: Reuse cells already written by a run with the same settings.
         progress: Show progress bars.
+        backend: None runs the cells one after the other in this process; a
+            ``dlo_env.dataset.ray_backend.RayBackend`` runs them as Ray tasks (same results:
+            a cell is self-contained, see :func:`run_cell`).
 
     Returns:
         The rows: agents in ``config.agents`` order, then the cells in ``config.cells()`` order.
@@ -354,17 +401,13 @@ def run_benchmark(config: BenchmarkConfig, out_dir: str | os.PathLike, *,
     shape_model, why = (None, "")
     if any(AGENTS[a].shape_model for a in config.agents):
         shape_model, why = load_shape_model(config.model)
-    rows = []
+    rows: list[dict[str, Any]] = []
+    todo: list[tuple[int, str, str, int, LoadedAgent, dict[str, Any]]] = []
     for name in config.agents:
         agents: dict[str, LoadedAgent] = {}
         for env_id in config.envs:
-            env = gym.make(env_id)
-            try:
+            with gym.make(env_id) as env:
                 agent = load_agent(name, config, env, shape_model)
-                if agent.policy is not None:
-                    _warm_up(agent.policy, env)
-            finally:
-                env.close()
             if agent.missing.startswith("no shape model") and why:
                 agent = LoadedAgent(name, None, missing=f"no shape model: {why}")
             agents[env_id] = agent
@@ -379,17 +422,53 @@ def run_benchmark(config: BenchmarkConfig, out_dir: str | os.PathLike, *,
             key = cell_key(config, agent, env_id, difficulty)
             path = folder / f"{cell}.json"
             loaded = _load_cell(path, key) if resume else None
-            if loaded is None:
-                t0 = time.perf_counter()
-                suite = SUITE_OF_DIFFICULTY[difficulty]
-                result = evaluate(agent.policy, env_id, suite=suite, episodes=config.episodes,
-                                  seed=config.seed, split="test", agent=name,
-                                  fidelity=config.fidelity, progress=progress)
-                facts = {"wall_seconds": time.perf_counter() - t0, "commit": code_version()}
-                write_evaluation(result, folder, cell, extra={"benchmark_key": key, **facts})
-            else:
+            if loaded is not None:
                 result, facts = loaded
+                rows.append({**row_of(agent, env_id, difficulty, result, config.episodes),
+                             **facts})
                 if progress:
                     print(f"{cell}: reused {path}", flush=True)
-            rows.append({**row_of(agent, env_id, difficulty, result, config.episodes), **facts})
+                continue
+            todo.append((len(rows), name, env_id, difficulty, agent, key))
+            rows.append({})
+
+    def finish(k: int, result: Evaluation, seconds: float) -> None:
+        slot, name, env_id, difficulty, agent, key = todo[k]
+        cell = f"{name}-{env_label(env_id)}-d{difficulty}"
+        facts = {"wall_seconds": seconds, "commit": code_version()}
+        write_evaluation(result, folder, cell, extra={"benchmark_key": key, **facts})
+        rows[slot] = {**row_of(agent, env_id, difficulty, result, config.episodes), **facts}
+
+    if backend is None:
+        for k, (_, name, env_id, difficulty, _, _) in enumerate(todo):
+            result, seconds = run_cell(name, env_id, difficulty, config,
+                                       shape_model=shape_model, progress=progress)
+            finish(k, result, seconds)
+    else:
+        threads = _torch_threads()
+        calls = [(name, env_id, difficulty, config, None, threads)
+                 for _, name, env_id, difficulty, _, _ in todo]
+        for done, (k, (result, seconds)) in enumerate(backend.map(_run_cell_task, calls), 1):
+            finish(k, result, seconds)
+            if progress:
+                _, name, env_id, difficulty, _, _ = todo[k]
+                print(f"{name}-{env_label(env_id)}-d{difficulty}: success "
+                      f"{result.summary['success_rate']:.0%} ({done}/{len(todo)} cells)",
+                      flush=True)
     return rows
+
+
+def _run_cell_task(name: str, env_id: str, difficulty: int, config: BenchmarkConfig,
+                   shape_model: ShapeSurrogate | None, threads: int | None
+                   ) -> tuple[Evaluation, float]:
+    """``run_cell`` with positional arguments, as a Ray task calls it."""
+    return run_cell(name, env_id, difficulty, config, shape_model=shape_model, threads=threads)
+
+
+def _torch_threads() -> int | None:
+    """This process's torch threads (None without torch), for the workers to match."""
+    try:
+        import torch
+    except ImportError:
+        return None
+    return torch.get_num_threads()

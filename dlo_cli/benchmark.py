@@ -4,7 +4,15 @@ from __future__ import annotations
 
 import argparse
 
-from dlo_cli.flags import add_agent, add_difficulty, add_model, add_out, add_planner_flags
+from dlo_cli.flags import (
+    add_agent,
+    add_backend,
+    add_difficulty,
+    add_model,
+    add_out,
+    add_planner_flags,
+    backend_of,
+)
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
@@ -40,6 +48,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     add_planner_flags(parser)
     parser.add_argument("--seed", type=int, default=BenchmarkConfig.seed,
                         help="seed of the planners' sampling (the tasks are the suites')")
+    add_backend(parser, "this process, one cell after the other")
     parser.add_argument("--resume", action="store_true",
                         help="reuse the cells an interrupted run with the same settings wrote")
     add_out(parser, "benchmark", "results.md/.json/.png and results_episodes/; "
@@ -86,7 +95,8 @@ def run(args: argparse.Namespace) -> int:
     print(f"benchmark: {len(config.agents)} agents x ({cells}) x {config.episodes} episodes "
           f"-> {args.out}", flush=True)
     t0 = time.perf_counter()
-    rows = run_benchmark(config, args.out, resume=args.resume, progress=True)
+    rows = run_benchmark(config, args.out, resume=args.resume, progress=True,
+                         backend=backend_of(args))
     seconds = time.perf_counter() - t0
     parser = argparse.ArgumentParser()
     add_arguments(parser)

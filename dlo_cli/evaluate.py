@@ -3,14 +3,17 @@
 from __future__ import annotations
 
 import argparse
+from typing import Any
 
 from dlo_cli.flags import (
     add_agent,
+    add_backend,
     add_difficulty,
     add_model,
     add_out,
     add_planner_flags,
     add_seed,
+    backend_of,
     positive_int,
 )
 
@@ -31,7 +34,11 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     add_seed(parser, "the tasks (episode i of random tasks resets with SEED+i) and planners")
     parser.add_argument("--env-id", default="dlo_env/DLOEndpoint-v0", help="environment")
     add_model(parser)
+    parser.add_argument("--transition-model", default=None,
+                        help="transition model file, or folder holding transition.pt, for "
+                             "latent-mpc and latent-tree-kino (None: the shipped one)")
     add_planner_flags(parser)
+    add_backend(parser, "this process, one row after the other")
     add_out(parser, "evaluate", "<agent>-<difficulty>.csv/.json and summary.json")
 
 
@@ -40,45 +47,83 @@ def _file_name(agent: str, label: str) -> str:
     return f"{safe.strip('-')}-{label}"
 
 
-def run(args: argparse.Namespace) -> int:
-    """Evaluate every agent on every difficulty (or suite), print the table, write files."""
-    import platform
-    from pathlib import Path
+def evaluate_row(agent: str, difficulty: int | None, suite: str | None,
+                 settings: dict[str, Any], model: Any = None) -> Any:
+    """One row: ``agent`` built from scratch and evaluated (the same in any process).
 
+    Args:
+        agent, difficulty, suite: The row.
+        settings: The command's flags (``env_id``, ``seed``, ``episodes``, ``split``...).
+        model: The loaded shape model of the latent-tree agents (None: loaded here if needed).
+    """
     import gymnasium as gym
 
     import dlo_env  # noqa: F401  (registers the environments)
     from dlo_bench.agents import agent_spec, build_agent, load_shape_model
     from dlo_bench.evaluation import evaluate
+
+    if settings.get("threads"):
+        import torch
+
+        torch.set_num_threads(settings["threads"])
+    if model is None and agent_spec(agent).shape_model:
+        model = load_shape_model(settings["model"])
+    with gym.make(settings["env_id"]) as env:
+        policy = build_agent(agent, env, model=model, seed=settings["seed"],
+                             transition_model=settings["transition_model"],
+                             replan_every=settings["replan_every"],
+                             max_seconds=settings["max_seconds"])
+    return evaluate(policy, settings["env_id"], difficulty=difficulty, suite=suite,
+                    episodes=settings["episodes"], seed=settings["seed"],
+                    split=settings["split"], agent=agent,
+                    fidelity=not settings["no_fidelity"], progress=settings["progress"])
+
+
+def run(args: argparse.Namespace) -> int:
+    """Evaluate every agent on every difficulty (or suite), print the table, write files."""
+    import platform
+    from pathlib import Path
+
+    from dlo_bench.agents import agent_spec, load_shape_model
     from dlo_bench.report import format_divergence, format_table, write_evaluation, write_summaries
     from dlo_env.tasks import suite_seeds
 
     specs = [agent_spec(agent) for agent in args.agent]  # unknown names fail before any work
     for suite in args.suite or []:
         suite_seeds(suite, args.split)
+    backend = backend_of(args)
+    settings = {k: v for k, v in vars(args).items() if not k.startswith("_")}
     model = None
     if any(spec.shape_model for spec in specs):
         import torch
 
         torch.set_num_threads(args.threads)
-        model = load_shape_model(args.model)
+        if backend is None:
+            model = load_shape_model(args.model)
     rows = ([(None, s, s) for s in args.suite] if args.suite
             else [(d, None, f"d{d}") for d in args.difficulty])
+    calls = [(agent, difficulty, suite) for agent in args.agent
+             for difficulty, suite, _ in rows]
+    labels = [(agent, label) for agent in args.agent for _, _, label in rows]
     out = Path(args.out)
-    settings = {k: v for k, v in vars(args).items() if not k.startswith("_")}
-    summaries = []
-    for agent in args.agent:
-        for difficulty, suite, label in rows:
-            with gym.make(args.env_id) as env:
-                policy = build_agent(agent, env, model=model, seed=args.seed,
-                                     replan_every=args.replan_every,
-                                     max_seconds=args.max_seconds)
-            result = evaluate(policy, args.env_id, difficulty=difficulty, suite=suite,
-                              episodes=args.episodes, seed=args.seed, split=args.split,
-                              agent=agent, fidelity=not args.no_fidelity, progress=True)
-            extra = {"arguments": settings, "machine": platform.platform()}
-            write_evaluation(result, out, _file_name(agent, label), extra=extra)
-            summaries.append(result.summary)
+    extra = {"arguments": settings, "machine": platform.platform()}
+    results: dict[int, Any] = {}
+
+    def finish(k: int, result: Any) -> None:  # written as soon as it is done
+        results[k] = result
+        write_evaluation(result, out, _file_name(*labels[k]), extra=extra)
+
+    if backend is None:
+        for k, (agent, difficulty, suite) in enumerate(calls):
+            finish(k, evaluate_row(agent, difficulty, suite, {**settings, "progress": True},
+                                   model))
+    else:
+        quiet = {**settings, "progress": False}
+        for k, result in backend.map(evaluate_row, [(*c, quiet) for c in calls]):
+            finish(k, result)
+            print(f"{labels[k][0]} {labels[k][1]}: success "
+                  f"{result.summary['success_rate']:.0%}", flush=True)
+    summaries = [results[k].summary for k in range(len(calls))]
     print(format_table(summaries))
     parting = format_divergence(summaries)
     if parting:

@@ -91,12 +91,12 @@ def add_threads(parser: argparse.ArgumentParser, default: int | None = 1) -> Non
                              "contend with other work)")
 
 
-def add_backend(parser: argparse.ArgumentParser) -> None:
-    """``--backend`` and ``--address``: local worker processes, or Ray."""
+def add_backend(parser: argparse.ArgumentParser,
+                local: str = "local worker processes (--workers)") -> None:
+    """``--backend`` and ``--address``: ``local`` (what it means for this command), or Ray."""
     parser.add_argument("--backend", choices=("local", "ray"), default="local",
-                        help="where the work runs: local worker processes (--workers), or Ray "
-                             "(a local Ray runtime, or the cluster at --address); the results "
-                             "are the same")
+                        help=f"where the work runs: {local}, or Ray (a local Ray runtime, or "
+                             "the cluster at --address); the results are the same")
     parser.add_argument("--address", default=None,
                         help="with --backend ray: address of a running Ray cluster ('auto', "
                              "'ray://HOST:10001'); None starts a local Ray runtime")

@@ -95,7 +95,6 @@ class CEMPolicy:
         self.max_step = float(max_step)
         self.success_threshold = float(success_threshold)
         self.config = config
-        self._rng = np.random.default_rng(config.seed)
         self.reset()
 
     def episode_stats(self) -> EpisodeStats:
@@ -103,9 +102,12 @@ class CEMPolicy:
         return EpisodeStats(plans=self.stats.plans, seconds=self.stats.seconds)
 
     def reset(self) -> None:
-        """Forget the current plan and the episode's statistics."""
+        """Forget the current plan and the episode's statistics, and restart the sampling from
+        ``config.seed``: an episode's plans depend on its task and the seed only, not on the
+        episodes before it (so episodes and cells can run in any order or process)."""
         self._queue: list[np.ndarray] = []
         self._mean: np.ndarray | None = None
+        self._rng = np.random.default_rng(self.config.seed)
         self.stats = CEMStats()
 
     # ------------------------------------------------------------------ to override

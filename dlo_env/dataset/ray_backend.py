@@ -1,4 +1,4 @@
-"""Ray as the engine of chunked collection, when one machine is not enough.
+"""Ray as the engine of chunked collection and of evaluations, when one machine is not enough.
 
 :class:`RayBackend` runs the chunks of a :class:`dlo_env.dataset.chunks.ChunkJob` as Ray tasks,
 on a local Ray runtime or on the cluster at ``address``. A task makes its chunk in a temporary
@@ -9,12 +9,16 @@ whose worker dies (killed, node lost) is run again by Ray (``max_retries``); a c
 once, when its task returns, so nothing is lost and nothing is made twice. An interrupted run
 resumes from the written chunks as with the local pool.
 
+``RayBackend.map`` is the general form: any function over a list of argument tuples, one task
+each; the benchmark and ``dlo evaluate`` run their cells with it.
+
 Every node needs this project installed (the same environment as the driver).
 """
 
 from __future__ import annotations
 
 import tempfile
+from collections.abc import Callable, Iterator
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -45,39 +49,49 @@ class RayBackend:
                                               and self.num_cpus >= 1):
             raise ValueError(f"num_cpus must be an int >= 1 or None, got {self.num_cpus!r}")
 
-    def run(self, job: Any, todo: list[tuple[int, int]], parts: Path,
-            progress: Any = None) -> None:
-        """Make the chunks ``todo`` (``(index, size)`` pairs) of ``job`` into ``parts``.
+    def map(self, function: Callable[..., Any], calls: list[tuple[Any, ...]]
+            ) -> Iterator[tuple[int, Any]]:
+        """Run ``function(*args)`` for every ``args`` of ``calls`` as Ray tasks (one CPU each);
+        yield ``(index into calls, result)`` as each finishes.
 
-        ``progress(done, 0)`` is told a chunk's size when it is written.
+        A task whose worker dies is run again (``max_retries``); its result is yielded once.
+        Interrupting the iteration cancels the tasks still running.
         """
         import ray
-
-        from dlo_env.dataset.chunks import chunk_path
 
         started_here = not ray.is_initialized()
         if started_here:
             options = {} if self.address else {"num_cpus": self.num_cpus}
             ray.init(address=self.address, include_dashboard=False, logging_level="warning",
                      **options)
+        pending: dict[Any, int] = {}
         try:
-            make = ray.remote(num_cpus=1, max_retries=self.max_retries)(make_chunk_bytes)
-            pending = {make.remote(job, i, n): (i, n) for i, n in todo}
+            task = ray.remote(num_cpus=1, max_retries=self.max_retries)(function)
+            pending = {task.remote(*args): i for i, args in enumerate(calls)}
             while pending:
                 done, _ = ray.wait(list(pending), num_returns=1)
                 for ref in done:
-                    index, size = pending.pop(ref)
-                    with atomic_path(chunk_path(parts, index)) as tmp:
-                        tmp.write_bytes(ray.get(ref))
-                    if progress is not None:
-                        progress(size, 0)
-        except KeyboardInterrupt:
+                    yield pending.pop(ref), ray.get(ref)
+        finally:
             for ref in pending:
                 ray.cancel(ref)
-            raise
-        finally:
             if started_here:
                 ray.shutdown()
+
+    def run(self, job: Any, todo: list[tuple[int, int]], parts: Path,
+            progress: Any = None) -> None:
+        """Make the chunks ``todo`` (``(index, size)`` pairs) of ``job`` into ``parts``.
+
+        ``progress(done, 0)`` is told a chunk's size when it is written.
+        """
+        from dlo_env.dataset.chunks import chunk_path
+
+        for k, data in self.map(make_chunk_bytes, [(job, i, n) for i, n in todo]):
+            index, size = todo[k]
+            with atomic_path(chunk_path(parts, index)) as tmp:
+                tmp.write_bytes(data)
+            if progress is not None:
+                progress(size, 0)
 
 
 def make_chunk_bytes(job: Any, index: int, size: int) -> bytes:

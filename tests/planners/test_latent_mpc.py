@@ -91,3 +91,15 @@ def test_a_cord_held_at_the_tail_is_planned_with_tail_moves():
         solved += error(cord.shape, task.goal) <= 0.02
     assert policy.grasp == "tail" and policy.ends == ("tail",)
     assert solved >= 2
+
+
+def test_an_episode_plans_the_same_whatever_ran_before_it():
+    model = TransitionModel(TINY, device="cpu")
+    tasks = load_suite("linear-2", "train", limit=2)
+    policy = LatentMPCPolicy(model, config=LatentMPCConfig(samples=16, elites=4, iterations=2))
+    fresh, _ = policy.plan(tasks[0].start, tasks[0].goal)
+    policy.reset()
+    policy.plan(tasks[1].start, tasks[1].goal)  # another episode first
+    policy.reset()
+    again, _ = policy.plan(tasks[0].start, tasks[0].goal)
+    np.testing.assert_array_equal(again, fresh)
