@@ -6,7 +6,8 @@ shape it was planned from, carried out again in the simulator exactly as transit
 made (``carry_out``: ``split_move`` actions, then zero actions until the cord is at rest, from
 the shape at rest), and kept when the model's prediction is more than ``--threshold`` from
 what the simulator did. The kept transitions are written as a transition file to add to the
-training data (test splits are never touched):
+training data (test splits are never touched). ``summary.json`` states the sample cost of the
+round: the environment steps of latent-mpc's rollouts and of the replayed moves.
 
     python benchmarks/aggregate_transitions.py
     dlo train --stage transition --data data/transitions-train.npz \\
@@ -57,7 +58,7 @@ def main() -> None:
     )
     from dlo_env.envs import ENVIRONMENTS
     from dlo_env.shapes import error
-    from dlo_env.tasks import MAX_SETTLE_ACTIONS, SUITES
+    from dlo_env.tasks import MAX_SETTLE_ACTIONS, SUITES, split_move
     from planners.latent_mpc import LatentMPCPolicy
 
     torch.set_num_threads(1)
@@ -66,7 +67,9 @@ def main() -> None:
     class Recording(LatentMPCPolicy):
         """latent-mpc that remembers each executed move and the shape it was planned from."""
 
-        executed: list[tuple[np.ndarray, np.ndarray]] = []
+        def __init__(self, *args, **kwargs) -> None:
+            self.executed: list[tuple[np.ndarray, np.ndarray]] = []
+            super().__init__(*args, **kwargs)
 
         def _execute(self, plan: np.ndarray) -> list[np.ndarray]:
             self.executed.append((self._planned_from, plan[0].reshape(-1).copy()))
@@ -85,15 +88,16 @@ def main() -> None:
         code = GRASP_NAMES.index(grasp)
         for difficulty in difficulties:
             suite = next(name for name, k in SUITES.items() if k == difficulty)
-            Recording.executed = []
-            policy = Recording.for_env(gym.make(env_id), model=model)
+            with gym.make(env_id) as env:
+                policy = Recording.for_env(env, model=model)
             result = evaluate(policy, env_id, suite=suite, episodes=args.episodes, split="train",
                               agent="latent-mpc", fidelity=False)
-            errors = []
-            for shape, move in Recording.executed:
+            errors, replayed = [], 0
+            for shape, move in policy.executed:
                 cord = Cord(model.cord_params, grasp=grasp)
                 cord.reset(shape)
                 nxt, commanded, moved, settle = carry_out(cord, move, model.config.max_step)
+                replayed += len(split_move(move, model.config.max_step)) + settle
                 predicted = model.predict(shape, grasp, move)
                 errors.append(float(error(predicted, nxt)))
                 if errors[-1] > args.threshold:
@@ -101,13 +105,16 @@ def main() -> None:
                                         ("displacement", commanded), ("moved", moved),
                                         ("settle", settle)):
                         rows[name].append(value)
-            errors = np.array(errors)
+            errors = np.array(errors) if errors else np.zeros(1)
             cell = f"{ENVIRONMENTS[env_id][1]} d{difficulty}"
+            rollout = int(sum(r.steps for r in result.records))
             summary[cell] = {"train_success": result.summary["success_rate"],
-                             "moves": len(errors), "mean_error_cm": 100 * float(errors.mean()),
-                             "kept": int((errors > args.threshold).sum())}
+                             "moves": len(policy.executed),
+                             "mean_error_cm": 100 * float(errors.mean()),
+                             "kept": int((errors > args.threshold).sum()),
+                             "rollout_env_steps": rollout, "replayed_env_steps": replayed}
             print(f"{cell}: train success {result.summary['success_rate']:.0%}, "
-                  f"{len(errors)} moves, model error mean {100 * errors.mean():.2f} cm, "
+                  f"{len(policy.executed)} moves, model error mean {100 * errors.mean():.2f} cm, "
                   f"{(errors > args.threshold).sum()} above {100 * args.threshold:.1f} cm "
                   f"({time.perf_counter() - t0:.0f} s)", flush=True)
     count = len(rows["grasp"])
@@ -127,7 +134,10 @@ def main() -> None:
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
     save_transitions(out / "aggregated.npz", data)
-    summary["total"] = {"kept": count, "env_steps": data.env_steps(),
+    cells = [v for v in summary.values()]
+    summary["total"] = {"kept": count, "kept_env_steps": data.env_steps(),
+                        "rollout_env_steps": sum(v["rollout_env_steps"] for v in cells),
+                        "replayed_env_steps": sum(v["replayed_env_steps"] for v in cells),
                         "seconds": time.perf_counter() - t0}
     write_text_atomic(out / "summary.json", json.dumps(summary, indent=2) + "\n")
     print(f"wrote {count} transitions ({data.env_steps()} env steps) to {out / 'aggregated.npz'}")

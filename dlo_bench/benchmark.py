@@ -128,7 +128,8 @@ class LoadedAgent:
         training_env_steps: Environment steps of the data its model or policy was trained on
             (None: not trained on environment steps; ``sample_cost`` says what instead).
         sample_cost: What it was trained on, in words.
-        model: Where its model came from ("" for model-free planners).
+        models: The files of its models (none for model-free planners).
+        settings: Its planner's settings (``repr`` of its config), part of the resume key.
     """
 
     name: str
@@ -136,7 +137,21 @@ class LoadedAgent:
     missing: str = ""
     training_env_steps: int | None = None
     sample_cost: str = ""
-    model: str = ""
+    models: tuple[str, ...] = ()
+    settings: str = ""
+
+
+def policy_settings(policy: Any) -> str:
+    """The settings of a planner (``repr`` of its config, and of its tree's), "" without any:
+    a change of an agent's defaults makes its saved cells stale."""
+    parts = [repr(getattr(policy, "config", ""))]
+    planner = getattr(policy, "planner", None)
+    if planner is not None:
+        parts.append(repr(getattr(planner, "config", "")))
+    for name in ("replan_every", "moves_per_plan", "partial_plans"):
+        if hasattr(policy, name):
+            parts.append(f"{name}={getattr(policy, name)!r}")
+    return "; ".join(p for p in parts if p and p != "''")
 
 
 def _baseline_folder(name: str, config: BenchmarkConfig, env_id: str) -> Path:
@@ -148,7 +163,10 @@ def _baseline_folder(name: str, config: BenchmarkConfig, env_id: str) -> Path:
 
 
 def _steps(count: int) -> str:
-    return f"{count / 1e6:.2f}M" if count >= 1e6 else f"{count / 1e3:.0f}k"
+    """``1.12M``, ``301k``, ``256``."""
+    if count >= 1e6:
+        return f"{count / 1e6:.2f}M"
+    return f"{count / 1e3:.0f}k" if count >= 1e4 else f"{count:,}"
 
 
 def load_agent(name: str, config: BenchmarkConfig, env: Any,
@@ -179,19 +197,19 @@ def load_agent(name: str, config: BenchmarkConfig, env: Any,
         if name == "bc":  # trained offline on the oracle's demonstrations
             cost = f"{_steps(steps)} demonstration steps"
             return LoadedAgent(name, policy, training_env_steps=steps, sample_cost=cost,
-                               model=str(folder / "model.zip"))
+                               models=(str(folder / "model.zip"),))
         return LoadedAgent(name, policy, training_env_steps=steps,
                            sample_cost=f"{_steps(steps)} env steps",
-                           model=str(folder / "model.zip"))
+                           models=(str(folder / "model.zip"),))
     options: dict[str, Any] = {"seed": config.seed}
-    costs, steps, model = [], None, ""
+    costs, steps, models = [], None, []
     if spec.shape_model:
         if shape_model is None:
             return LoadedAgent(name, None, missing="no shape model (pass --model, or ship "
                                                    "latent_model/pretrained/model.pt)")
         options.update(model=shape_model, replan_every=config.replan_every,
                        max_seconds=config.max_seconds)
-        model = str(shape_model_file(config.model))
+        models.append(str(shape_model_file(config.model)))
         shapes = getattr(shape_model, "info", {}).get("n_train")
         costs.append(f"{_steps(shapes)} simulated shapes" if shapes else "simulated shapes")
     if spec.transition_model:
@@ -200,17 +218,19 @@ def load_agent(name: str, config: BenchmarkConfig, env: Any,
         except (FileNotFoundError, ValueError) as exc:
             return LoadedAgent(name, None, missing=str(exc).splitlines()[0])
         options.update(transition_model=transition)
-        model = str(transition_model_file(config.transition_model))
+        models.append(str(transition_model_file(config.transition_model)))
         steps = transition.info.get("env_steps")
-        moves = transition.info.get("transitions")
-        costs.insert(0, f"{_steps(steps)} env steps ({_steps(moves)} moves)" if steps
-                     else "unknown (the model does not record its data)")
+        moves = transition.info.get("data_transitions")
+        costs.insert(0, "unknown (the model does not record its data)" if not steps
+                     else f"{_steps(steps)} env steps" + (f" ({_steps(moves)} moves)" if moves
+                                                           else ""))
     try:
         policy = build_agent(name, env, **options)
     except ValueError as exc:  # e.g. a model made for another cord
         return LoadedAgent(name, None, missing=str(exc).splitlines()[0])
     return LoadedAgent(name, policy, training_env_steps=steps,
-                       sample_cost=" + ".join(costs) or "none (no learned model)", model=model)
+                       sample_cost=" + ".join(costs) or "none (no learned model)",
+                       models=tuple(models), settings=policy_settings(policy))
 
 
 def load_shape_model(path: str | None) -> tuple[ShapeSurrogate | None, str]:
@@ -238,7 +258,8 @@ def cell_key(config: BenchmarkConfig, agent: LoadedAgent, env_id: str,
     for name in ("agents", "envs", "difficulties"):
         key.pop(name)
     return {**key, "agent": agent.name, "env_id": env_id, "difficulty": difficulty,
-            "model_digest": file_digest(agent.model) if agent.model else ""}
+            "model_digest": "+".join(file_digest(m) for m in agent.models),
+            "settings": agent.settings}
 
 
 def row_of(agent: LoadedAgent, env_id: str, difficulty: int, evaluation: Evaluation | None,
@@ -264,7 +285,7 @@ def row_of(agent: LoadedAgent, env_id: str, difficulty: int, evaluation: Evaluat
         "mean_fidelity": None,
         "training_env_steps": agent.training_env_steps,
         "sample_cost": agent.sample_cost,
-        "model": agent.model,
+        "models": list(agent.models),
         "wall_seconds": None,
         "commit": "",
     }
@@ -446,6 +467,7 @@ def run_benchmark(config: BenchmarkConfig, out_dir: str | os.PathLike, *,
             finish(k, result, seconds)
     else:
         threads = _torch_threads()
+        config = absolute_paths(config)  # the tasks may run in another folder or node
         calls = [(name, env_id, difficulty, config, None, threads)
                  for _, name, env_id, difficulty, _, _ in todo]
         for done, (k, (result, seconds)) in enumerate(backend.map(_run_cell_task, calls), 1):
@@ -456,6 +478,15 @@ def run_benchmark(config: BenchmarkConfig, out_dir: str | os.PathLike, *,
                       f"{result.summary['success_rate']:.0%} ({done}/{len(todo)} cells)",
                       flush=True)
     return rows
+
+
+def absolute_paths(config: BenchmarkConfig) -> BenchmarkConfig:
+    """``config`` with its model and baseline paths made absolute."""
+    from dataclasses import replace
+
+    fields_ = ("model", "transition_model", "baselines")
+    return replace(config, **{f: str(Path(getattr(config, f)).resolve()) for f in fields_
+                              if getattr(config, f)})
 
 
 def _run_cell_task(name: str, env_id: str, difficulty: int, config: BenchmarkConfig,

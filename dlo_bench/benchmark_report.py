@@ -57,10 +57,14 @@ def ratio_lines(rows: list[dict[str, Any]]) -> list[str]:
     for slow, fast in RATIO_PAIRS:
         ratios = planning_time_ratios(rows, slow, fast)
         if ratios:
-            parts = ", ".join(f"{k} {v:.0f}x" for k, v in ratios.items() if k != "all")
+            parts = ", ".join(f"{k} {_ratio(v)}" for k, v in ratios.items() if k != "all")
             lines.append(f"Planning time {slow} / {fast} on the same episodes: "
-                         f"{ratios['all']:.0f}x overall ({parts}).")
+                         f"{_ratio(ratios['all'])} overall ({parts}).")
     return lines
+
+
+def _ratio(value: float) -> str:
+    return f"{value:.0f}x" if value >= 10 else f"{value:.2g}x"
 
 
 def success_table(rows: list[dict[str, Any]]) -> list[str]:
@@ -156,7 +160,7 @@ def results_markdown(rows: list[dict[str, Any]], machine: dict[str, Any], comman
     if missing:
         lines += ["", "Missing cells:"]
         lines += [f"- `{agent}`: {note}" for agent, note in missing]
-    models = sorted({(r["agent"], r["model"]) for r in rows if r["model"]})
+    models = sorted({(r["agent"], m) for r in rows for m in r.get("models", [])})
     if models:
         lines += ["", "Models (SHA-256 prefix): " + "; ".join(
             f"`{a}` {_display_path(m)} ({file_digest(m)[:8] or 'gone'})" for a, m in models) + "."]

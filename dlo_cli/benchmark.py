@@ -38,8 +38,10 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     add_difficulty(parser, None, "each runs the test split of suite linear-K in every "
                                  f"--env (None: {defaults})")
     parser.add_argument("--baselines", default=BenchmarkConfig.baselines,
-                        help="folder with one `dlo baseline` output folder per RL agent "
-                             "(BASELINES/ppo, BASELINES/sac-her; None: the shipped ones)")
+                        help="folder with one `dlo baseline` output folder per RL agent and "
+                             "environment (BASELINES/ppo, BASELINES/sac-her, BASELINES/bc; "
+                             "BASELINES/ppo-dual-endpoint... for DLODualEndpoint-v0; None: the "
+                             "shipped ones)")
     add_model(parser)
     parser.add_argument("--transition-model", default=None,
                         help="transition model file, or folder holding transition.pt, for "

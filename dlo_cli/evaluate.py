@@ -118,7 +118,9 @@ def run(args: argparse.Namespace) -> int:
             finish(k, evaluate_row(agent, difficulty, suite, {**settings, "progress": True},
                                    model))
     else:
-        quiet = {**settings, "progress": False}
+        quiet = {**settings, "progress": False, **{  # the tasks may run in another folder
+            k: str(Path(settings[k]).resolve()) for k in ("model", "transition_model")
+            if settings.get(k)}}
         for k, result in backend.map(evaluate_row, [(*c, quiet) for c in calls]):
             finish(k, result)
             print(f"{labels[k][0]} {labels[k][1]}: success "

@@ -18,6 +18,7 @@ import math
 import os
 from dataclasses import asdict, dataclass
 from importlib import resources
+from numbers import Integral
 from pathlib import Path
 from typing import Any
 
@@ -178,6 +179,9 @@ class TransitionModel(nn.Module):
         """
         e, n = self.config.members, self.config.n_points
         per_member = shapes.dim() == 4
+        if per_member and members is not None:
+            raise ValueError("members applies to shapes shared by the members (B, n, 2), not to "
+                             "one start per member")
         if per_member:
             b = shapes.shape[1]
             grasp, moves, shapes = grasp.repeat(e), moves.repeat(e, 1, 1), shapes.reshape(-1, n, 2)
@@ -301,8 +305,9 @@ class TransitionModel(nn.Module):
                 then tail dx, dy) for both. Targets off the table are clipped as the
                 simulator clips them.
             return_std: Also return the ensemble's spread.
-            members: Use only the first ``members`` networks of the ensemble (None: all):
-                ``members`` times cheaper, a little less accurate; the spread needs two.
+            members: Use only the first ``members`` networks of the ensemble (None: all): the
+                networks' share of the time falls by ``self.config.members / members``, a
+                little less accurate; the spread needs two.
 
         Returns:
             float32 ``(B, n, 2)`` (``(n, 2)`` for one shape), the ensemble's mean, on the
@@ -311,8 +316,14 @@ class TransitionModel(nn.Module):
         """
         arr, d, single = self._inputs(shapes, end, displacement)
         total = self.config.members
-        if members is not None and not (isinstance(members, int) and 1 <= members <= total):
+        if members is not None and not (isinstance(members, Integral) and not isinstance(
+                members, bool) and 1 <= members <= total):
             raise ValueError(f"members must be an int in 1..{total} or None, got {members!r}")
+        if members is not None:
+            members = int(members)
+        if return_std and members == 1:
+            raise ValueError("return_std needs members >= 2 (one network has no spread), "
+                             "got members=1")
         moves = self.reachable_moves(arr, end, d)
         grasp = torch.full((len(arr),), GRASP_CODES[end], dtype=torch.int64)
         means, spreads = [], []

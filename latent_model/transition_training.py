@@ -218,7 +218,8 @@ def train_transition_model(
     gen = torch.Generator(device="cpu").manual_seed(tc.seed * 1_000_003 + step)
     info = {"data": data.metadata.get("collect", {}), "files": data.metadata.get("files"),
             "train_config": asdict(tc),
-            "transitions": len(train), "env_steps": data.env_steps()}
+            "transitions": len(train), "data_transitions": len(data),
+            "env_steps": data.env_steps()}
     started = time.perf_counter()
     model.train()
     while step < tc.steps:

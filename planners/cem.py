@@ -19,7 +19,7 @@ import numpy as np
 from dlo_env.checks import non_negative, positive, positive_ints
 from dlo_env.cord import CordParams
 from dlo_env.shapes import error
-from dlo_env.tasks import GRASP_ENDS
+from dlo_env.tasks import GRASP_ENDS, split_move
 from planners.interfaces import EpisodeStats, Observation
 
 
@@ -163,14 +163,8 @@ class CEMPolicy:
         return best_plan, best_err
 
     def _actions(self, plan: np.ndarray) -> list[np.ndarray]:
-        """Split each move into equal actions no longer than ``max_step`` (as the env runs them)."""
-        actions = []
-        for move in plan:
-            longest = float(np.linalg.norm(move, axis=-1).max())
-            k = max(1, math.ceil(longest / self.max_step - 1e-9))
-            step = (move / (k * self.max_step)).reshape(-1).astype(np.float32)
-            actions.extend([step] * k)
-        return actions
+        """Each move as the environments carry it out: ``split_move``'s equal actions."""
+        return [action for move in plan for action in split_move(move, self.max_step)]
 
     # ------------------------------------------------------------------ policy
     def predict(

@@ -38,6 +38,9 @@ from planners.surrogate import Surrogate
 ENDS = {"head": 0, "tail": -1}
 #: The edge types of the tree (``TreeConfig.edges``).
 EDGES = ("latent", "moves")
+#: ``"moves"`` edges: a move must change the cord by more than this (``error``, metres) to
+#: make a node; moves that leave it where it was add nothing to the tree.
+MIN_NODE_CHANGE = 0.005
 
 
 @dataclass(frozen=True)
@@ -609,8 +612,7 @@ class LatentTreePlanner:
             nearest = ((samples[:, None, :] - nodes[None]) ** 2).sum(axis=-1).argmin(axis=1)
             targets = self.surrogate.decode(samples.astype(np.float32))
             move, shape, _ = self._best_moves(tree.shapes[nearest], targets, rng)
-            # A node must change the cord: moves that leave it where it was add nothing.
-            new = np.asarray(error(shape, tree.shapes[nearest])).reshape(-1) > 0.005
+            new = np.asarray(error(shape, tree.shapes[nearest])).reshape(-1) > MIN_NODE_CHANGE
             parents = nearest[new]
             added = tree.add(self._encode(shape[new]) if new.any() else np.zeros((0, len(z_goal))),
                              shape[new], parents, tree.cost[parents] + 1,

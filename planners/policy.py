@@ -216,13 +216,17 @@ class PlannerPolicy:
         self._goal_key: bytes | None = None
         self._since_plan = 0
         self._no_progress = 0
+        self._expect_progress = True  # the executed part of the last plan should end better
 
     def _stalled(self, shape: np.ndarray, goal: np.ndarray) -> bool:
-        """Update the stall guard with the real error now; True when the motion must stop."""
+        """Update the stall guard with the real error now; True when the motion must stop.
+
+        With ``moves_per_plan``, a move that was not the last of a plan predicted to reach the
+        goal is a step of that plan, not a stall (a plan may have to move away first)."""
         now = float(error(shape, goal))
         if now < self.stats.best_error - self.min_progress:
             self._no_progress = 0
-        else:
+        elif self._expect_progress:
             self._no_progress += 1
         self.stats.best_error = min(self.stats.best_error, now)
         if self.patience is not None and self._no_progress >= self.patience:
@@ -259,6 +263,7 @@ class PlannerPolicy:
             corners = goal[0 if self.planner.config.end == "head" else -1][None]
         moves = actions_by_move(head, corners, self.max_step)
         if self.moves_per_plan is not None:
+            self._expect_progress = not plan.success or len(moves) <= self.moves_per_plan
             moves = moves[: self.moves_per_plan]
         self._queue = [action for move in moves for action in move]
         self._corners = set(np.cumsum([len(move) for move in moves]).tolist())

@@ -10,7 +10,8 @@ once, when its task returns, so nothing is lost and nothing is made twice. An in
 resumes from the written chunks as with the local pool.
 
 ``RayBackend.map`` is the general form: any function over a list of argument tuples, one task
-each; the benchmark and ``dlo evaluate`` run their cells with it.
+each; the benchmark and ``dlo evaluate`` run their cells with it. Those read their model files
+in the task: the files must be on every node at the same (absolute) path, unlike collection.
 
 Every node needs this project installed (the same environment as the driver).
 """
@@ -71,7 +72,13 @@ class RayBackend:
             while pending:
                 done, _ = ray.wait(list(pending), num_returns=1)
                 for ref in done:
-                    yield pending.pop(ref), ray.get(ref)
+                    index = pending.pop(ref)
+                    try:
+                        result = ray.get(ref)
+                    except ray.exceptions.RayTaskError as exc:
+                        # The task's own exception, so its one-line message reaches the user.
+                        raise (exc.cause if exc.cause is not None else exc) from None
+                    yield index, result
         finally:
             for ref in pending:
                 ray.cancel(ref)

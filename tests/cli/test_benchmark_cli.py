@@ -58,7 +58,7 @@ def test_quick_benchmark_writes_every_agent_and_difficulty(models, tmp_path, cap
         assert row["seconds_per_episode"] > 0
     assert {r["training_env_steps"] for r in rows if r["agent"] in ("ppo", "sac-her")} == {256}
     costs = {r["agent"]: r["sample_cost"] for r in rows}
-    assert costs["sac-her"] == "0k env steps" or costs["sac-her"].endswith("env steps")
+    assert costs["sac-her"] == "256 env steps"
     assert "env steps" in costs["latent-mpc"] and "simulated shapes" in costs["latent-tree"]
     assert costs["physics-mpc"].startswith("none")
     table = (out / "results.md").read_text()

@@ -136,11 +136,14 @@ def test_the_first_members_alone_are_the_first_members_of_the_ensemble(model):
                             list(model.net.weights) + list(model.net.biases)):
             dst.copy_(src[:1])
     assert torch.equal(first[0], solo.net.weights[0]) and torch.equal(first[1], solo.net.biases[0])
-    one, spread = model.predict(shapes, "tail", d, return_std=True, members=1)
+    one = model.predict(shapes, "tail", d, members=np.int64(1))
     assert np.allclose(one, solo.predict(shapes, "tail", d), atol=1e-6)
-    assert np.all(spread == 0)
     assert not np.allclose(one, model.predict(shapes, "tail", d), atol=1e-4)
-    for bad in (0, 4, 1.5):
+    two, spread = model.predict(shapes, "tail", d, return_std=True, members=2)
+    assert (spread > 0).all()
+    with pytest.raises(ValueError, match="return_std needs members >= 2"):
+        model.predict(shapes, "tail", d, return_std=True, members=1)
+    for bad in (0, 4, 1.5, True):
         with pytest.raises(ValueError, match="members must be an int in 1..3"):
             model.predict(shapes, "tail", d, members=bad)
 
