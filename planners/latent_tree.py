@@ -453,11 +453,9 @@ class LatentTreePlanner:
                     break
             if reached is not None:
                 break
-            if time.perf_counter() - t0 > cfg.max_seconds:
-                stop = "time"
-                break
-            if tree.size > cfg.max_nodes:
-                stop = "nodes"
+            spent = self._budget_spent(t0, tree)
+            if spent:
+                stop = spent
                 break
             iterations += 1
             samples = rng.uniform(low, high, size=(cfg.batch_size, len(z_goal)))
@@ -518,6 +516,12 @@ class LatentTreePlanner:
             "rejected": dict(counts),
         }
         return self._build_plan(path_latents, path_points, start, goal, success, stats, t0, calls0)
+
+    def _budget_spent(self, t0: float, tree: _Tree) -> str:
+        """``"time"`` or ``"nodes"`` when the search budget is spent, else ""."""
+        if time.perf_counter() - t0 > self.config.max_seconds:
+            return "time"
+        return "nodes" if tree.size > self.config.max_nodes else ""
 
     def _sample_box(self, z_start: np.ndarray, z_goal: np.ndarray
                     ) -> tuple[np.ndarray, np.ndarray]:
@@ -599,11 +603,9 @@ class LatentTreePlanner:
                 if err[k] <= cfg.goal_threshold:
                     found = (int(candidates[k]), move[k], shape[k])
                     break
-            if time.perf_counter() - t0 > cfg.max_seconds:
-                stop = "time"
-                break
-            if tree.size > cfg.max_nodes:
-                stop = "nodes"
+            spent = self._budget_spent(t0, tree)
+            if spent:
+                stop = spent
                 break
             iterations += 1
             samples = rng.uniform(low, high, size=(cfg.batch_size, len(z_goal)))

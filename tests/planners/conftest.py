@@ -1,0 +1,45 @@
+"""Shared by the planner tests: one torch thread, and running an agent on suite tasks."""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+
+import gymnasium as gym
+import pytest
+import torch
+
+import dlo_env  # noqa: F401  (registers the environments)
+from dlo_bench import build_agent
+from dlo_env.tasks import load_suite
+
+
+@pytest.fixture(autouse=True)
+def _one_thread():
+    # Small networks run faster on one thread, and other jobs share the machine.
+    before = torch.get_num_threads()
+    torch.set_num_threads(1)
+    yield
+    torch.set_num_threads(before)
+
+
+@pytest.fixture
+def solved() -> Callable[[str, str, int], int]:
+    """``solved(agent, suite, limit)``: train tasks of ``suite`` the agent solves closed loop
+    in ``DLOEndpoint-v0`` (its registry defaults, the shipped models)."""
+
+    def run(agent: str, suite: str, limit: int) -> int:
+        env = gym.make("dlo_env/DLOEndpoint-v0")
+        policy = build_agent(agent, env)
+        count = 0
+        for task in load_suite(suite, "train", limit=limit):
+            obs, info = env.reset(options={"start": task.start, "goal": task.goal})
+            policy.reset()
+            for _ in range(100):
+                action, _ = policy.predict(obs)
+                obs, _, terminated, truncated, info = env.step(action)
+                if terminated or truncated:
+                    break
+            count += bool(info["is_success"])
+        return count
+
+    return run
