@@ -190,8 +190,12 @@ def load_agent(name: str, config: BenchmarkConfig, env: Any,
         try:
             meta = read_baseline_metadata(folder)
             policy = build_agent(name, env, baseline=folder)
-        except (FileNotFoundError, ValueError) as exc:
-            return LoadedAgent(name, None, missing=f"no trained model for {env_id}: "
+        except FileNotFoundError:
+            return LoadedAgent(name, None, missing=(
+                f"no trained model for {env_id} in {baseline_folder_name(name, env_id)}/ (train "
+                f"one with `dlo baseline --algo {name} --env-id {env_id}`)"))
+        except ValueError as exc:
+            return LoadedAgent(name, None, missing=f"no usable model for {env_id}: "
                                                    f"{exc}".splitlines()[0])
         steps = int(meta["trained_timesteps"])
         if name == "bc":  # trained offline on the oracle's demonstrations
