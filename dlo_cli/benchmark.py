@@ -21,7 +21,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
     parser.add_argument("--quick", action="store_true",
                         help=f"{QUICK_EPISODES} episodes of each cell: a smoke test of every "
-                             "agent (under a minute on two cores; CI runs it)")
+                             "agent (about 2 minutes on two cores)")
     parser.add_argument("--episodes", type=int, default=None,
                         help="episodes per agent and difficulty, the first tasks of each test "
                              f"split (None: {BenchmarkConfig.episodes}, the whole split; "
