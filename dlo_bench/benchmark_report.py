@@ -13,13 +13,8 @@ from pathlib import Path
 from typing import Any
 
 from dlo_bench.benchmark import file_digest
-from dlo_bench.report import json_ready
+from dlo_bench.report import cell_label, json_ready
 from dlo_env.atomic import write_text_atomic
-
-
-def cell_label(row: dict[str, Any]) -> str:
-    """A cell's short name in tables and charts: ``endpoint d3``, ``dual-endpoint d1``."""
-    return f"{row.get('env', 'endpoint')} d{row['difficulty']}"
 
 
 def planning_time_ratios(rows: list[dict[str, Any]], slow: str = "physics-mpc",

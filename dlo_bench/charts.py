@@ -103,7 +103,7 @@ def plot_results(rows: list[dict[str, Any]], png: str | os.PathLike) -> None:
     """Bar charts of success rate, median error and seconds per episode (missing rows skipped)."""
     plt = _pyplot()
 
-    from dlo_bench.benchmark_report import cell_label
+    from dlo_bench.report import cell_label
 
     agents = list(dict.fromkeys(r["agent"] for r in rows))
     cells = list(dict.fromkeys(cell_label(r) for r in rows))

@@ -144,3 +144,8 @@ def write_evaluation(
     }
     write_text_atomic(json_path, json.dumps(json_ready(data), indent=2) + "\n")
     return csv_path, json_path
+
+
+def cell_label(row: dict[str, Any]) -> str:
+    """A benchmark cell's short name in tables and charts: ``endpoint d3``, ``dual-endpoint d1``."""
+    return f"{row.get('env', 'endpoint')} d{row['difficulty']}"

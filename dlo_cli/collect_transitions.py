@@ -15,7 +15,7 @@ def run(args: argparse.Namespace) -> int:
     """Collect transitions with a progress bar, then print a summary."""
     import numpy as np
 
-    from dlo_cli.collect import run_chunked
+    from dlo_cli.chunked_run import run_chunked
     from dlo_env.dataset.transitions import (
         GRASP_NAMES,
         TransitionCollectConfig,
