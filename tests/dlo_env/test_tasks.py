@@ -130,8 +130,12 @@ def test_task_validates_its_fields():
 
 
 def test_suites_have_fixed_seeds_disjoint_splits_and_their_difficulty():
-    for name, difficulty in (("linear-1", 1), ("linear-2", 2), ("linear-3", 3)):
+    seen: set[int] = set()
+    for difficulty in range(1, 6):
+        name = f"linear-{difficulty}"
         train, test = suite_seeds(name, "train"), suite_seeds(name, "test")
+        assert not (set(train) | set(test)) & seen  # no seed shared by two suites
+        seen |= set(train) | set(test)
         assert len(train) == SPLIT_SIZES["train"] == 200 and len(test) == SPLIT_SIZES["test"] == 50
         assert not set(train) & set(test)
         tasks = load_suite(name, "test", limit=2)
