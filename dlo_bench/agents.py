@@ -77,20 +77,30 @@ def _max_step(env: Any) -> float:
     return float(env.unwrapped.max_step)
 
 
+def _loaded_or_file(model: Any, loaded: type, load: Callable[[Any], Any], what: str,
+                    train: str) -> Any:
+    """``model`` itself when it is a ``loaded`` instance, else ``load(model)``; a missing file
+    raises ``FileNotFoundError`` saying "no WHAT" and how to make one."""
+    if isinstance(model, loaded):
+        return model
+    try:
+        return load(model)
+    except FileNotFoundError as exc:
+        raise FileNotFoundError(f"no {what}: {exc} (train one with `{train}`)") from exc
+
+
 def load_shape_model(model: ShapeSurrogate | str | Path | None) -> ShapeSurrogate:
     """``model`` itself when it is loaded, else ``ShapeModel.load_or_pretrained(model)``.
 
     Raises:
         FileNotFoundError: Saying "no shape model" and where, when the file is missing.
     """
-    if isinstance(model, ShapeSurrogate):
-        return model
-    from latent_model import ShapeModel
+    def load(path: Any) -> ShapeSurrogate:
+        from latent_model import ShapeModel  # torch only when a file must be read
 
-    try:
-        return ShapeModel.load_or_pretrained(model, device="cpu")
-    except FileNotFoundError as exc:
-        raise FileNotFoundError(f"no shape model: {exc} (train one with `dlo train`)") from exc
+        return ShapeModel.load_or_pretrained(path, device="cpu")
+
+    return _loaded_or_file(model, ShapeSurrogate, load, "shape model", "dlo train")
 
 
 def load_transition_model(model: Any) -> Any:
@@ -101,13 +111,9 @@ def load_transition_model(model: Any) -> Any:
     """
     from latent_model import TransitionModel
 
-    if isinstance(model, TransitionModel):
-        return model
-    try:
-        return TransitionModel.load_or_pretrained(model, device="cpu")
-    except FileNotFoundError as exc:
-        raise FileNotFoundError(f"no transition model: {exc} (train one with `dlo train "
-                                "--stage transition`)") from exc
+    return _loaded_or_file(model, TransitionModel,
+                           lambda m: TransitionModel.load_or_pretrained(m, device="cpu"),
+                           "transition model", "dlo train --stage transition")
 
 
 def _latent_tree(closed: bool) -> Callable[[Any, AgentOptions], Policy]:

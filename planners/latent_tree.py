@@ -458,11 +458,8 @@ class LatentTreePlanner:
                 stop = spent
                 break
             iterations += 1
-            samples = rng.uniform(low, high, size=(cfg.batch_size, len(z_goal)))
-            samples[rng.random(cfg.batch_size) < cfg.goal_bias] = z_goal
+            samples, nearest = self._sample_targets(rng, low, high, z_goal, tree)
             nodes = tree.latents[: tree.size]
-            d2 = ((samples[:, None, :] - nodes[None]) ** 2).sum(axis=-1)  # (B, N)
-            nearest = d2.argmin(axis=1)
             direction = samples - nodes[nearest]
             dist = np.linalg.norm(direction, axis=1)
             keep = dist > 1e-6
@@ -522,6 +519,17 @@ class LatentTreePlanner:
         if time.perf_counter() - t0 > self.config.max_seconds:
             return "time"
         return "nodes" if tree.size > self.config.max_nodes else ""
+
+    def _sample_targets(self, rng: np.random.Generator, low: np.ndarray, high: np.ndarray,
+                        z_goal: np.ndarray, tree: _Tree) -> tuple[np.ndarray, np.ndarray]:
+        """A batch of latent targets (uniform in the box, or the goal with ``goal_bias``) and
+        the index of each one's nearest node in latent space."""
+        cfg = self.config
+        samples = rng.uniform(low, high, size=(cfg.batch_size, len(z_goal)))
+        samples[rng.random(cfg.batch_size) < cfg.goal_bias] = z_goal
+        nodes = tree.latents[: tree.size]
+        d2 = ((samples[:, None, :] - nodes[None]) ** 2).sum(axis=-1)  # (B, N)
+        return samples, d2.argmin(axis=1)
 
     def _sample_box(self, z_start: np.ndarray, z_goal: np.ndarray
                     ) -> tuple[np.ndarray, np.ndarray]:
@@ -608,10 +616,7 @@ class LatentTreePlanner:
                 stop = spent
                 break
             iterations += 1
-            samples = rng.uniform(low, high, size=(cfg.batch_size, len(z_goal)))
-            samples[rng.random(cfg.batch_size) < cfg.goal_bias] = z_goal
-            nodes = tree.latents[: tree.size]
-            nearest = ((samples[:, None, :] - nodes[None]) ** 2).sum(axis=-1).argmin(axis=1)
+            samples, nearest = self._sample_targets(rng, low, high, z_goal, tree)
             targets = self.surrogate.decode(samples.astype(np.float32))
             move, shape, _ = self._best_moves(tree.shapes[nearest], targets, rng)
             new = np.asarray(error(shape, tree.shapes[nearest])).reshape(-1) > MIN_NODE_CHANGE
