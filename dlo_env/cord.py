@@ -114,10 +114,12 @@ def reachable_targets(targets: np.ndarray, params: CordParams | None = None) -> 
     """
     p = params if params is not None else CordParams()
     lim = TABLE_HALF - p.rim_margin
-    out = np.clip(np.asarray(targets, dtype=np.float64), -lim, lim)
+    # minimum/maximum and the explicit norm are np.clip's and np.linalg.norm's arithmetic
+    # without their call overhead (this runs once per action of every simulated move).
+    out = np.minimum(np.maximum(np.asarray(targets, dtype=np.float64), -lim), lim)
     if out.shape[-2] == 2:
         gap = out[..., 1, :] - out[..., 0, :]
-        dist = np.linalg.norm(gap, axis=-1, keepdims=True)
+        dist = np.sqrt((gap * gap).sum(axis=-1, keepdims=True))
         span = p.max_span * p.length
         too_far = dist > span
         if too_far.any():
@@ -316,8 +318,11 @@ class Cord:
         """Velocity of every point, ``(n, 2)`` m/s (inner points average the two ends)."""
         self._require_reset()
         pos, ang, vel, omega = self._body_state()
-        r = 0.5 * self.params.segment * np.stack([np.cos(ang), np.sin(ang)], axis=1)
-        spin = omega[:, None] * np.stack([-r[:, 1], r[:, 0]], axis=1)
+        half = 0.5 * self.params.segment
+        # The spin's contribution at each link's ends: omega x r, r = half * (cos, sin).
+        spin = np.empty_like(vel)
+        spin[:, 0] = omega * -(half * np.sin(ang))
+        spin[:, 1] = omega * (half * np.cos(ang))
         v_start, v_end = vel - spin, vel + spin
         out = np.empty((len(pos) + 1, 2))
         out[0] = v_start[0]
@@ -325,25 +330,34 @@ class Cord:
         out[1:-1] = 0.5 * (v_end[:-1] + v_start[1:])
         return out
 
+    def max_point_speed(self) -> float:
+        """The fastest point's speed, m/s (the rest test of ``settle`` and the tasks)."""
+        v = self.point_velocities()
+        return math.sqrt(float((v * v).sum(axis=1).max()))
+
     def gripper_positions(self) -> dict[str, np.ndarray]:
         """Positions of the grippers that are attached, by end name."""
         return {k: np.array(g.position) for k, g in self.grippers.items()}
 
     # ----------------------------------------------------------------- motion
-    def _targets(self, head: np.ndarray | None, tail: np.ndarray | None) -> dict[str, np.ndarray]:
+    def _targets(self, head: np.ndarray | None, tail: np.ndarray | None
+                 ) -> tuple[list[str], np.ndarray, np.ndarray]:
+        # The held ends, their float64 start positions (k, 2) and reachable targets (k, 2).
         names = [name for name in ("head", "tail") if name in self.grippers]
-        starts, moves = [], []
-        for name in names:
-            d = {"head": head, "tail": tail}[name]
-            d = np.zeros(2) if d is None else np.asarray(d, dtype=np.float64).reshape(2)
-            if not np.isfinite(d).all():
-                raise ValueError(f"{name} displacement must be finite, got {d.tolist()}")
-            starts.append(np.array(self.grippers[name].position))
-            moves.append(d)
+        starts = np.empty((len(names), 2))
+        moves = np.zeros((len(names), 2))
+        for i, name in enumerate(names):
+            starts[i] = self.grippers[name].position
+            d = head if name == "head" else tail
+            if d is not None:
+                moves[i] = np.asarray(d, dtype=np.float64).reshape(2)
+        if not np.isfinite(moves).all():
+            name = names[int(np.flatnonzero(~np.isfinite(moves).all(axis=1))[0])]
+            raise ValueError(f"{name} displacement must be finite, got "
+                             f"{moves[names.index(name)].tolist()}")
         if not names:
-            return {}
-        targets = reachable_targets(np.stack(starts) + np.stack(moves), self.params)
-        return dict(zip(names, targets))
+            return names, starts, starts
+        return names, starts, reachable_targets(starts + moves, self.params)
 
     def move(
         self,
@@ -368,20 +382,18 @@ class Cord:
         """
         self._require_reset()
         p = self.params
-        targets = self._targets(head, tail)
-        longest = max((np.linalg.norm(t - self.grippers[k].position) for k, t in targets.items()),
-                      default=0.0)
+        names, starts, targets = self._targets(head, tail)
+        travel = targets - starts
+        longest = float(np.sqrt((travel * travel).sum(axis=1)).max(initial=0.0))
         periods = max(1, math.ceil(longest / (p.max_speed * p.dt) - 1e-9))
-        duration = periods * p.dt
-        for name, target in targets.items():
-            g = self.grippers[name]
-            v = (target - np.array(g.position)) / duration
-            g.velocity = (float(v[0]), float(v[1]))
+        velocity = (travel / (periods * p.dt)).tolist()
+        for name, v in zip(names, velocity):
+            self.grippers[name].velocity = (v[0], v[1])
         recorded = self._run(periods * p.substeps, record_every)
-        for name, target in targets.items():
+        for name, target in zip(names, targets.tolist()):
             g = self.grippers[name]
             g.velocity = (0.0, 0.0)
-            g.position = (float(target[0]), float(target[1]))
+            g.position = (target[0], target[1])
         return recorded
 
     def wait(self, periods: int = 1, record_every: int = 0) -> np.ndarray:
@@ -406,7 +418,7 @@ class Cord:
         while steps * h < max_time:
             self.space.step(h)
             steps += 1
-            if np.linalg.norm(self.point_velocities(), axis=1).max() < tolerance:
+            if self.max_point_speed() < tolerance:
                 break
         self._keep_on_table()
         return steps * h

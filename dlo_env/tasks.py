@@ -183,7 +183,7 @@ def split_move(displacement: np.ndarray, max_step: float) -> np.ndarray:
 
 
 def _rest(cord: Cord) -> bool:
-    return float(np.linalg.norm(cord.point_velocities(), axis=1).max()) < REST_SPEED
+    return cord.max_point_speed() < REST_SPEED
 
 
 def at_rest(cord: Cord) -> bool:

@@ -144,6 +144,22 @@ def test_cord_comes_to_rest_within_half_a_second_after_the_grippers_stop():
             assert np.linalg.norm(cord.point_velocities(), axis=1).max() < 1e-3
 
 
+def test_point_velocities_are_the_links_rigid_motion_and_max_point_speed_their_largest_norm():
+    rng = np.random.default_rng(5)
+    cord = Cord(grasp="both")
+    cord.reset(random_start(rng, "both"))
+    cord.move(*max_speed_direction(rng, 2))
+    v = cord.point_velocities()
+    assert np.abs(v).max() > 1e-3  # moving
+    # Finite differences of the points over one tiny physics step agree with the velocities.
+    before = cord.shape.astype(np.float64)
+    h = 1e-5
+    cord.space.step(h)
+    fd = (cord.shape.astype(np.float64) - before) / h
+    assert np.abs(fd - v).max() < 0.02 * np.abs(v).max() + 2e-3
+    assert cord.max_point_speed() == np.linalg.norm(cord.point_velocities(), axis=1).max()
+
+
 def test_settle_relaxes_a_freshly_reset_bent_cord():
     # Zero velocity right after reset is not rest: the bent joints push against friction.
     bent = random_cord_shape(np.random.default_rng(4))
