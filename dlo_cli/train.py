@@ -21,6 +21,12 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help="--stage transition: optimiser steps (None: TransitionTrainConfig's)")
     parser.add_argument("--members", type=int, default=None,
                         help="--stage transition: networks in the ensemble (None: 5)")
+    parser.add_argument("--rim-reach", type=float, default=None,
+                        help="--stage transition: metres from the table's edge within which the "
+                             "model sees the rim (None: TransitionModelConfig's)")
+    parser.add_argument("--rim-targets", type=int, choices=(1, 2), default=None,
+                        help="--stage transition: rim vectors of the leading end's target only "
+                             "(1) or of both ends' targets (2) (None: TransitionModelConfig's)")
     parser.add_argument("--init", default=None,
                         help="--stage transition: start from this transition model file "
                              "(fine-tuning; same architecture), None: random weights")

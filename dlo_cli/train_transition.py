@@ -51,7 +51,9 @@ def run(args: argparse.Namespace) -> int:
                                   "eval_every": args.eval_every, "seed": args.seed,
                                   "init": args.init, "lr": args.lr}.items()
                 if v is not None}
-    model_kw = {k: v for k, v in {"width": args.width, "members": args.members}.items()
+    model_kw = {k: v for k, v in {"width": args.width, "members": args.members,
+                                  "rim_reach": args.rim_reach,
+                                  "rim_targets": args.rim_targets}.items()
                 if v is not None}
     tc = replace(TransitionTrainConfig(), **train_kw)
     mc = replace(TransitionModelConfig(), **model_kw)

@@ -65,9 +65,12 @@ class TransitionModelConfig:
         depth: Hidden layers.
         move_scale: Move lengths are divided by this in the input, metres.
         output_scale: The network's outputs are point displacements in units of this, metres.
-        rim_reach: Points (and the moved end's target) closer than this to the table's edge
+        rim_reach: Points (and the held ends' targets) closer than this to the table's edge
             tell the network where the rim is, metres; farther, the model is exactly
             equivariant.
+        rim_targets: Targets whose rim vectors the network sees: 1, the leading end's (the
+            first models); 2, both ends' (the other end's target is its start when it is not
+            held).
     """
 
     n_points: int = 20
@@ -79,17 +82,21 @@ class TransitionModelConfig:
     move_scale: float = 0.35
     output_scale: float = 0.1
     rim_reach: float = 0.15
+    rim_targets: int = 1
 
     def __post_init__(self) -> None:
         positive_ints(self, "n_points", "members", "width", "depth")
+        if self.rim_targets not in (1, 2):
+            raise ValueError(f"TransitionModelConfig.rim_targets must be 1 or 2, "
+                             f"got {self.rim_targets!r}")
         positive(self, "cord_length", "max_step", "move_scale", "output_scale", "rim_reach")
 
     @property
     def inputs(self) -> int:
         """Network inputs: the cord's points and segment directions in the frame, the rim near
-        each point and near the moved end's target, the lead length, the other move, both."""
+        each point and near the held ends' targets, the lead length, the other move, both."""
         n = self.n_points
-        return 2 * n + 2 * (n - 1) + 2 * (n + 1) + 4
+        return 2 * n + 2 * (n - 1) + 2 * (n + self.rim_targets) + 4
 
 
 class EnsembleMLP(nn.Module):
@@ -191,9 +198,16 @@ class TransitionModel(nn.Module):
         both = grasp == GRASP_CODES["both"]
         c = self.config
         target = frame.origin + torch.stack([frame.cos, frame.sin], dim=-1) * lead[:, None]
+        if c.rim_targets == 2:  # the other end's target too: its start plus its move
+            far_end = torch.where(frame.reversed[:, None], shapes[:, 0], shapes[:, -1])
+            target = torch.stack([target, far_end + from_frame(other[:, None], MoveFrame(
+                torch.zeros_like(frame.origin), frame.cos, frame.sin,
+                torch.zeros_like(frame.reversed)))[:, 0]], dim=1)
+        else:
+            target = target[:, None]
         rim = torch.cat([into_frame(rim_vectors(shapes, TABLE_HALF, c.rim_reach), frame),
-                         into_frame(rim_vectors(target[:, None], TABLE_HALF, c.rim_reach),
-                                    frame, reorder=False)], dim=1)  # (B, n + 1, 2)
+                         into_frame(rim_vectors(target, TABLE_HALF, c.rim_reach),
+                                    frame, reorder=False)], dim=1)  # (B, n + targets, 2)
         moved = self.predict_points(points, lead, other, both, rim,
                                     (e, b) if per_member else None, members)
         if per_member:
@@ -211,7 +225,7 @@ class TransitionModel(nn.Module):
         Args:
             points, lead, other, both: The batch in the move frames (flat over members and
                 batch when ``members_batch`` is given, else shared by the members).
-            rim: ``(B, n + 1, 2)`` rim vectors of the points and of the moved end's target.
+            rim: ``(B, n + rim_targets, 2)`` rim vectors of the points and the targets.
             members_batch: ``(members, B)`` when every member has its own input.
             members: Run only the first ``members`` networks (inputs shared).
         """

@@ -71,6 +71,40 @@ def test_near_the_rim_the_model_sees_the_rim(model):
     assert np.abs(moved - (model.predict(shapes, "head", d) + shift)).max() > 1e-4
 
 
+class _RimRecorder(TransitionModel):
+    """Keeps the rim vectors the network was given."""
+
+    def predict_points(self, points, lead, other, both, rim, members_batch, members=None):
+        self.rim = rim.clone()
+        return super().predict_points(points, lead, other, both, rim, members_batch, members)
+
+
+@pytest.mark.parametrize("lead", ["head", "tail"])
+def test_with_rim_targets_2_the_network_sees_the_rim_at_both_held_ends_targets(lead):
+    from latent_model.move_frame import rim_vectors
+
+    config = TransitionModelConfig(width=16, depth=1, members=2, rim_reach=0.35, rim_targets=2)
+    assert config.inputs == TINY.inputs + 2
+    model = _RimRecorder(config, device="cpu").eval()
+    # A bent cord (ends 0.8 m apart) whose other end moves less than the leading one, onto
+    # the rim; both targets are within the span, so the moves are not clipped.
+    t = np.linspace(0.0, 1.0, 20)
+    shape = np.stack([0.8 * t, 0.2 * np.sin(np.pi * t)], axis=1).astype(np.float32)
+    lead_move, other_move = np.array([0.3, 0.1]), np.array([0.15, 0.05])
+    if lead == "head":
+        d = np.concatenate([lead_move, other_move])
+    else:  # the same move of the reversed cord: the tail leads, the head is the other end
+        shape, d = shape[::-1].copy(), np.concatenate([other_move, lead_move])
+    model.predict(shape, "both", d.astype(np.float32))
+    target = torch.tensor([[0.95, 0.05]], dtype=torch.float32)  # 0.8 + 0.15, 0 + 0.05
+    near = rim_vectors(target, 1.0, 0.35)[0]
+    assert float(near.norm()) > 0.5  # the other end's target is near the rim
+    c, s_ = lead_move / np.linalg.norm(lead_move)
+    expected = torch.tensor([c * near[0] + s_ * near[1], -s_ * near[0] + c * near[1]])
+    assert torch.allclose(model.rim[0, -1], expected.float(), atol=1e-5)  # in the move's frame
+    assert np.abs(model.rim[0, -2].numpy()).max() == 0.0  # the lead's target is far from it
+
+
 def test_a_tail_move_is_a_head_move_of_the_reversed_cord(model):
     shapes = _shapes(8, seed=2)
     d = np.random.default_rng(2).uniform(-0.1, 0.1, size=(8, 2)).astype(np.float32)
