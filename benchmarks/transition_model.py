@@ -8,7 +8,9 @@
    zigzags): each settled in the simulator, then one random move of 1-35 cm (with both ends
    held, only shapes whose ends are within the grippers' span, as every dual-arm start);
 4. throughput: one batch of 1024 predictions against simulating the same 1024 moves, as a ratio
-   per transition (torch on 1 thread and on all threads; the simulator in one process);
+   per transition (torch on 1 thread and on all threads; the simulator in one process), and
+   the trade-off of predicting with only the first k networks of the ensemble: speed on 1
+   thread and held-out one-move error for every k;
 5. predictions off the table where the simulator stays on it.
 
     python benchmarks/transition_model.py [--model PATH] [--heldout data/transitions-heldout.npz]
@@ -145,13 +147,14 @@ def throughput(model: TransitionModel, heldout, batch: int = 1024, repeats: int 
             model.predict(starts, "head", moves)
             times.append(time.perf_counter() - t)
         result[f"model_threads_{threads}_s"] = float(np.median(times)) / batch
-    torch.set_num_threads(1)  # one member, as latent-mpc scores its candidates
-    times = []
-    for _ in range(repeats):
-        t = time.perf_counter()
-        model.predict(starts, "head", moves, members=1)
-        times.append(time.perf_counter() - t)
-    result["one_member_threads_1_s"] = float(np.median(times)) / batch
+    torch.set_num_threads(1)  # the first k networks alone (latent-mpc scores with one)
+    for k in range(1, model.config.members):
+        times = []
+        for _ in range(repeats):
+            t = time.perf_counter()
+            model.predict(starts, "head", moves, members=k)
+            times.append(time.perf_counter() - t)
+        result[f"members_{k}_threads_1_s"] = float(np.median(times)) / batch
     torch.set_num_threads(default_threads)
     t = time.perf_counter()
     for start, move in zip(starts, moves):
@@ -159,6 +162,20 @@ def throughput(model: TransitionModel, heldout, batch: int = 1024, repeats: int 
     result["simulator_s"] = (time.perf_counter() - t) / batch
     result["batch"] = batch
     return result
+
+
+def members_accuracy(model: TransitionModel, heldout) -> dict[int, dict[str, float]]:
+    """Held-out one-move mean error (cm) by grasp when only the first k networks predict,
+    for every k (the last is the whole ensemble, the floors' model)."""
+    out: dict[int, dict[str, float]] = {}
+    for k in range(1, model.config.members + 1):
+        out[k] = {}
+        for code, name in enumerate(GRASP_NAMES):
+            idx = np.flatnonzero(heldout.grasp == code)
+            pred = model.predict(heldout.start[idx], name, heldout.end_displacement(idx),
+                                 members=k)
+            out[k][name] = 100 * float(error(pred, heldout.next[idx]).mean())
+    return out
 
 
 def main() -> None:
@@ -216,9 +233,15 @@ def main() -> None:
             threads = key.split("_")[2]
             print(f"   model, {threads} thread(s):     {1e6 * value:.1f} us per transition: "
                   f"{sim / value:.0f}x")
-    print(f"   one member, 1 thread:  {1e6 * speed['one_member_threads_1_s']:.1f} us per "
-          f"transition: {sim / speed['one_member_threads_1_s']:.0f}x (not the floor's model: "
-          "the ensemble's first network alone, as latent-mpc scores)")
+    accuracy = members_accuracy(model, heldout)
+    print("   fewer networks (1 thread; held-out one-move mean by grasp):")
+    print(f"   {'members':>7} {'us/transition':>13} {'speed-up':>8} {'head':>7} {'tail':>7} "
+          f"{'both':>7}")
+    for k, errors in accuracy.items():
+        value = speed["model_threads_1_s" if k == model.config.members
+                     else f"members_{k}_threads_1_s"]
+        print(f"   {k:>7} {1e6 * value:>13.1f} {sim / value:>7.0f}x "
+              + " ".join(f"{errors[g]:>5.3f}cm" for g in GRASP_NAMES))
     best = sim / min(v for k, v in speed.items() if k.startswith("model_threads"))
     one_thread = sim / speed["model_threads_1_s"]
     checks.append((f"speed-up >= {FLOORS['speedup']:.0f}x (all threads)", best,
@@ -238,6 +261,7 @@ def main() -> None:
     write_text_atomic(out / "transition-benchmark.json", json.dumps(json_ready({
         "heldout": [r.__dict__ for r in rows], "spread_rank": rank, "chained_linear3": chain,
         "analytic": curves, "off_table": off, "throughput": speed,
+        "members_one_move_cm": accuracy,
         "speedup_one_thread": one_thread, "speedup_best": best,
         "floors": [{"name": n, "value": v, "pass": p} for n, v, p in checks]}), indent=1))
     print(f"\nwrote {out / 'transition-benchmark.json'}")
