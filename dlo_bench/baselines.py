@@ -327,7 +327,8 @@ def train_baseline(
     checkpoint.unlink(missing_ok=True)
     from dlo_bench.charts import plot_learning_curve
 
-    plot_learning_curve(monitor_dir, out / "learning_curve.png", title=config.algo)
+    plot_learning_curve(read_monitor_logs(monitor_dir), out / "learning_curve.png",
+                        title=config.algo)
     return out / "model.zip"
 
 

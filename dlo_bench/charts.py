@@ -140,14 +140,15 @@ def plot_results(rows: list[dict[str, Any]], png: str | os.PathLike) -> None:
     _save(fig, png, dpi=100)
 
 
-def plot_learning_curve(monitor_dir: str | os.PathLike, png: str | os.PathLike,
-                        title: str = "") -> None:
-    """Episode return and success rate (moving averages) against environment steps."""
+def plot_learning_curve(logs: dict[str, Any], png: str | os.PathLike, title: str = "") -> None:
+    """Episode return and success rate (moving averages) against environment steps.
+
+    Args:
+        logs: Episodes as ``dlo_bench.baselines.read_monitor_logs`` returns them.
+        png: Output file.
+        title: Prefix of the panels' titles.
+    """
     plt = _pyplot()
-
-    from dlo_bench.baselines import read_monitor_logs
-
-    logs = read_monitor_logs(monitor_dir)
     fig, (ax1, ax2) = plt.subplots(1, 2, figsize=(9, 3.2))
     if len(logs["reward"]):
         k = max(1, len(logs["reward"]) // 50)

@@ -9,7 +9,7 @@ import numpy as np
 from dlo_env.cord import Cord, CordParams
 from dlo_env.shapes import error
 from dlo_env.tasks import apply_action
-from planners.latent_tree import Plan
+from planners.interfaces import Plan
 from planners.moves import actions_through
 from planners.observation import as_shape
 

@@ -10,10 +10,10 @@ The interfaces they share are ``typing.Protocol``s in :mod:`planners.interfaces`
 from __future__ import annotations
 
 from planners.cem import CEMConfig, CEMPolicy
-from planners.interfaces import EpisodeStats, PlanningPolicy, Policy, ShapeSurrogate
+from planners.interfaces import EpisodeStats, Plan, PlanningPolicy, Policy, ShapeSurrogate
 from planners.interpolation import interpolate
 from planners.latent_mpc import LatentMPCConfig, LatentMPCPolicy
-from planners.latent_tree import LatentTreePlanner, Plan, TreeConfig
+from planners.latent_tree import LatentTreePlanner, TreeConfig
 from planners.physics_mpc import PhysicsMPCConfig, PhysicsMPCPolicy
 from planners.policy import PlannerPolicy
 from planners.straight_line import StraightLinePolicy

@@ -4,19 +4,65 @@ A planner plans on a :class:`ShapeSurrogate` (``latent_model.ShapeModel`` is one
 model with the same four members). Every agent is a :class:`Policy`, the interface of
 Stable-Baselines3 models, so one harness drives planners and RL models alike. An agent that
 plans is also a :class:`PlanningPolicy`: the harness resets it at every episode start and asks
-it for its :class:`EpisodeStats`, never for its internals.
+it for its :class:`EpisodeStats`, never for its internals. A tree planner's result is a
+:class:`Plan`.
 """
 
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
-from typing import TYPE_CHECKING, Any, Protocol, runtime_checkable
+from dataclasses import dataclass, field
+from typing import Any, Protocol, runtime_checkable
 
 import numpy as np
 
-if TYPE_CHECKING:
-    from planners.latent_tree import Plan
+
+@dataclass(frozen=True)
+class Plan:
+    """A planned shape transition: the decoded path and the end's straight moves.
+
+    The manipulated end moves in straight lines between the positions it has at the path's
+    nodes; every planned shape has the end position (waypoint) at which it is predicted.
+
+    Attributes:
+        shapes: ``(T, n, 2)`` decoded shapes along the path, metres (``shapes[0]`` decodes the
+            inverted start).
+        latents: ``(T, d)`` their latents.
+        waypoints: ``(T, 2)`` position of the manipulated end for each shape, metres; on the
+            straight line of its edge, anchored at the real start (and, on success, real goal)
+            end position.
+        nodes: ``(K,)`` indices into ``shapes`` of the path's nodes (first 0, last T-1): the
+            corners of the end's path.
+        success: Whether the path reaches the goal (within ``goal_threshold``).
+        stats: What the search did: ``nodes``, ``decoder_calls``, ``seconds``, ``iterations``,
+            inversion errors, rejection counts per check, ``direct`` (one straight move).
+        end: The manipulated end, ``"head"`` or ``"tail"``.
+    """
+
+    shapes: np.ndarray
+    latents: np.ndarray
+    waypoints: np.ndarray
+    nodes: np.ndarray
+    success: bool
+    stats: dict[str, Any] = field(default_factory=dict)
+    end: str = "head"
+
+    @property
+    def corners(self) -> np.ndarray:
+        """``(K, 2)`` end positions at the nodes: the end moves straight from one to the next."""
+        return self.waypoints[self.nodes]
+
+    @property
+    def moves(self) -> np.ndarray:
+        """``(K - 1, 2)`` straight displacements of the end, metres."""
+        return np.diff(self.corners, axis=0)
+
+    @property
+    def path_length(self) -> float:
+        """Total distance the end travels, metres."""
+        return float(np.linalg.norm(self.moves, axis=1).sum())
+
+
 
 #: A ``dlo_env`` goal observation: ``observation``, ``achieved_goal``, ``desired_goal`` arrays.
 Observation = dict[str, np.ndarray]

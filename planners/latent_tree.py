@@ -19,7 +19,7 @@ from __future__ import annotations
 
 import math
 import time
-from dataclasses import dataclass, field, fields, replace
+from dataclasses import dataclass, fields, replace
 from typing import Any
 
 import numpy as np
@@ -31,7 +31,7 @@ from dlo_env.shapes import (
     segment_lengths,
     turning_cosines,
 )
-from planners.interfaces import ShapeSurrogate
+from planners.interfaces import Plan, ShapeSurrogate
 from planners.observation import as_shape
 from planners.surrogate import Surrogate
 
@@ -166,52 +166,6 @@ class TreeConfig:
 #: transition model. A plan predicted within 1.5 cm of the goal is accepted (chosen on the train
 #: splits, 30 tasks each: 100 / 97 / 100 % against 100 / 90 / 90 % with 1 cm; docs/planners.md).
 KINO_CONFIG = TreeConfig(edges="moves", goal_threshold=0.015)
-
-
-@dataclass(frozen=True)
-class Plan:
-    """A planned shape transition: the decoded path and the end's straight moves.
-
-    The manipulated end moves in straight lines between the positions it has at the path's
-    nodes; every planned shape has the end position (waypoint) at which it is predicted.
-
-    Attributes:
-        shapes: ``(T, n, 2)`` decoded shapes along the path, metres (``shapes[0]`` decodes the
-            inverted start).
-        latents: ``(T, d)`` their latents.
-        waypoints: ``(T, 2)`` position of the manipulated end for each shape, metres; on the
-            straight line of its edge, anchored at the real start (and, on success, real goal)
-            end position.
-        nodes: ``(K,)`` indices into ``shapes`` of the path's nodes (first 0, last T-1): the
-            corners of the end's path.
-        success: Whether the path reaches the goal (within ``goal_threshold``).
-        stats: What the search did: ``nodes``, ``decoder_calls``, ``seconds``, ``iterations``,
-            inversion errors, rejection counts per check, ``direct`` (one straight move).
-        end: The manipulated end, ``"head"`` or ``"tail"``.
-    """
-
-    shapes: np.ndarray
-    latents: np.ndarray
-    waypoints: np.ndarray
-    nodes: np.ndarray
-    success: bool
-    stats: dict[str, Any] = field(default_factory=dict)
-    end: str = "head"
-
-    @property
-    def corners(self) -> np.ndarray:
-        """``(K, 2)`` end positions at the nodes: the end moves straight from one to the next."""
-        return self.waypoints[self.nodes]
-
-    @property
-    def moves(self) -> np.ndarray:
-        """``(K - 1, 2)`` straight displacements of the end, metres."""
-        return np.diff(self.corners, axis=0)
-
-    @property
-    def path_length(self) -> float:
-        """Total distance the end travels, metres."""
-        return float(np.linalg.norm(self.moves, axis=1).sum())
 
 
 @dataclass(frozen=True)

@@ -31,8 +31,8 @@ from typing import Any
 import numpy as np
 
 from dlo_env.shapes import error
-from planners.interfaces import EpisodeStats, Observation, ShapeSurrogate
-from planners.latent_tree import LatentTreePlanner, Plan
+from planners.interfaces import EpisodeStats, Observation, Plan, ShapeSurrogate
+from planners.latent_tree import LatentTreePlanner
 from planners.moves import actions_by_move
 from planners.observation import read_observation
 from planners.surrogate import model_n_points
