@@ -1,7 +1,10 @@
 """The transition model against the simulator: every floor of the model, measured in one run.
 
 1. held-out one-move error by grasp (and two-, three-move chains), from a transition file
-   collected with another seed than the training data;
+   collected with another seed than the training data; next to it, how far the simulator
+   itself lands from the held-out shape when it replays a move from the stored start and
+   from a start whose links are turned by a fraction of a degree (is the error the physics'
+   own, or the model's?), and a figure of the worst both-ends moves;
 2. the moves of the linear-3 test tasks chained from the start (three predictions in a row)
    against the task goals, next to the simulator itself replaying them rest to rest;
 3. transitions from analytic shapes the data never holds as such (arcs, S-curves, spirals,
@@ -14,7 +17,7 @@
 5. predictions off the table where the simulator stays on it.
 
     python benchmarks/transition_model.py [--model PATH] [--heldout data/transitions-heldout.npz]
-        [--curves 400] [--seed 7] [--out runs/transition-benchmark]
+        [--curves 400] [--seed 7] [--replays 250] [--out runs/transition-benchmark]
 """
 
 from __future__ import annotations
@@ -29,7 +32,7 @@ import numpy as np
 import torch
 
 from dlo_bench.report import json_ready
-from dlo_env.atomic import write_text_atomic
+from dlo_env.atomic import atomic_path, write_text_atomic
 from dlo_env.cord import Cord, CordParams
 from dlo_env.dataset.transitions import GRASP_NAMES, load_transitions
 from dlo_env.shapes import ANALYTIC_KINDS, analytic_shape, error, on_table
@@ -164,6 +167,81 @@ def throughput(model: TransitionModel, heldout, batch: int = 1024, repeats: int 
     return result
 
 
+def turned_links(shape: np.ndarray, rng: np.random.Generator, angle: float) -> np.ndarray:
+    """``shape`` with every link's heading turned by N(0, ``angle``) radians (lengths kept,
+    the head fixed): a start the eye could not tell apart from ``shape``."""
+    seg = np.diff(shape.astype(np.float64), axis=0)
+    heading = np.arctan2(seg[:, 1], seg[:, 0]) + rng.normal(0.0, angle, len(seg))
+    steps = np.linalg.norm(seg, axis=1)[:, None] * np.stack([np.cos(heading), np.sin(heading)], 1)
+    points = shape[0] + np.concatenate([np.zeros((1, 2)), np.cumsum(steps, axis=0)])
+    return np.clip(points, -0.999, 0.999).astype(np.float32)
+
+
+def predictability(model: TransitionModel, heldout, count: int, seed: int, angle: float = 0.005
+                   ) -> dict[str, dict[str, float]]:
+    """Is the model's error the physics' own spread? Per grasp, on ``count`` held-out moves:
+    the model's one-move error, the simulator replaying the move from the stored start, and
+    the simulator from that start with every link turned by N(0, ``angle``) rad."""
+    rng = np.random.default_rng(seed)
+    out: dict[str, dict[str, float]] = {}
+    for code, name in enumerate(GRASP_NAMES):
+        idx = rng.choice(np.flatnonzero(heldout.grasp == code), count, replace=False)
+        moves = heldout.end_displacement(idx)
+        truth = heldout.next[idx]
+        pred = model.predict(heldout.start[idx], name, moves)
+        replay = np.stack([simulate(heldout.start[i], name, m) for i, m in zip(idx, moves)])
+        turned = np.stack([simulate(turned_links(heldout.start[i], rng, angle), name, m)
+                           for i, m in zip(idx, moves)])
+        out[name] = {}
+        for label, shapes in (("model", pred), ("replay", replay), ("turned_start", turned)):
+            e = error(shapes, truth)
+            out[name][f"{label}_mean_cm"] = 100 * float(e.mean())
+            out[name][f"{label}_within_1cm"] = float((e <= 0.01).mean())
+    return out
+
+
+def worst_cases_png(model: TransitionModel, heldout, end: str, path: Path, count: int = 6
+                    ) -> Path:
+    """The start, the simulator's and the model's shape for held-out ``end`` moves at the
+    top of the error ranking (the 1st, 2nd, 5th... percentile of the worst), as a PNG."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    idx = np.flatnonzero(heldout.grasp == GRASP_NAMES.index(end))
+    pred = model.predict(heldout.start[idx], end, heldout.end_displacement(idx))
+    err = error(pred, heldout.next[idx])
+    order = np.argsort(err)[::-1]
+    ranks = np.unique(np.round(np.geomspace(1, 0.1 * len(idx), count)).astype(int) - 1)
+    fig, axes = plt.subplots(1, len(ranks), figsize=(3.2 * len(ranks), 3.4))
+    for ax, rank in zip(np.atleast_1d(axes), ranks):
+        k = order[rank]
+        i = idx[k]
+        ax.plot(*heldout.start[i].T, "-", color="0.65", lw=1.5, label="start")
+        ax.plot(*heldout.next[i].T, "-o", ms=2, color="C0", label="simulator")
+        ax.plot(*pred[k].T, "-o", ms=2, color="C3", label="model")
+        for row, point in ((0, 0), (1, -1)):
+            if np.abs(heldout.moved[i, row]).sum():
+                ax.annotate("", xy=heldout.start[i, point] + heldout.moved[i, row],
+                            xytext=heldout.start[i, point],
+                            arrowprops={"arrowstyle": "->", "color": "k"})
+        ax.set_title(f"#{rank + 1} worst of {len(idx)}: {100 * err[k]:.1f} cm", fontsize=9)
+        ax.set_aspect("equal")
+        ax.set_xticks([])
+        ax.set_yticks([])
+    np.atleast_1d(axes)[0].legend(fontsize=7, loc="best")
+    label = "both-ends" if end == "both" else f"{end}-end"
+    fig.suptitle(f"held-out {label} moves the model gets most wrong (arrows: the held ends' moves)",
+                 fontsize=10)
+    fig.tight_layout()
+    path.parent.mkdir(parents=True, exist_ok=True)
+    with atomic_path(path) as tmp:
+        fig.savefig(tmp, dpi=80, format="png")
+    plt.close(fig)
+    return path
+
+
 def members_accuracy(model: TransitionModel, heldout) -> dict[int, dict[str, float]]:
     """Held-out one-move mean error (cm) by grasp when only the first k networks predict,
     for every k (the last is the whole ensemble, the floors' model)."""
@@ -184,7 +262,10 @@ def main() -> None:
     parser.add_argument("--heldout", default="data/transitions-heldout.npz",
                         help="held-out transitions (dlo collect --kind transitions --seed 1)")
     parser.add_argument("--curves", type=int, default=400, help="analytic-shape transitions")
-    parser.add_argument("--seed", type=int, default=7, help="seed of the analytic shapes")
+    parser.add_argument("--seed", type=int, default=7,
+                        help="seed of the analytic shapes and of the replayed moves")
+    parser.add_argument("--replays", type=int, default=250,
+                        help="held-out moves per grasp replayed in the simulator")
     parser.add_argument("--out", default="runs/transition-benchmark", help="results folder")
     args = parser.parse_args()
     model = TransitionModel.load_or_pretrained(args.model, device="cpu")
@@ -207,6 +288,17 @@ def main() -> None:
                    one["both"].mean_cm <= FLOORS["both_mean_cm"]))
     checks.append((f"both within 1 cm >= {FLOORS['both_within']:.0%}", one["both"].within_1cm,
                    one["both"].within_1cm >= FLOORS["both_within"]))
+
+    spread = predictability(model, heldout, args.replays, args.seed)
+    print(f"\n   is the error the physics' own? {args.replays} held-out moves per grasp, mean "
+          "(within 1 cm):")
+    for name, r in spread.items():
+        print(f"   {name:<5} model {r['model_mean_cm']:.3f} cm ({r['model_within_1cm']:.1%}); "
+              f"simulator from the stored start {r['replay_mean_cm']:.3f} cm "
+              f"({r['replay_within_1cm']:.1%}); from the start with links turned by 0.005 rad "
+              f"{r['turned_start_mean_cm']:.3f} cm ({r['turned_start_within_1cm']:.1%})")
+    worst = worst_cases_png(model, heldout, "both", Path(args.out) / "worst-both.png")
+    print(f"   the worst both-ends moves: {worst}")
 
     chain = chained_tasks(model)
     print(f"\n2. linear-3 test tasks, moves chained from the start ({chain['tasks']} tasks)")
@@ -261,7 +353,7 @@ def main() -> None:
     write_text_atomic(out / "transition-benchmark.json", json.dumps(json_ready({
         "heldout": [r.__dict__ for r in rows], "spread_rank": rank, "chained_linear3": chain,
         "analytic": curves, "off_table": off, "throughput": speed,
-        "members_one_move_cm": accuracy,
+        "members_one_move_cm": accuracy, "predictability": spread,
         "speedup_one_thread": one_thread, "speedup_best": best,
         "floors": [{"name": n, "value": v, "pass": p} for n, v, p in checks]}), indent=1))
     print(f"\nwrote {out / 'transition-benchmark.json'}")
