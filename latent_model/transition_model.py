@@ -32,6 +32,7 @@ from dlo_env.shapes import TABLE_HALF
 from dlo_env.tasks import DEFAULT_MAX_STEP
 from latent_model.checkpoint import load_checkpoint, save_atomic
 from latent_model.config import config_from_dict
+from latent_model.inextensible import make_inextensible
 from latent_model.move_frame import (
     GRASP_CODES,
     MoveFrame,
@@ -309,7 +310,8 @@ class TransitionModel(nn.Module):
 
     @torch.no_grad()
     def predict(self, shapes: Any, end: str, displacement: Any, return_std: bool = False,
-                members: int | None = None) -> np.ndarray | tuple[np.ndarray, np.ndarray]:
+                members: int | None = None, inextensible: bool = True
+                ) -> np.ndarray | tuple[np.ndarray, np.ndarray]:
         """The shape at rest after one straight move of the held end(s).
 
         Args:
@@ -322,6 +324,10 @@ class TransitionModel(nn.Module):
             members: Use only the first ``members`` networks of the ensemble (None: all): the
                 networks' share of the time falls by ``self.config.members / members``, a
                 little less accurate; the spread needs two.
+            inextensible: Move the mean onto the nearest shape whose segments have the
+                cord's rest length, the held ends kept (:mod:`latent_model.inextensible`):
+                more accurate (the simulator's links are rigid), at a small fixed cost per
+                call that planners making many small calls may skip.
 
         Returns:
             float32 ``(B, n, 2)`` (``(n, 2)`` for one shape), the ensemble's mean, on the
@@ -356,6 +362,10 @@ class TransitionModel(nn.Module):
             spreads = [torch.zeros(len(arr))]
         mean = torch.cat(means).cpu().numpy() if means else np.zeros((0,) + arr.shape[1:])
         spread = torch.cat(spreads).cpu().numpy() if spreads else np.zeros(0)
+        if inextensible and len(mean):
+            rest = self.config.cord_length / (self.config.n_points - 1)
+            mean = make_inextensible(mean, rest, np.full(len(mean), end != "tail"),
+                                     np.full(len(mean), end != "head"))  # the held ends
         still = np.abs(moves).sum(axis=(1, 2)) == 0  # nothing moves: the cord stays at rest
         mean[still] = arr[still]
         spread[still] = 0.0

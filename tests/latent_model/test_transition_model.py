@@ -159,6 +159,23 @@ def test_single_shapes_batches_and_the_ensemble_spread(model):
     assert np.allclose(one, batch[0], atol=1e-6)
 
 
+@pytest.mark.parametrize("end", ["head", "tail", "both"])
+def test_predictions_have_rest_length_segments_unless_asked_for_the_raw_mean(model, end):
+    shapes = _shapes(8, seed=10)
+    d = np.random.default_rng(10).uniform(-0.1, 0.1, (8, 4 if end == "both" else 2))
+    d = d.astype(np.float32)
+    raw = model.predict(shapes, end, d, inextensible=False)
+    pred = model.predict(shapes, end, d)
+    rest = 1.0 / 19
+
+    def deviation(s):
+        return np.median(np.abs(np.linalg.norm(np.diff(s, axis=1), axis=-1) - rest)) / rest
+
+    assert deviation(raw) > 0.05 and deviation(pred) < 0.2 * deviation(raw)
+    held = {"head": [0], "tail": [-1], "both": [0, -1]}[end]
+    assert np.array_equal(pred[:, held], raw[:, held])  # the held ends are where they were
+
+
 def test_the_first_members_alone_are_the_first_members_of_the_ensemble(model):
     shapes = _shapes(4, seed=8)
     d = np.full((4, 2), -0.07, dtype=np.float32)

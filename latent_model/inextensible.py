@@ -1,0 +1,52 @@
+"""Projecting predicted shapes onto inextensible cords: every segment at its rest length.
+
+The simulated cord's links are rigid, so every shape it rests in has equal segments. A learned
+prediction does not by construction; where it hesitates between two outcomes (a loop that may
+swing either way) its mean is shorter than the cord. :func:`make_inextensible` moves the points
+to a nearby shape with rest-length segments the way position-based dynamics does: each segment
+in turn is set to its rest length by moving its two points along it, a held end not at all.
+Distances only, so it turns and shifts with the shape (the model stays equivariant), and it is
+symmetric under reversing the cord when the number of segments is odd (the default 19).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+#: Sweeps over all segments; the held-out error stops falling at about 20.
+ITERATIONS = 20
+
+
+def make_inextensible(points: np.ndarray, rest: float, pin_first: np.ndarray,
+                      pin_last: np.ndarray, iterations: int = ITERATIONS) -> np.ndarray:
+    """``points`` ``(B, n, 2)`` moved towards segments of length ``rest``.
+
+    Args:
+        points: The shapes.
+        rest: Rest length of a segment.
+        pin_first, pin_last: ``(B,)`` bool, the first / last point is held (does not move).
+        iterations: Sweeps; each sets the even, then the odd segments to length.
+
+    Returns:
+        float32 ``(B, n, 2)``, a new array; the held points are unchanged.
+    """
+    # Points as complex numbers: a segment's length and direction in one array operation.
+    z = np.ascontiguousarray(points, dtype=np.float32).view(np.complex64)[..., 0].copy()
+    n = z.shape[1]
+    free = np.ones(z.shape, dtype=np.float32)
+    free[:, 0] = ~np.asarray(pin_first, dtype=bool)
+    free[:, -1] = ~np.asarray(pin_last, dtype=bool)
+    shares = []
+    for parity in (0, 1):
+        wa, wb = free[:, parity:n - 1:2], free[:, parity + 1:n:2]
+        total = np.maximum(wa + wb, 1e-12)
+        shares.append((wa / total, wb / total))
+    for _ in range(iterations):
+        for parity, (share_a, share_b) in enumerate(shares):
+            a, b = z[:, parity:n - 1:2], z[:, parity + 1:n:2]  # views: updated in place
+            seg = b - a
+            length = np.maximum(np.abs(seg), 1e-12)
+            seg *= (length - rest) / length
+            a += share_a * seg
+            b -= share_b * seg
+    return z.view(np.float32).reshape(z.shape + (2,))
