@@ -8,6 +8,12 @@ seconds per episode. The chosen values become ``LatentMPCConfig``'s defaults by 
 sweep quoted in ``docs/planners.md``.
 
     python benchmarks/tune_latent_mpc.py --episodes 40
+    python benchmarks/tune_latent_mpc.py --grid '{"inextensible": [false, true]}' \
+        --suite linear-3 linear-4 linear-5 --out runs/tune-inextensible
+
+``--grid`` replaces the grid (any ``LatentMPCConfig`` fields; the others keep their defaults,
+elites a tenth of the samples when samples are swept); ``--model`` tunes for another
+transition model file.
 """
 
 from __future__ import annotations
@@ -15,6 +21,7 @@ from __future__ import annotations
 import argparse
 import csv
 import itertools
+import json
 import time
 from pathlib import Path
 
@@ -41,7 +48,19 @@ def main() -> None:
                         help="run DLODualEndpoint-v0 instead of DLOEndpoint-v0")
     parser.add_argument("--out", default="runs/tune-latent-mpc",
                         help="output folder (sweep.csv)")
+    parser.add_argument("--grid", default=None,
+                        help="JSON object of LatentMPCConfig fields to lists of values, in place "
+                             "of the built-in grid")
+    parser.add_argument("--model", default=None,
+                        help="transition model file (default: the shipped one)")
     args = parser.parse_args()
+    grid = GRID
+    if args.grid is not None:
+        try:
+            grid = {k: tuple(v) for k, v in json.loads(args.grid).items()}
+        except (ValueError, TypeError, AttributeError) as exc:
+            raise SystemExit(f"--grid must be a JSON object of field names to lists, got "
+                             f"{args.grid!r} ({exc})") from None
 
     import gymnasium as gym
     import torch
@@ -54,19 +73,22 @@ def main() -> None:
 
     torch.set_num_threads(1)
     env_id = "dlo_env/DLODualEndpoint-v0" if args.dual else "dlo_env/DLOEndpoint-v0"
-    model = TransitionModel.load_or_pretrained(device="cpu")
+    model = TransitionModel.load_or_pretrained(args.model, device="cpu")
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
     path = out / ("sweep-dual.csv" if args.dual else "sweep.csv")
-    keys = list(GRID)
+    keys = list(grid)
     columns = [*keys, "suite", "episodes", "success", "median_error_cm", "seconds_per_episode"]
     done = list(csv.DictReader(path.open())) if path.is_file() else []
     seen = {tuple(r[k] for k in [*keys, "suite", "episodes"]) for r in done}
     rows = list(done)
-    for values in itertools.product(*GRID.values()):
+    for values in itertools.product(*grid.values()):
         setting = dict(zip(keys, values))
-        elites = max(2, setting["samples"] // 10)
-        config = LatentMPCConfig(**{**setting, "elites": elites})
+        if "samples" in setting and "elites" not in setting:
+            setting_kw = {**setting, "elites": max(2, setting["samples"] // 10)}
+        else:
+            setting_kw = setting
+        config = LatentMPCConfig(**setting_kw)
         for suite in args.suite:
             tag = tuple(str(setting[k]) for k in keys) + (suite, str(args.episodes))
             if tag in seen:
