@@ -51,6 +51,8 @@ FORMAT_VERSION = 1
 MODEL_FILE = "transition.pt"
 #: Predictions per network call in ``predict`` (keeps activations in cache).
 PREDICT_CHUNK = 4096
+#: Values of config fields added after the first files were written, for files without them.
+LEGACY_CONFIG = {"rim_targets": 1}
 
 
 @dataclass(frozen=True)
@@ -394,7 +396,9 @@ class TransitionModel(nn.Module):
                    name: str = "path") -> TransitionModel:
         """Rebuild a model from a checkpoint dict (as written by ``save``)."""
         try:
-            config = config_from_dict(TransitionModelConfig, data["config"], "config")
+            # Files written before rim_targets existed saw the leading end's target only.
+            values = {**LEGACY_CONFIG, **data["config"]}
+            config = config_from_dict(TransitionModelConfig, values, "config")
             model = cls(config, device="cpu", info=data.get("info"))
             model.net.load_state_dict({k: v.float() for k, v in data["net"].items()})
         except (KeyError, TypeError, RuntimeError, ValueError) as exc:

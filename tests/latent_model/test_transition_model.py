@@ -226,6 +226,15 @@ def test_save_and_load_round_trip_and_a_corrupt_file_is_refused(model, tmp_path)
         TransitionModel.load(tmp_path / "missing.pt")
 
 
+def test_a_file_from_before_rim_targets_loads_with_the_leading_ends_target_only():
+    old = TransitionModel(TransitionModelConfig(width=16, depth=1, members=2, rim_targets=1),
+                          device="cpu")
+    state = old.state()
+    del state["config"]["rim_targets"]  # as the files written before the field existed
+    loaded = TransitionModel.from_state(state, device="cpu")
+    assert loaded.config.rim_targets == 1 and loaded.config == old.config
+
+
 def test_chain_starts_only_link_consecutive_moves_of_one_cord():
     episode = np.array([0, 0, 0, 1, 1, 2])
     step = np.array([0, 1, 2, 0, 1, 0])
