@@ -84,8 +84,8 @@ class TransitionModelConfig:
     depth: int = 3
     move_scale: float = 0.35
     output_scale: float = 0.1
-    rim_reach: float = 0.15
-    rim_targets: int = 1
+    rim_reach: float = 0.35
+    rim_targets: int = 2
 
     def __post_init__(self) -> None:
         positive_ints(self, "n_points", "members", "width", "depth")

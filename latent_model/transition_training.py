@@ -57,7 +57,7 @@ class TransitionTrainConfig:
             adding data); its architecture must be the one trained. None: random weights.
     """
 
-    steps: int = 20_000
+    steps: int = 48_000
     batch_size: int = 512
     chain_batch: int = 128
     chain_moves: int = 3
@@ -65,7 +65,7 @@ class TransitionTrainConfig:
     lr: float = 1e-3
     lr_schedule: str = "cosine"
     validation_fraction: float = 0.05
-    eval_every: int = 1000
+    eval_every: int = 4000
     seed: int = 0
     init: str | None = None
 

@@ -20,7 +20,7 @@ from latent_model.transition_training import (
     train_transition_model,
 )
 
-TINY = TransitionModelConfig(width=32, depth=2, members=3)
+TINY = TransitionModelConfig(width=32, depth=2, members=3, rim_reach=0.15, rim_targets=1)
 
 
 @pytest.fixture(scope="module")
