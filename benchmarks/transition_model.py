@@ -34,16 +34,13 @@ import torch
 from dlo_bench.report import json_ready
 from dlo_env.atomic import atomic_path, write_text_atomic
 from dlo_env.cord import Cord, CordParams
-from dlo_env.dataset.transitions import GRASP_NAMES, load_transitions
+from dlo_env.dataset.transitions import GRASP_NAMES, carry_out, load_transitions
 from dlo_env.shapes import ANALYTIC_KINDS, analytic_shape, error, on_table
 from dlo_env.tasks import (
     DEFAULT_MAX_STEP,
     GRASP_ENDS,
     SPAN_MARGIN,
-    apply_action,
     load_suite,
-    split_move,
-    wait_for_rest,
 )
 from latent_model.transition_metrics import report_lines, transition_report
 from latent_model.transition_model import TransitionModel
@@ -58,10 +55,7 @@ def simulate(start: np.ndarray, end: str, move: np.ndarray) -> np.ndarray:
     """The simulator's transition: reset at ``start``, one straight move, wait for rest."""
     cord = Cord(grasp=end)
     cord.reset(start)
-    for action in split_move(move, DEFAULT_MAX_STEP):
-        apply_action(cord, action, DEFAULT_MAX_STEP)
-    wait_for_rest(cord)
-    return cord.shape
+    return carry_out(cord, move, DEFAULT_MAX_STEP)[0]
 
 
 def settled(shape: np.ndarray, end: str) -> np.ndarray:

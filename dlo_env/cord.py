@@ -352,9 +352,9 @@ class Cord:
             if d is not None:
                 moves[i] = np.asarray(d, dtype=np.float64).reshape(2)
         if not np.isfinite(moves).all():
-            name = names[int(np.flatnonzero(~np.isfinite(moves).all(axis=1))[0])]
-            raise ValueError(f"{name} displacement must be finite, got "
-                             f"{moves[names.index(name)].tolist()}")
+            bad = int(np.flatnonzero(~np.isfinite(moves).all(axis=1))[0])
+            raise ValueError(f"{names[bad]} displacement must be finite, got "
+                             f"{moves[bad].tolist()}")
         if not names:
             return names, starts, starts
         return names, starts, reachable_targets(starts + moves, self.params)

@@ -4,19 +4,15 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-import torch
 
 from dlo_env.shapes import random_cord_shape
 from latent_model.config import ModelConfig, TrainConfig
 
 
 @pytest.fixture(autouse=True)
-def _one_thread():
-    # Tiny networks run faster on one thread, and other jobs share the machine.
-    before = torch.get_num_threads()
-    torch.set_num_threads(1)
+def _one_thread(one_torch_thread):
+    # Every test here runs torch on one thread (the shared fixture in tests/conftest.py).
     yield
-    torch.set_num_threads(before)
 
 
 @pytest.fixture(scope="session")

@@ -6,7 +6,6 @@ from collections.abc import Callable
 
 import gymnasium as gym
 import pytest
-import torch
 
 import dlo_env  # noqa: F401  (registers the environments)
 from dlo_bench import build_agent
@@ -14,12 +13,9 @@ from dlo_env.tasks import load_suite
 
 
 @pytest.fixture(autouse=True)
-def _one_thread():
-    # Small networks run faster on one thread, and other jobs share the machine.
-    before = torch.get_num_threads()
-    torch.set_num_threads(1)
+def _one_thread(one_torch_thread):
+    # Every test here runs torch on one thread (the shared fixture in tests/conftest.py).
     yield
-    torch.set_num_threads(before)
 
 
 @pytest.fixture
