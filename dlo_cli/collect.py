@@ -14,6 +14,7 @@ from dlo_cli.flags import add_backend, backend_of, engine_text, number_in, posit
 
 _seed = number_in(int, 0, expected="an integer >= 0")
 _cosine = number_in(float, -1.0, 1.0, expected="a number in [-1, 1]")
+_share = number_in(float, 0.0, 1.0, expected="a number in [0, 1]")
 
 
 def _npz_path(text: str) -> str:
@@ -41,6 +42,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help="cord-like filter: least cosine of consecutive segments")
     parser.add_argument("--record-every", type=positive_int, default=CollectConfig.record_every,
                         help="record a shape every K physics substeps (10: about 1 cm of motion)")
+    parser.add_argument("--wide-fraction", type=_share, default=0.0,
+                        help="--kind transitions: share of episodes starting from a more "
+                             "strongly bent shape (wide_cord_shape: several hard bends, kinks)")
     parser.add_argument("--resume", action="store_true",
                         help="continue an interrupted run from OUT.parts/")
     add_backend(parser)

@@ -17,6 +17,7 @@ from dlo_env.shapes import (
     max_error,
     random_cord_shape,
     validate_shape,
+    wide_cord_shape,
 )
 
 __all__ = [
@@ -29,6 +30,7 @@ __all__ = [
     "max_error",
     "random_cord_shape",
     "validate_shape",
+    "wide_cord_shape",
 ]
 
 _ENVS = {

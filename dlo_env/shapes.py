@@ -200,7 +200,6 @@ def random_cord_shape(
     """
     segment = length / (n_points - 1)
     s = (np.arange(n_points - 2) + 0.5) / (n_points - 2)
-    half = TABLE_HALF - margin
     for _ in range(1000):
         scale = rng.choice([0.5, 2.0, 5.0])
         modes = np.arange(4)
@@ -208,15 +207,73 @@ def random_cord_shape(
         phase = rng.uniform(0.0, 2.0 * np.pi, size=4)
         kappa = (coef * np.cos(np.pi * modes * s[:, None] + phase)).sum(axis=1)
         turns = np.clip(kappa, -max_curvature, max_curvature) * segment
-        headings = rng.uniform(-np.pi, np.pi) + np.concatenate([[0.0], np.cumsum(turns)])
-        shape = shape_from_headings(headings, segment, np.zeros(2))
-        shape -= shape.mean(axis=0)
-        lo, hi = shape.min(axis=0), shape.max(axis=0)
-        room_lo, room_hi = -half - lo, half - hi
-        if (room_lo > room_hi).any() or not is_cord_like(shape, threshold):
-            continue
-        shape += rng.uniform(room_lo, room_hi)
-        return shape.astype(np.float32)
+        shape = _placed(rng, turns, segment, margin, threshold)
+        if shape is not None:
+            return shape
+    raise RuntimeError("could not draw a cord shape that fits on the table; lower margin")
+
+
+def _placed(rng: np.random.Generator, turns: np.ndarray, segment: float, margin: float,
+            threshold: float | None) -> np.ndarray | None:
+    # The chain with these joint turns at a uniform heading and a uniform place where it fits
+    # on the table with ``margin``; None if it does not fit or fails the cord-like filter.
+    headings = rng.uniform(-np.pi, np.pi) + np.concatenate([[0.0], np.cumsum(turns)])
+    shape = shape_from_headings(headings, segment, np.zeros(2))
+    shape -= shape.mean(axis=0)
+    half = TABLE_HALF - margin
+    room_lo, room_hi = -half - shape.min(axis=0), half - shape.max(axis=0)
+    if (room_lo > room_hi).any() or (threshold is not None
+                                     and not is_cord_like(shape, threshold)):
+        return None
+    return (shape + rng.uniform(room_lo, room_hi)).astype(np.float32)
+
+
+def wide_cord_shape(
+    rng: np.random.Generator,
+    *,
+    n_points: int = 20,
+    length: float = 1.0,
+    margin: float = 0.1,
+    max_curvature: float = 9.0,
+    threshold: float = COSINE_THRESHOLD,
+    kinks: float = 1.0,
+) -> np.ndarray:
+    """Draw a cord-like shape from a wider family than :func:`random_cord_shape`.
+
+    ``random_cord_shape`` rarely bends the cord hard more than once (its higher Fourier modes
+    are weak), so tight S-shapes, waves and kinked cords are scarce in what it draws. Here the
+    curvature runs linearly between 2 to 6 evenly spaced knots along the cord, each uniform in
+    ``(-peak, peak)`` with ``peak = max_curvature * sqrt(u)``, ``u`` uniform in ``(0, 1)``
+    (hard bends often); then a
+    Poisson(``kinks``) number of joints turn sharply (by 0.3 rad up to 95 % of the cord-like
+    filter's limit, ``arccos(threshold)``). Placed as ``random_cord_shape`` places.
+
+    Args:
+        rng: Source of randomness.
+        n_points: Number of points.
+        length: Cord length, metres.
+        margin: Distance every point keeps from the table edge, metres.
+        max_curvature: Largest curvature of the smooth part, 1/m.
+        threshold: The cord-like filter the shape must pass.
+        kinks: Mean number of sharp joints.
+
+    Returns:
+        float32 ``(n_points, 2)``.
+    """
+    segment = length / (n_points - 1)
+    joints = n_points - 2
+    s = (np.arange(joints) + 0.5) / joints
+    sharpest = 0.95 * float(np.arccos(threshold))
+    for _ in range(1000):
+        knots = int(rng.integers(2, 7))
+        values = rng.uniform(-1.0, 1.0, size=knots) * max_curvature * np.sqrt(rng.uniform())
+        turns = np.interp(s, np.linspace(0.0, 1.0, knots), values) * segment
+        sharp = rng.choice(joints, size=min(int(rng.poisson(kinks)), joints), replace=False)
+        turns[sharp] = rng.choice([-1.0, 1.0], size=len(sharp)) * rng.uniform(
+            min(0.3, sharpest), sharpest, size=len(sharp))
+        shape = _placed(rng, turns, segment, margin, threshold)
+        if shape is not None:
+            return shape
     raise RuntimeError("could not draw a cord shape that fits on the table; lower margin")
 
 
@@ -275,14 +332,8 @@ def analytic_shape(
     if kind != "zigzag":  # a zigzag's kinks are single sharp joints, not a curvature
         kappa = np.clip(kappa, -kmax, kmax)
     turns = sign * kappa * segment
-    half = TABLE_HALF - margin
     for _ in range(1000):
-        headings = rng.uniform(-np.pi, np.pi) + np.concatenate([[0.0], np.cumsum(turns)])
-        shape = shape_from_headings(headings, segment, np.zeros(2))
-        shape -= shape.mean(axis=0)
-        lo, hi = shape.min(axis=0), shape.max(axis=0)
-        room_lo, room_hi = -half - lo, half - hi
-        if (room_lo > room_hi).any():
-            continue
-        return (shape + rng.uniform(room_lo, room_hi)).astype(np.float32)
+        shape = _placed(rng, turns, segment, margin, None)
+        if shape is not None:
+            return shape
     raise RuntimeError(f"a {kind} does not fit on the table with margin {margin}")

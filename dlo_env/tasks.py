@@ -17,6 +17,7 @@ from __future__ import annotations
 import math
 import os
 import zipfile
+from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -208,7 +209,7 @@ def wait_for_rest(cord: Cord, max_step: float = DEFAULT_MAX_STEP) -> int:
 
 def random_start(
     seed: int | np.random.Generator, grasp: Grasp = "head", *, params: CordParams | None = None,
-    cord: Cord | None = None,
+    cord: Cord | None = None, draw: Callable[..., np.ndarray] = random_cord_shape,
 ) -> np.ndarray:
     """A random cord-like start shape at rest: ``random_cord_shape`` settled in the simulator.
 
@@ -222,6 +223,9 @@ def random_start(
         params: Cord parameters (default cord if None).
         cord: Settle on this cord (its params and grasp are used; it is left in some
             simulated state, so reset it before use) instead of a new one.
+        draw: The shape drawer, called as ``draw(rng, n_points=..., length=...)``
+            (``random_cord_shape``, or :func:`dlo_env.shapes.wide_cord_shape` for more
+            strongly bent starts).
 
     Returns:
         float32 ``(n, 2)``.
@@ -229,14 +233,15 @@ def random_start(
     if cord is None:
         action_dim(grasp)
         cord = Cord(params, grasp=grasp)
-    return _random_start(np.random.default_rng(seed), cord)
+    return _random_start(np.random.default_rng(seed), cord, draw)
 
 
-def _random_start(rng: np.random.Generator, cord: Cord) -> np.ndarray:
+def _random_start(rng: np.random.Generator, cord: Cord,
+                  draw: Callable[..., np.ndarray] = random_cord_shape) -> np.ndarray:
     p = cord.params
     span = p.max_span * p.length - SPAN_MARGIN
     for _ in range(1000):
-        shape = random_cord_shape(rng, n_points=p.n_points, length=p.length)
+        shape = draw(rng, n_points=p.n_points, length=p.length)
         if cord.grasp == "both" and np.linalg.norm(shape[-1] - shape[0]) >= span:
             continue
         cord.reset(shape)

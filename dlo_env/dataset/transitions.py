@@ -62,7 +62,7 @@ from dlo_env.dataset.chunks import (
     run_chunks,
 )
 from dlo_env.dataset.npz_file import check_arrays, load_npz, save_npz
-from dlo_env.shapes import TABLE_HALF
+from dlo_env.shapes import TABLE_HALF, random_cord_shape, wide_cord_shape
 from dlo_env.tasks import (
     DEFAULT_MAX_STEP,
     GRASP_ENDS,
@@ -109,6 +109,9 @@ class TransitionCollectConfig:
         log_fraction: Share of move lengths drawn log-uniformly (the rest uniformly) from
             ``[min_move, max_move]``: planners end with short corrective moves, and a
             uniform draw alone gives few of them (4 % under 2.5 cm).
+        wide_fraction: Share of episodes whose random start is drawn by
+            :func:`dlo_env.shapes.wide_cord_shape` (hard bends, several bends, kinks) instead
+            of :func:`dlo_env.shapes.random_cord_shape` (the environments' starts).
         max_step: Gripper displacement of an action of 1.0 (the environments' ``max_step``).
         chunk_size: Transitions per chunk (the unit of parallel work, saving and resuming).
         cord: The cord simulated.
@@ -122,6 +125,7 @@ class TransitionCollectConfig:
     push_fraction: float = 0.25
     rim_fraction: float = 0.1
     log_fraction: float = 0.5
+    wide_fraction: float = 0.0
     max_step: float = DEFAULT_MAX_STEP
     chunk_size: int = 500
     cord: CordParams = field(default_factory=CordParams)
@@ -141,7 +145,7 @@ class TransitionCollectConfig:
         if min(aims) < 0 or sum(aims) > 1:
             raise ValueError("push_fraction and rim_fraction must be >= 0 with a sum <= 1, "
                              f"got {self.push_fraction!r} and {self.rim_fraction!r}")
-        fractions(self, "log_fraction", closed_low=True)
+        fractions(self, "log_fraction", "wide_fraction", closed_low=True)
         positive(self, "max_step")
 
     def to_json(self) -> dict[str, Any]:
@@ -285,7 +289,10 @@ def collect_transition_chunk(config: TransitionCollectConfig, index: int, size: 
         episode += 1
         grasp = int(rng.choice(3, p=weights))
         cord = Cord(config.cord, grasp=GRASP_NAMES[grasp])
-        cord.reset(random_start(rng, cord=cord))  # fresh, as an environment's reset
+        # No draw at wide_fraction 0: files collected before the option stay reproducible.
+        wide = config.wide_fraction > 0 and rng.uniform() < config.wide_fraction
+        draw = wide_cord_shape if wide else random_cord_shape
+        cord.reset(random_start(rng, cord=cord, draw=draw))  # fresh, as an environment's reset
         start = cord.shape
         for step in range(config.moves_per_episode):
             if len(rows["grasp"]) == size:

@@ -12,12 +12,13 @@ from latent_model import TransitionModel
 @pytest.mark.slow
 def test_collect_then_train_a_transition_model_from_two_files(tmp_path, capsys):
     first, second = tmp_path / "a.npz", tmp_path / "b.npz"
-    for seed, out in ((0, first), (1, second)):
+    for seed, out, wide in ((0, first, "0"), (1, second, "0.5")):
         assert main(["collect", "--kind", "transitions", "--num-transitions", "25",
-                     "--seed", str(seed), "--out", str(out)]) == 0
+                     "--seed", str(seed), "--wide-fraction", wide, "--out", str(out)]) == 0
     text = capsys.readouterr().out
     assert f"wrote {first}" in text and "transitions: 25" in text and "grasps: head" in text
     assert len(load_transitions(first)) == 25
+    assert load_transitions(second).metadata["collect"]["wide_fraction"] == 0.5
     out = tmp_path / "model"
     assert main(["train", "--stage", "transition", "--data", str(first), str(second),
                  "--heldout", str(second), "--out", str(out), "--steps", "20",

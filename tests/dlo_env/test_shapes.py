@@ -17,6 +17,7 @@ from dlo_env.shapes import (
     spacing_cv,
     turning_cosines,
     validate_shape,
+    wide_cord_shape,
 )
 
 N, LENGTH = 20, 1.0
@@ -102,6 +103,38 @@ def test_validate_shape_accepts_flat_and_returns_float32_points():
 def test_validate_shape_rejects_bad_shapes_naming_the_argument(shape, match):
     with pytest.raises(ValueError, match=match):
         validate_shape(shape, n_points=N, length=LENGTH, name="start")
+
+
+def _turns(shapes: np.ndarray) -> np.ndarray:
+    # Signed turn at every joint, radians.
+    v = np.diff(shapes.astype(np.float64), axis=-2)
+    a = np.arctan2(v[..., 1], v[..., 0])
+    return np.angle(np.exp(1j * np.diff(a, axis=-1)))
+
+
+def _s_like(shapes: np.ndarray) -> np.ndarray:
+    # Each half of the cord turns by more than 1 rad, the two halves opposite ways.
+    t = _turns(shapes)
+    h = t.shape[-1] // 2
+    first, second = t[:, :h].sum(axis=-1), t[:, h:].sum(axis=-1)
+    return (np.minimum(np.abs(first), np.abs(second)) > 1.0) & (np.sign(first) != np.sign(second))
+
+
+def test_wide_cord_shape_is_seeded_cord_like_and_bends_harder_than_random_cord_shape():
+    a = wide_cord_shape(np.random.default_rng(7))
+    assert np.array_equal(a, wide_cord_shape(np.random.default_rng(7)))
+    wide = np.stack([wide_cord_shape(np.random.default_rng(s)) for s in range(200)])
+    plain = np.stack([random_cord_shape(np.random.default_rng(s)) for s in range(200)])
+    assert wide.dtype == np.float32 and is_cord_like(wide).all()
+    np.testing.assert_allclose(segment_lengths(wide), SEG, rtol=1e-4)
+    assert np.abs(wide).max() <= 0.9 + 1e-6
+    assert _s_like(wide).mean() >= max(0.04, 3 * _s_like(plain).mean())
+    # Kinks: about half the shapes have a joint sharper than the smooth part can bend...
+    smooth_limit = 9.0 * SEG
+    assert 0.3 < (np.abs(_turns(wide)).max(axis=-1) > smooth_limit + 0.05).mean() < 0.8
+    # ...and without kinks none has.
+    calm = np.stack([wide_cord_shape(np.random.default_rng(s), kinks=0.0) for s in range(50)])
+    assert np.abs(_turns(calm)).max() <= smooth_limit + 1e-4
 
 
 def test_random_cord_shape_is_seeded_cord_like_exact_length_and_inside_the_margin():

@@ -15,7 +15,7 @@ from dlo_env.dataset.transitions import (
     save_transitions,
     split_transitions,
 )
-from dlo_env.shapes import error, on_table
+from dlo_env.shapes import error, is_cord_like, on_table
 from dlo_env.tasks import DEFAULT_MAX_STEP, GRASP_ENDS, apply_action, split_move, wait_for_rest
 
 SMALL = TransitionCollectConfig(chunk_size=12)
@@ -141,6 +141,7 @@ def test_split_keeps_each_episode_on_one_side(small):
     ("grasp_weights", (0.0, 0.0, 0.0), "grasp_weights"),
     ("push_fraction", 0.95, "push_fraction and rim_fraction"),
     ("log_fraction", 2.0, "log_fraction must be in"),
+    ("wide_fraction", -0.1, "wide_fraction must be in"),
 ])
 def test_bad_configuration_is_rejected_naming_the_field(field, value, message):
     with pytest.raises(ValueError, match=message):
@@ -171,3 +172,20 @@ def test_env_steps_count_every_action_and_settle_of_the_moves():
         ends = {0: [0], 1: [1], 2: [0, 1]}[int(held)]
         by_hand += len(split_move(d[ends].reshape(-1), DEFAULT_MAX_STEP)) + int(settle)
     assert data.env_steps() == by_hand
+
+
+def test_wide_starts_are_drawn_by_wide_cord_shape_and_settled_as_every_start(chunk):
+    wide = collect_transition_chunk(
+        TransitionCollectConfig(chunk_size=12, wide_fraction=1.0, grasp_weights=(0, 0, 1)), 0, 10)
+    first = wide.start[wide.step == 0]
+    assert len(first) == 2 and not np.array_equal(first[0], chunk.start[0])
+    assert is_cord_like(first).all() and on_table(wide.next).all()
+    span = CordParams().max_span * CordParams().length
+    assert (np.linalg.norm(first[:, -1] - first[:, 0], axis=-1) < span).all()
+    # At wide_fraction 0 choosing the start family draws no random number: the data is what
+    # the code made before the option existed (points of its first and last shape then).
+    np.testing.assert_allclose(chunk.start[0, [0, 7, 19]], [
+        [0.1339544, 0.01992647], [0.20646718, -0.3243924], [-0.36117348, -0.37432355]], atol=1e-6)
+    np.testing.assert_allclose(chunk.next[-1, [0, 7, 19]], [
+        [-0.53157717, 0.11815619], [-0.19679147, -0.00902746], [0.07396714, 0.51108027]],
+        atol=1e-6)
