@@ -9,7 +9,8 @@
    against the task goals, next to the simulator itself replaying them rest to rest;
 3. transitions from analytic shapes the data never holds as such (arcs, S-curves, spirals,
    zigzags): each settled in the simulator, then one random move of 1-35 cm (with both ends
-   held, only shapes whose ends are within the grippers' span, as every dual-arm start);
+   held, only shapes whose ends are within the grippers' span, as every dual-arm start), by
+   family and by grasp;
 4. throughput: one batch of 1024 predictions against simulating the same 1024 moves, as a ratio
    per transition (torch on 1 thread and on all threads; the simulator in one process), and
    the trade-off of predicting with only the first k networks of the ensemble: speed on 1
@@ -92,15 +93,25 @@ def chained_tasks(model: TransitionModel) -> dict[str, float]:
             "simulator_rest_to_rest_mean_cm": 100 * float(np.mean(replayed))}
 
 
+def _summary(errors: np.ndarray, ends: np.ndarray) -> dict[str, float | None]:
+    # Count, mean, 99th percentile and share within 1 cm; the mean per grasp (None: no case).
+    return {"count": len(errors), "mean_cm": 100 * float(errors.mean()),
+            "p99_cm": 100 * float(np.percentile(errors, 99)),
+            "within_1cm": float((errors <= 0.01).mean()),
+            **{f"{end}_mean_cm": (100 * float(errors[ends == end].mean())
+                                  if (ends == end).any() else None) for end in GRASP_NAMES}}
+
+
 def analytic_curves(model: TransitionModel, count: int, seed: int
-                    ) -> tuple[dict[str, dict[str, float]], dict[str, int]]:
-    """Errors of one move from settled analytic shapes, by family; off-table counts."""
+                    ) -> tuple[dict[str, dict[str, float | None]], dict[str, int]]:
+    """Errors of one move from settled analytic shapes, by family and over all (each also by
+    grasp); off-table counts."""
     rng = np.random.default_rng(seed)
-    out: dict[str, dict[str, float]] = {}
+    out: dict[str, dict[str, float | None]] = {}
     off = {"predicted_off_table": 0, "simulated_off_table": 0, "cases": 0}
-    every = []
+    every, every_end = [], []
     for kind in ANALYTIC_KINDS:
-        errors = []
+        errors, ends = [], []
         for i in range(count // len(ANALYTIC_KINDS)):
             end = GRASP_NAMES[i % 3]
             shape = analytic_shape(kind, rng)
@@ -111,18 +122,14 @@ def analytic_curves(model: TransitionModel, count: int, seed: int
             truth = simulate(start, end, move)
             pred = model.predict(start, end, move)
             errors.append(error(pred, truth))
+            ends.append(end)
             off["cases"] += 1
             off["predicted_off_table"] += int(not on_table(pred) and on_table(truth))
             off["simulated_off_table"] += int(not on_table(truth))
-        e = np.array(errors)
-        every.append(e)
-        out[kind] = {"count": len(e), "mean_cm": 100 * e.mean(),
-                     "p99_cm": 100 * float(np.percentile(e, 99)),
-                     "within_1cm": float((e <= 0.01).mean())}
-    e = np.concatenate(every)
-    out["all"] = {"count": len(e), "mean_cm": 100 * e.mean(),
-                  "p99_cm": 100 * float(np.percentile(e, 99)),
-                  "within_1cm": float((e <= 0.01).mean())}
+        every.append(np.array(errors))
+        every_end.append(np.array(ends))
+        out[kind] = _summary(every[-1], every_end[-1])
+    out["all"] = _summary(np.concatenate(every), np.concatenate(every_end))
     return out, off
 
 
@@ -305,8 +312,10 @@ def main() -> None:
     curves, off = analytic_curves(model, args.curves, args.seed)
     print(f"\n3. one move from settled analytic shapes (seed {args.seed})")
     for kind, r in curves.items():
+        grasps = " / ".join("-" if r[f"{end}_mean_cm"] is None else f"{r[f'{end}_mean_cm']:.2f}"
+                            for end in GRASP_NAMES)
         print(f"   {kind:<8} {r['count']:>4}  mean {r['mean_cm']:.3f} cm  p99 {r['p99_cm']:.2f} cm"
-              f"  within 1 cm {r['within_1cm']:.1%}")
+              f"  within 1 cm {r['within_1cm']:.1%}  ({grasps} cm {' / '.join(GRASP_NAMES)})")
     checks.append((f"analytic shapes mean <= {FLOORS['curves_cm']} cm", curves["all"]["mean_cm"],
                    curves["all"]["mean_cm"] <= FLOORS["curves_cm"]))
 

@@ -42,9 +42,10 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help="cord-like filter: least cosine of consecutive segments")
     parser.add_argument("--record-every", type=positive_int, default=CollectConfig.record_every,
                         help="record a shape every K physics substeps (10: about 1 cm of motion)")
-    parser.add_argument("--wide-fraction", type=_share, default=0.0,
-                        help="--kind transitions: share of episodes starting from a more "
-                             "strongly bent shape (wide_cord_shape: several hard bends, kinks)")
+    parser.add_argument("--wide-fraction", type=_share, default=None,
+                        help="--kind transitions: share of episodes starting from a shape of "
+                             "wide_cord_shape (several bends, kinks; default 0: the "
+                             "environments' random starts)")
     parser.add_argument("--resume", action="store_true",
                         help="continue an interrupted run from OUT.parts/")
     add_backend(parser)
@@ -70,6 +71,8 @@ def run(args: argparse.Namespace) -> int:
         return run_transitions(args)
     if args.num_shapes is None:
         raise ValueError("--num-shapes is required with --kind shapes")
+    if args.wide_fraction is not None:
+        raise ValueError("--wide-fraction applies to --kind transitions, not to shapes")
 
     from dlo_env.dataset.collect import CollectConfig, collect
     from dlo_env.dataset.diversity import diversity_report

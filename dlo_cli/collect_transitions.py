@@ -24,7 +24,8 @@ def run(args: argparse.Namespace) -> int:
 
     if args.num_transitions is None:
         raise ValueError("--num-transitions is required with --kind transitions")
-    config = TransitionCollectConfig(seed=args.seed, wide_fraction=args.wide_fraction)
+    wide = {} if args.wide_fraction is None else {"wide_fraction": args.wide_fraction}
+    config = TransitionCollectConfig(seed=args.seed, **wide)
     result = run_chunked(
         args, lambda progress: collect_transitions(
             args.out, args.num_transitions, config, workers=args.workers, resume=args.resume,

@@ -8,6 +8,8 @@ everything else in the project imports them from here.
 
 from __future__ import annotations
 
+from collections.abc import Callable
+
 import numpy as np
 
 #: Half the side of the square table, metres: the table is ``[-TABLE_HALF, TABLE_HALF]^2``.
@@ -200,32 +202,35 @@ def random_cord_shape(
     """
     segment = length / (n_points - 1)
     s = (np.arange(n_points - 2) + 0.5) / (n_points - 2)
-    for _ in range(1000):
+
+    def turns() -> np.ndarray:
         scale = rng.choice([0.5, 2.0, 5.0])
         modes = np.arange(4)
         coef = rng.normal(0.0, scale / (1.0 + modes), size=4)
         phase = rng.uniform(0.0, 2.0 * np.pi, size=4)
         kappa = (coef * np.cos(np.pi * modes * s[:, None] + phase)).sum(axis=1)
-        turns = np.clip(kappa, -max_curvature, max_curvature) * segment
-        shape = _placed(rng, turns, segment, margin, threshold)
-        if shape is not None:
-            return shape
-    raise RuntimeError("could not draw a cord shape that fits on the table; lower margin")
+        return np.clip(kappa, -max_curvature, max_curvature) * segment
+
+    return _first_placed(rng, turns, segment, margin, threshold, "a cord shape")
 
 
-def _placed(rng: np.random.Generator, turns: np.ndarray, segment: float, margin: float,
-            threshold: float | None) -> np.ndarray | None:
-    # The chain with these joint turns at a uniform heading and a uniform place where it fits
-    # on the table with ``margin``; None if it does not fit or fails the cord-like filter.
-    headings = rng.uniform(-np.pi, np.pi) + np.concatenate([[0.0], np.cumsum(turns)])
-    shape = shape_from_headings(headings, segment, np.zeros(2))
-    shape -= shape.mean(axis=0)
+def _first_placed(rng: np.random.Generator, turns: Callable[[], np.ndarray], segment: float,
+                  margin: float, threshold: float | None, what: str) -> np.ndarray:
+    # Up to 1000 tries: joint turns from ``turns()``, then the chain at a uniform heading and a
+    # uniform place where it fits on the table with ``margin`` and passes the cord-like filter
+    # (``threshold``; None: no filter).
     half = TABLE_HALF - margin
-    room_lo, room_hi = -half - shape.min(axis=0), half - shape.max(axis=0)
-    if (room_lo > room_hi).any() or (threshold is not None
-                                     and not is_cord_like(shape, threshold)):
-        return None
-    return (shape + rng.uniform(room_lo, room_hi)).astype(np.float32)
+    for _ in range(1000):
+        chain = turns()
+        headings = rng.uniform(-np.pi, np.pi) + np.concatenate([[0.0], np.cumsum(chain)])
+        shape = shape_from_headings(headings, segment, np.zeros(2))
+        shape -= shape.mean(axis=0)
+        room_lo, room_hi = -half - shape.min(axis=0), half - shape.max(axis=0)
+        if (room_lo > room_hi).any() or (threshold is not None
+                                         and not is_cord_like(shape, threshold)):
+            continue
+        return (shape + rng.uniform(room_lo, room_hi)).astype(np.float32)
+    raise RuntimeError(f"could not draw {what} that fits on the table with margin {margin}")
 
 
 def wide_cord_shape(
@@ -243,10 +248,11 @@ def wide_cord_shape(
     ``random_cord_shape`` rarely bends the cord hard more than once (its higher Fourier modes
     are weak), so tight S-shapes, waves and kinked cords are scarce in what it draws. Here the
     curvature runs linearly between 2 to 6 evenly spaced knots along the cord, each uniform in
-    ``(-peak, peak)`` with ``peak = max_curvature * sqrt(u)``, ``u`` uniform in ``(0, 1)``
-    (hard bends often); then a
-    Poisson(``kinks``) number of joints turn sharply (by 0.3 rad up to 95 % of the cord-like
-    filter's limit, ``arccos(threshold)``). Placed as ``random_cord_shape`` places.
+    ``(-peak, peak)`` with ``peak = max_curvature * sqrt(u)``, ``u`` uniform in ``(0, 1)``;
+    then a Poisson(``kinks``) number of joints get a turn of 0.3 rad up to 95 % of the
+    cord-like filter's limit ``arccos(threshold)``, either way, in place of the smooth one
+    (the smooth part turns a joint by at most ``max_curvature`` times a segment, 0.47 rad for
+    the default cord). Placed as ``random_cord_shape`` places.
 
     Args:
         rng: Source of randomness.
@@ -254,27 +260,31 @@ def wide_cord_shape(
         length: Cord length, metres.
         margin: Distance every point keeps from the table edge, metres.
         max_curvature: Largest curvature of the smooth part, 1/m.
-        threshold: The cord-like filter the shape must pass.
-        kinks: Mean number of sharp joints.
+        threshold: The cord-like filter the shape must pass, in ``[-1, 1)``.
+        kinks: Mean number of kinked joints, ``>= 0``.
 
     Returns:
         float32 ``(n_points, 2)``.
     """
+    if not -1.0 <= threshold < 1.0:
+        raise ValueError(f"threshold must be in [-1, 1), got {threshold!r}")
+    if not kinks >= 0:
+        raise ValueError(f"kinks must be a number >= 0, got {kinks!r}")
     segment = length / (n_points - 1)
     joints = n_points - 2
     s = (np.arange(joints) + 0.5) / joints
     sharpest = 0.95 * float(np.arccos(threshold))
-    for _ in range(1000):
+
+    def turns() -> np.ndarray:
         knots = int(rng.integers(2, 7))
         values = rng.uniform(-1.0, 1.0, size=knots) * max_curvature * np.sqrt(rng.uniform())
-        turns = np.interp(s, np.linspace(0.0, 1.0, knots), values) * segment
+        smooth = np.interp(s, np.linspace(0.0, 1.0, knots), values) * segment
         sharp = rng.choice(joints, size=min(int(rng.poisson(kinks)), joints), replace=False)
-        turns[sharp] = rng.choice([-1.0, 1.0], size=len(sharp)) * rng.uniform(
+        smooth[sharp] = rng.choice([-1.0, 1.0], size=len(sharp)) * rng.uniform(
             min(0.3, sharpest), sharpest, size=len(sharp))
-        shape = _placed(rng, turns, segment, margin, threshold)
-        if shape is not None:
-            return shape
-    raise RuntimeError("could not draw a cord shape that fits on the table; lower margin")
+        return smooth
+
+    return _first_placed(rng, turns, segment, margin, threshold, "a cord shape")
 
 
 #: Families of :func:`analytic_shape`.
@@ -332,8 +342,4 @@ def analytic_shape(
     if kind != "zigzag":  # a zigzag's kinks are single sharp joints, not a curvature
         kappa = np.clip(kappa, -kmax, kmax)
     turns = sign * kappa * segment
-    for _ in range(1000):
-        shape = _placed(rng, turns, segment, margin, None)
-        if shape is not None:
-            return shape
-    raise RuntimeError(f"a {kind} does not fit on the table with margin {margin}")
+    return _first_placed(rng, lambda: turns, segment, margin, None, f"a {kind}")

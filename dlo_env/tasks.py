@@ -211,7 +211,7 @@ def random_start(
     seed: int | np.random.Generator, grasp: Grasp = "head", *, params: CordParams | None = None,
     cord: Cord | None = None, draw: Callable[..., np.ndarray] = random_cord_shape,
 ) -> np.ndarray:
-    """A random cord-like start shape at rest: ``random_cord_shape`` settled in the simulator.
+    """A random cord-like start shape at rest: a shape from ``draw`` settled in the simulator.
 
     The shape settles with the grippers of ``grasp`` holding its ends (bent joints relax until
     friction holds them). With both ends held, head and tail end up closer than

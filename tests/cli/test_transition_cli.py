@@ -40,3 +40,6 @@ def test_each_kind_needs_its_own_count(tmp_path, capsys):
     assert "--num-transitions is required" in capsys.readouterr().err
     assert main(["collect", "--num-transitions", "5", "--out", str(tmp_path / "y.npz")]) == 2
     assert "--num-shapes is required" in capsys.readouterr().err
+    assert main(["collect", "--num-shapes", "5", "--wide-fraction", "0.5",
+                 "--out", str(tmp_path / "z.npz")]) == 2
+    assert "--wide-fraction applies to --kind transitions" in capsys.readouterr().err

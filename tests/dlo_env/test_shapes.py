@@ -137,6 +137,15 @@ def test_wide_cord_shape_is_seeded_cord_like_and_bends_harder_than_random_cord_s
     assert np.abs(_turns(calm)).max() <= smooth_limit + 1e-4
 
 
+@pytest.mark.parametrize(("kwargs", "match"), [
+    ({"kinks": -1.0}, "kinks must be a number >= 0, got -1.0"),
+    ({"threshold": 1.5}, r"threshold must be in \[-1, 1\), got 1.5"),
+])
+def test_wide_cord_shape_rejects_bad_arguments_naming_them(kwargs, match):
+    with pytest.raises(ValueError, match=match):
+        wide_cord_shape(np.random.default_rng(0), **kwargs)
+
+
 def test_random_cord_shape_is_seeded_cord_like_exact_length_and_inside_the_margin():
     a = random_cord_shape(np.random.default_rng(7))
     b = random_cord_shape(np.random.default_rng(7))

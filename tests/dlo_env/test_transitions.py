@@ -6,6 +6,7 @@ import numpy as np
 import pytest
 
 from dlo_env.cord import Cord, CordParams, reachable_targets
+from dlo_env.dataset import transitions
 from dlo_env.dataset.chunks import parts_dir
 from dlo_env.dataset.transitions import (
     TransitionCollectConfig,
@@ -15,7 +16,7 @@ from dlo_env.dataset.transitions import (
     save_transitions,
     split_transitions,
 )
-from dlo_env.shapes import error, is_cord_like, on_table
+from dlo_env.shapes import error, is_cord_like, on_table, wide_cord_shape
 from dlo_env.tasks import DEFAULT_MAX_STEP, GRASP_ENDS, apply_action, split_move, wait_for_rest
 
 SMALL = TransitionCollectConfig(chunk_size=12)
@@ -174,11 +175,18 @@ def test_env_steps_count_every_action_and_settle_of_the_moves():
     assert data.env_steps() == by_hand
 
 
-def test_wide_starts_are_drawn_by_wide_cord_shape_and_settled_as_every_start(chunk):
+def test_wide_starts_are_drawn_by_wide_cord_shape_and_settled_as_every_start(chunk, monkeypatch):
+    calls = []
+
+    def counted(*args, **kwargs):
+        calls.append(1)
+        return wide_cord_shape(*args, **kwargs)
+
+    monkeypatch.setattr(transitions, "wide_cord_shape", counted)
     wide = collect_transition_chunk(
         TransitionCollectConfig(chunk_size=12, wide_fraction=1.0, grasp_weights=(0, 0, 1)), 0, 10)
     first = wide.start[wide.step == 0]
-    assert len(first) == 2 and not np.array_equal(first[0], chunk.start[0])
+    assert len(first) == 2 and len(calls) >= 2  # every start (a rejected draw is drawn again)
     assert is_cord_like(first).all() and on_table(wide.next).all()
     span = CordParams().max_span * CordParams().length
     assert (np.linalg.norm(first[:, -1] - first[:, 0], axis=-1) < span).all()
