@@ -57,7 +57,7 @@ class TransitionTrainConfig:
             adding data); its architecture must be the one trained. None: random weights.
     """
 
-    steps: int = 48_000
+    steps: int = 64_000
     batch_size: int = 512
     chain_batch: int = 128
     chain_moves: int = 3
