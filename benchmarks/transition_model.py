@@ -142,23 +142,22 @@ def throughput(model: TransitionModel, heldout, batch: int = 1024, repeats: int 
     starts, moves = heldout.start[idx], heldout.displacement[idx, 0]
     result = {}
     default_threads = torch.get_num_threads()
+
+    def per_transition(members: int | None = None) -> float:
+        times = []
+        for _ in range(repeats):
+            t = time.perf_counter()
+            model.predict(starts, "head", moves, members=members)
+            times.append(time.perf_counter() - t)
+        return float(np.median(times)) / batch
+
     for threads in sorted({1, default_threads}):
         torch.set_num_threads(threads)
         model.predict(starts, "head", moves)
-        times = []
-        for _ in range(repeats):
-            t = time.perf_counter()
-            model.predict(starts, "head", moves)
-            times.append(time.perf_counter() - t)
-        result[f"model_threads_{threads}_s"] = float(np.median(times)) / batch
+        result[f"model_threads_{threads}_s"] = per_transition()
     torch.set_num_threads(1)  # the first k networks alone (latent-mpc scores with one)
     for k in range(1, model.config.members):
-        times = []
-        for _ in range(repeats):
-            t = time.perf_counter()
-            model.predict(starts, "head", moves, members=k)
-            times.append(time.perf_counter() - t)
-        result[f"members_{k}_threads_1_s"] = float(np.median(times)) / batch
+        result[f"members_{k}_threads_1_s"] = per_transition(k)
     torch.set_num_threads(default_threads)
     t = time.perf_counter()
     for start, move in zip(starts, moves):

@@ -92,6 +92,12 @@ def into_frame(vectors: torch.Tensor, frame: MoveFrame, reorder: bool = True) ->
     return _rotate(vectors, frame.cos, -frame.sin)
 
 
+def out_of_frame(vectors: torch.Tensor, frame: MoveFrame) -> torch.Tensor:
+    """Direction vectors ``(B, k, 2)`` in the frames turned back into the world (the inverse
+    of ``into_frame(..., reorder=False)``)."""
+    return _rotate(vectors, frame.cos, frame.sin)
+
+
 def rim_vectors(points: torch.Tensor, half: float, reach: float) -> torch.Tensor:
     """How close each world point ``(..., 2)`` is to the table's rim, as a vector.
 

@@ -38,6 +38,7 @@ from latent_model.move_frame import (
     MoveFrame,
     from_frame,
     into_frame,
+    out_of_frame,
     rim_vectors,
     to_frame,
 )
@@ -203,9 +204,8 @@ class TransitionModel(nn.Module):
         target = frame.origin + torch.stack([frame.cos, frame.sin], dim=-1) * lead[:, None]
         if c.rim_targets == 2:  # the other end's target too: its start plus its move
             far_end = torch.where(frame.reversed[:, None], shapes[:, 0], shapes[:, -1])
-            target = torch.stack([target, far_end + from_frame(other[:, None], MoveFrame(
-                torch.zeros_like(frame.origin), frame.cos, frame.sin,
-                torch.zeros_like(frame.reversed)))[:, 0]], dim=1)
+            target = torch.stack([target, far_end + out_of_frame(other[:, None], frame)[:, 0]],
+                                 dim=1)
         else:
             target = target[:, None]
         rim = torch.cat([into_frame(rim_vectors(shapes, TABLE_HALF, c.rim_reach), frame),
