@@ -51,14 +51,15 @@ class LatentTransitionModel(TransitionModel):
                                self.latent_dim).to(self.device)
 
     def predict_points(self, points, lead, other, both, rim, members_batch,  # noqa: D102
-                       members=None):
+                       members=None, net=None):
+        net = self.net if net is None else net
         gan = self.shape_model
         c = self.config
         latent = gan.encode_torch(points)  # (E*B or B, L): shape latent and pose in the frame
         x = torch.cat([latent, rim.flatten(1), lead[:, None] / c.move_scale,
                        other / c.move_scale, both[:, None].to(points.dtype)], dim=1)
-        out = (self.net(x.reshape(*members_batch, -1)) if members_batch
-               else self.net(x, members))  # (E, B, L)
+        out = (net(x.reshape(*members_batch, -1)) if members_batch
+               else net(x, members))  # (E, B, L)
         e, b = out.shape[:2]
         nxt = latent.reshape(-1, b, self.latent_dim) + out
         return gan.decode_torch(nxt.reshape(e * b, -1)).reshape(e, b, c.n_points, 2)

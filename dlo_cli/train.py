@@ -30,6 +30,12 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--init", default=None,
                         help="--stage transition: start from this transition model file "
                              "(fine-tuning; same architecture), None: random weights")
+    parser.add_argument("--teacher", default=None,
+                        help="--stage transition: distil a mean network for this transition "
+                             "model file (its ensemble is kept; predict then runs one network)")
+    parser.add_argument("--teacher-weight", type=float, default=None,
+                        help="--stage transition with --teacher: weight of the error to the "
+                             "teacher's mean against the error to the data (None: 1)")
     parser.add_argument("--lr", type=float, default=None,
                         help="--stage transition: starting learning rate (None: "
                              "TransitionTrainConfig's; lower it when fine-tuning with --init)")

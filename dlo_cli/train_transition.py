@@ -3,6 +3,8 @@
 Example:
     dlo train --stage transition --data data/transitions-train.npz \
         --heldout data/transitions-heldout.npz --out runs/transition
+    dlo train --stage transition --teacher runs/transition/transition.pt --data ... \
+        --out runs/transition-mean          # distil a mean network: one network predicts
 """
 
 from __future__ import annotations
@@ -49,18 +51,24 @@ def run(args: argparse.Namespace) -> int:
         data, heldout = split_transitions(data, 0.05, seed=args.seed)
     train_kw = {k: v for k, v in {"steps": args.steps, "batch_size": args.batch_size,
                                   "eval_every": args.eval_every, "seed": args.seed,
-                                  "init": args.init, "lr": args.lr}.items()
+                                  "init": args.init, "lr": args.lr,
+                                  "teacher": args.teacher,
+                                  "teacher_weight": args.teacher_weight}.items()
                 if v is not None}
     model_kw = {k: v for k, v in {"width": args.width, "members": args.members,
                                   "rim_reach": args.rim_reach,
                                   "rim_targets": args.rim_targets}.items()
                 if v is not None}
+    if args.teacher and model_kw:
+        raise ValueError("--width, --members, --rim-reach and --rim-targets shape a new ensemble, "
+                         "not --teacher's mean network (its architecture is the teacher's)")
     tc = replace(TransitionTrainConfig(), **train_kw)
     mc = replace(TransitionModelConfig(), **model_kw)
     out = Path(args.out)
     resumed = (out / CHECKPOINT_FILE).exists()
     print(f"{'resuming' if resumed else 'training'} in {out}: {len(data)} transitions, "
-          f"{len(heldout)} held out\n{mc}\n{tc}")
+          f"{len(heldout)} held out\n{mc if not tc.teacher else 'distilling ' + tc.teacher}"
+          f"\n{tc}")
     started = time.perf_counter()
     bar = None if args.no_progress else progress_bar(tc.steps, desc="transition", unit="step")
     done = [0]

@@ -36,23 +36,35 @@ def make_inextensible(points: np.ndarray, rest: float, pin_first: np.ndarray,
     Returns:
         float32 ``(B, n, 2)``, a new array; the held points are unchanged.
     """
-    # Points as complex numbers: a segment's length and direction in one array operation.
-    z = np.ascontiguousarray(points, dtype=np.float32).view(np.complex64)[..., 0].copy()
-    n = z.shape[1]
-    free = np.ones(z.shape, dtype=np.float32)
-    free[:, 0] = ~np.asarray(pin_first, dtype=bool)
-    free[:, -1] = ~np.asarray(pin_last, dtype=bool)
+    # Coordinates as (n, B) rows: every segment slice below is whole contiguous rows, and the
+    # length is sqrt(dx^2 + dy^2) (np.abs of complex numbers, hypot, is slower).
+    p = np.asarray(points, dtype=np.float32)
+    x, y = np.ascontiguousarray(p[..., 0].T), np.ascontiguousarray(p[..., 1].T)
+    n = x.shape[0]
+    free = np.ones(x.shape, dtype=np.float32)
+    free[0] = ~np.asarray(pin_first, dtype=bool)
+    free[-1] = ~np.asarray(pin_last, dtype=bool)
     shares = []
     for parity in (0, 1):
-        wa, wb = free[:, parity:n - 1:2], free[:, parity + 1:n:2]
+        wa, wb = free[parity:n - 1:2], free[parity + 1:n:2]
         total = np.maximum(wa + wb, 1e-12)
         shares.append((over_relaxation * wa / total, over_relaxation * wb / total))
+    rest = np.float32(rest)
     for _ in range(iterations):
         for parity, (share_a, share_b) in enumerate(shares):
-            a, b = z[:, parity:n - 1:2], z[:, parity + 1:n:2]  # views: updated in place
-            seg = b - a
-            length = np.maximum(np.abs(seg), 1e-12)
-            seg *= (length - rest) / length
-            a += share_a * seg
-            b -= share_b * seg
-    return z.view(np.float32).reshape(z.shape + (2,))
+            xa, xb = x[parity:n - 1:2], x[parity + 1:n:2]  # views: updated in place
+            ya, yb = y[parity:n - 1:2], y[parity + 1:n:2]
+            dx, dy = xb - xa, yb - ya
+            length = dx * dx
+            length += dy * dy
+            np.sqrt(length, out=length)
+            np.maximum(length, 1e-12, out=length)
+            fix = length - rest
+            fix /= length  # the share of the segment that is too long
+            dx *= fix
+            dy *= fix
+            xa += share_a * dx
+            ya += share_a * dy
+            xb -= share_b * dx
+            yb -= share_b * dy
+    return np.stack([x.T, y.T], axis=-1)

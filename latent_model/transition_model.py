@@ -4,7 +4,10 @@ The network works in the frame attached to the move (:mod:`latent_model.move_fra
 input is the cord in that frame and the move's length (plus the other end's move when both are
 held), its output the displacement of every point. The held ends' final positions are known
 exactly and are set, not predicted. An ensemble of ``members`` networks, batched as one module,
-gives a mean prediction and a spread that says how far to trust it.
+gives a mean prediction and a spread that says how far to trust it. A model may also hold a
+*mean network*: one network distilled from the ensemble's mean
+(:mod:`latent_model.transition_training`, ``teacher``), which then makes ``predict``'s
+prediction at the cost of one network; the ensemble still gives the spread.
 
 Example:
     >>> tm = TransitionModel.load_or_pretrained()
@@ -53,7 +56,7 @@ MODEL_FILE = "transition.pt"
 #: Predictions per network call in ``predict`` (keeps activations in cache).
 PREDICT_CHUNK = 4096
 #: Values of config fields added after the first files were written, for files without them.
-LEGACY_CONFIG = {"rim_targets": 1}
+LEGACY_CONFIG = {"rim_targets": 1, "mean_network": False}
 
 
 @dataclass(frozen=True)
@@ -75,6 +78,8 @@ class TransitionModelConfig:
         rim_targets: Targets whose rim vectors the network sees: 1, the leading end's (the
             first models); 2, both ends' (the other end's target is its start when it is not
             held).
+        mean_network: The model also holds one network distilled from the ensemble's mean,
+            which makes ``predict``'s prediction (the ensemble gives the spread).
     """
 
     n_points: int = 20
@@ -87,6 +92,7 @@ class TransitionModelConfig:
     output_scale: float = 0.1
     rim_reach: float = 0.35
     rim_targets: int = 2
+    mean_network: bool = False
 
     def __post_init__(self) -> None:
         positive_ints(self, "n_points", "members", "width", "depth")
@@ -159,6 +165,8 @@ class TransitionModel(nn.Module):
         self.config = config if config is not None else TransitionModelConfig()
         c = self.config
         self.net = EnsembleMLP(c.members, c.inputs, c.width, c.depth, 2 * c.n_points)
+        self.mean_net = (EnsembleMLP(1, c.inputs, c.width, c.depth, 2 * c.n_points)
+                         if c.mean_network else None)
         self.device = resolve_device(device)
         self.info = dict(info or {})
         self.to(self.device)
@@ -181,14 +189,17 @@ class TransitionModel(nn.Module):
                           both[:, None].to(points.dtype)], dim=1)
 
     def in_frame(self, shapes: torch.Tensor, grasp: torch.Tensor, moves: torch.Tensor,
-                 members: int | None = None) -> tuple[torch.Tensor, MoveFrame]:
+                 members: int | None = None, net: EnsembleMLP | None = None
+                 ) -> tuple[torch.Tensor, MoveFrame]:
         """Every member's prediction in the move frames, ``(members, B, n, 2)``, and the frames.
 
         ``shapes`` is ``(B, n, 2)`` (one frame per move, shared by the members) or
         ``(members, B, n, 2)`` (one start per member; frames then cover ``members * B``).
-        ``members`` runs only the first networks (shared frames only).
+        ``members`` runs only the first networks (shared frames only). ``net`` is the
+        networks to run (None: the ensemble; ``self.mean_net`` for the mean network).
         """
-        e, n = self.config.members, self.config.n_points
+        net = self.net if net is None else net
+        e, n = net.members, self.config.n_points
         per_member = shapes.dim() == 4
         if per_member and members is not None:
             raise ValueError("members applies to shapes shared by the members (B, n, 2), not to "
@@ -212,7 +223,7 @@ class TransitionModel(nn.Module):
                          into_frame(rim_vectors(target, TABLE_HALF, c.rim_reach),
                                     frame, reorder=False)], dim=1)  # (B, n + targets, 2)
         moved = self.predict_points(points, lead, other, both, rim,
-                                    (e, b) if per_member else None, members)
+                                    (e, b) if per_member else None, members, net)
         if per_member:
             points, lead, other, both = (t.reshape(e, b, *t.shape[1:])
                                          for t in (points, lead, other, both))
@@ -220,8 +231,8 @@ class TransitionModel(nn.Module):
 
     def predict_points(self, points: torch.Tensor, lead: torch.Tensor, other: torch.Tensor,
                        both: torch.Tensor, rim: torch.Tensor,
-                       members_batch: tuple[int, int] | None, members: int | None = None
-                       ) -> torch.Tensor:
+                       members_batch: tuple[int, int] | None, members: int | None = None,
+                       net: EnsembleMLP | None = None) -> torch.Tensor:
         """The members' points in the move frames, ``(members, B, n, 2)``, before the held
         ends are pinned: the one place where a model design differs.
 
@@ -231,16 +242,18 @@ class TransitionModel(nn.Module):
             rim: ``(B, n + rim_targets, 2)`` rim vectors of the points and the targets.
             members_batch: ``(members, B)`` when every member has its own input.
             members: Run only the first ``members`` networks (inputs shared).
+            net: The networks to run (None: the ensemble).
         """
         n = self.config.n_points
+        net = self.net if net is None else net
         x = self.features(points, lead, other, both, rim)
-        out = (self.net(x.reshape(*members_batch, -1)) if members_batch
-               else self.net(x, members))  # (E, B, 2n)
+        out = (net(x.reshape(*members_batch, -1)) if members_batch
+               else net(x, members))  # (E, B, 2n)
         e, b = out.shape[:2]
         return points.reshape(-1, b, n, 2) + self.config.output_scale * out.reshape(e, b, n, 2)
 
-    def forward(self, shapes: torch.Tensor, grasp: torch.Tensor, moves: torch.Tensor
-                ) -> torch.Tensor:
+    def forward(self, shapes: torch.Tensor, grasp: torch.Tensor, moves: torch.Tensor,
+                net: EnsembleMLP | None = None) -> torch.Tensor:
         """Every member's prediction, world ``(members, B, n, 2)``; differentiable.
 
         Args:
@@ -248,8 +261,9 @@ class TransitionModel(nn.Module):
                 member (a member's own previous prediction, when rolling out a chain).
             grasp: ``(B,)`` int64 grasp codes (0 head, 1 tail, 2 both).
             moves: ``(B, 2, 2)`` reachable displacement of [head, tail] (zero if not held).
+            net: The networks to run (None: the ensemble; ``self.mean_net``: one member).
         """
-        moved, frame = self.in_frame(shapes, grasp, moves)
+        moved, frame = self.in_frame(shapes, grasp, moves, net=net)
         e, b, n = moved.shape[:3]
         if shapes.dim() == 3:  # one frame per move: repeat it for the members
             frame = MoveFrame(frame.origin.repeat(e, 1), frame.cos.repeat(e),
@@ -274,13 +288,22 @@ class TransitionModel(nn.Module):
         ends = {"head": [0], "tail": [-1], "both": [0, -1]}[end]
         start = shapes[:, ends].astype(np.float64)  # (B, k, 2)
         d = displacement.reshape(len(shapes), len(ends), 2).astype(np.float64)
-        longest = np.linalg.norm(d, axis=-1).max(axis=-1, initial=0.0)
-        actions = np.maximum(1, np.ceil(longest / self.config.max_step - 1e-9)).astype(int)
-        step = d / actions[:, None, None]
-        pos = start.copy()
-        for j in range(int(actions.max(initial=0))):
-            going = j < actions
-            pos[going] = reachable_targets(pos[going] + step[going], self.cord_params)
+        pos = start + d
+        walk = np.ones(len(shapes), dtype=bool)
+        if len(ends) == 1:
+            # One end: the rule only clips to a box, and clipping after every step of a
+            # straight path is clipping its end point, when the start is inside the box.
+            walk = (reachable_targets(start, self.cord_params) != start).any(axis=(1, 2))
+            pos = reachable_targets(pos, self.cord_params)
+        if walk.any():  # step by step, as the environment's actions go
+            longest = np.linalg.norm(d[walk], axis=-1).max(axis=-1, initial=0.0)
+            actions = np.maximum(1, np.ceil(longest / self.config.max_step - 1e-9)).astype(int)
+            step = d[walk] / actions[:, None, None]
+            path = start[walk]
+            for j in range(int(actions.max(initial=0))):
+                going = j < actions
+                path[going] = reachable_targets(path[going] + step[going], self.cord_params)
+            pos[walk] = path
         moves = np.zeros((len(shapes), 2, 2), dtype=np.float32)
         if end == "both":
             moves[:] = pos - start
@@ -323,18 +346,21 @@ class TransitionModel(nn.Module):
                 then tail dx, dy) for both. Targets off the table are clipped as the
                 simulator clips them.
             return_std: Also return the ensemble's spread.
-            members: Use only the first ``members`` networks of the ensemble (None: all): the
-                networks' share of the time falls by ``self.config.members / members``, a
-                little less accurate; the spread needs two.
+            members: Use only the first ``members`` networks of the ensemble for the mean and
+                the spread (None: the model's prediction, below). Their share of the time
+                falls by ``self.config.members / members``, a little less accurate; the spread
+                needs two.
             inextensible: Move the mean onto the nearest shape whose segments have the
                 cord's rest length, the held ends kept (:mod:`latent_model.inextensible`):
                 more accurate (the simulator's links are rigid), at a small fixed cost per
                 call that planners making many small calls may skip.
 
         Returns:
-            float32 ``(B, n, 2)`` (``(n, 2)`` for one shape), the ensemble's mean, on the
-            table; with ``return_std`` also ``(B,)`` (``()``) the members' spread: the mean
-            over points of each point's standard deviation (metres).
+            float32 ``(B, n, 2)`` (``(n, 2)`` for one shape), on the table: the mean network's
+            prediction when the model has one (``config.mean_network``) and ``members`` is
+            None, else the mean of the ensemble's (first ``members``) networks; with
+            ``return_std`` also ``(B,)`` (``()``) the members' spread: the mean over points of
+            each point's standard deviation (metres).
         """
         arr, d, single = self._inputs(shapes, end, displacement)
         total = self.config.members
@@ -343,23 +369,27 @@ class TransitionModel(nn.Module):
             raise ValueError(f"members must be an int in 1..{total} or None, got {members!r}")
         if members is not None:
             members = int(members)
-        if return_std and members == 1:
+        if return_std and (members == 1 or (members is None and total == 1)):
             raise ValueError("return_std needs members >= 2 (one network has no spread), "
-                             "got members=1")
+                             f"got members={members or total}")
+        use_mean_net = members is None and self.mean_net is not None
         moves = self.reachable_moves(arr, end, d)
         grasp = torch.full((len(arr),), GRASP_CODES[end], dtype=torch.int64)
         means, spreads = [], []
         for lo in range(0, len(arr), PREDICT_CHUNK):
             part = slice(lo, lo + PREDICT_CHUNK)
-            moved, frame = self.in_frame(torch.from_numpy(arr[part]).to(self.device),
-                                         grasp[part].to(self.device),
-                                         torch.from_numpy(moves[part]).to(self.device),
-                                         members)
-            # Mean and spread in the frame (the spread does not depend on the frame's angle).
+            batch = (torch.from_numpy(arr[part]).to(self.device), grasp[part].to(self.device),
+                     torch.from_numpy(moves[part]).to(self.device))
+            if use_mean_net:
+                moved, frame = self.in_frame(*batch, net=self.mean_net)
+            if not use_mean_net or return_std:
+                ensemble, frame = self.in_frame(*batch, members)
+                if not use_mean_net:
+                    moved = ensemble
+                if return_std:  # in the frame: the spread does not depend on its angle
+                    var = ensemble.var(dim=0, unbiased=False).sum(dim=-1)  # (b, n)
+                    spreads.append(var.sqrt().mean(dim=-1))
             means.append(from_frame(moved.mean(dim=0), frame))
-            if return_std:
-                var = moved.var(dim=0, unbiased=False).sum(dim=-1)  # (b, n)
-                spreads.append(var.sqrt().mean(dim=-1))
         if not return_std:
             spreads = [torch.zeros(len(arr))]
         mean = torch.cat(means).cpu().numpy() if means else np.zeros((0,) + arr.shape[1:])
@@ -380,9 +410,14 @@ class TransitionModel(nn.Module):
     # ------------------------------------------------------------- persistence
     def state(self, half: bool = True) -> dict[str, Any]:
         """The checkpoint dict; weights in float16 when ``half`` (the shipped file's size)."""
-        weights = {k: (v.half() if half else v).cpu() for k, v in self.net.state_dict().items()}
-        return {"format": FORMAT, "format_version": FORMAT_VERSION,
-                "config": asdict(self.config), "net": weights, "info": self.info}
+        def weights(net: nn.Module) -> dict[str, torch.Tensor]:
+            return {k: (v.half() if half else v).cpu() for k, v in net.state_dict().items()}
+
+        state = {"format": FORMAT, "format_version": FORMAT_VERSION,
+                 "config": asdict(self.config), "net": weights(self.net), "info": self.info}
+        if self.mean_net is not None:
+            state["mean_net"] = weights(self.mean_net)
+        return state
 
     def save(self, path: str | os.PathLike, half: bool = True) -> Path:
         """Write the model to ``path`` (a file, or a folder that gets ``transition.pt``)."""
@@ -401,6 +436,9 @@ class TransitionModel(nn.Module):
             config = config_from_dict(TransitionModelConfig, values, "config")
             model = cls(config, device="cpu", info=data.get("info"))
             model.net.load_state_dict({k: v.float() for k, v in data["net"].items()})
+            if model.mean_net is not None:
+                model.mean_net.load_state_dict({k: v.float()
+                                                for k, v in data["mean_net"].items()})
         except (KeyError, TypeError, RuntimeError, ValueError) as exc:
             detail = " ".join(str(exc).split())  # torch's messages span several lines
             raise ValueError(f"{name}: the checkpoint's contents do not fit a TransitionModel: "
@@ -438,4 +476,4 @@ class TransitionModel(nn.Module):
     def extra_repr(self) -> str:
         c = self.config
         return (f"members={c.members}, width={c.width}, depth={c.depth}, "
-                f"n_points={c.n_points}, device={self.device}")
+                f"mean_network={c.mean_network}, n_points={c.n_points}, device={self.device}")

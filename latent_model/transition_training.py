@@ -7,6 +7,11 @@ plan are trained away. The loss is the mean per-point distance (the project's ``
 The frame of the move makes rigid-transform augmentation redundant: the model is exactly
 equivariant. Checkpoints are written atomically every ``eval_every`` steps; a run resumes
 from the last one. The learning rate follows a cosine decay over ``steps``.
+
+With a ``teacher`` (a trained model file) the run distils instead: the teacher's ensemble is
+copied and frozen, and only a *mean network* is trained, starting from the ensemble's first
+member, towards both the data and the ensemble's mean prediction. The result predicts at the
+cost of one network and keeps the ensemble for the spread.
 """
 
 from __future__ import annotations
@@ -29,7 +34,7 @@ from dlo_env.checks import non_negative, positive, positive_ints
 from dlo_env.dataset.transitions import GRASP_NAMES, TransitionDataset, split_transitions
 from latent_model.checkpoint import load_checkpoint, save_atomic
 from latent_model.config import LR_SCHEDULES, config_from_dict
-from latent_model.transition_model import TransitionModel, TransitionModelConfig
+from latent_model.transition_model import EnsembleMLP, TransitionModel, TransitionModelConfig
 
 #: Marks a file as a transition-training checkpoint (resumable state).
 CHECKPOINT_FORMAT = "dlo-transition-training"
@@ -55,6 +60,10 @@ class TransitionTrainConfig:
         seed: Seed of the initialisation, the split and the batches.
         init: Start from the weights of this transition model file (fine-tuning, e.g. after
             adding data); its architecture must be the one trained. None: random weights.
+        teacher: Distil a mean network for this transition model file (its ensemble is
+            copied unchanged; the architecture is the teacher's). None: train an ensemble.
+        teacher_weight: Weight of the error to the teacher's mean against the error to the
+            data, when distilling.
     """
 
     steps: int = 64_000
@@ -68,10 +77,15 @@ class TransitionTrainConfig:
     eval_every: int = 4000
     seed: int = 0
     init: str | None = None
+    teacher: str | None = None
+    teacher_weight: float = 1.0
 
     def __post_init__(self) -> None:
         positive_ints(self, "steps", "batch_size", "eval_every", "chain_moves")
-        non_negative(self, "chain_batch", "chain_weight")
+        non_negative(self, "chain_batch", "chain_weight", "teacher_weight")
+        if self.init and self.teacher:
+            raise ValueError("TransitionTrainConfig: give init (fine-tune the ensemble) or "
+                             "teacher (distil a mean network), not both")
         positive(self, "lr")
         if self.lr_schedule not in LR_SCHEDULES:
             raise ValueError(f"TransitionTrainConfig.lr_schedule must be one of {LR_SCHEDULES}, "
@@ -118,15 +132,16 @@ def chain_starts(episode: np.ndarray, step: np.ndarray, moves: int) -> np.ndarra
     return np.flatnonzero(ok)
 
 
-def rollout(model: TransitionModel, data: TransitionTensors, first: torch.Tensor, moves: int
-            ) -> list[torch.Tensor]:
+def rollout(model: TransitionModel, data: TransitionTensors, first: torch.Tensor, moves: int,
+            net: EnsembleMLP | None = None) -> list[torch.Tensor]:
     """Each member's predictions along chains starting at ``first``: ``moves`` tensors
-    ``(members, B, n, 2)``, the k-th after k+1 moves (each from the member's own last one)."""
+    ``(members, B, n, 2)``, the k-th after k+1 moves (each from the member's own last one);
+    ``net`` as in ``TransitionModel.forward``."""
     shapes: torch.Tensor = data.start[first]
     out = []
     for k in range(moves):
         idx = first + k
-        shapes = model(shapes, data.grasp[idx], data.moves[idx])
+        shapes = model(shapes, data.grasp[idx], data.moves[idx], net=net)
         out.append(shapes)
     return out
 
@@ -146,12 +161,34 @@ def _curve_row(path: Path, row: dict[str, Any]) -> None:
 
 
 @torch.no_grad()
-def validation_error(model: TransitionModel, data: TransitionTensors, limit: int = 4096
-                     ) -> float:
-    """Mean one-move error of the ensemble's mean on (at most ``limit``) transitions, metres."""
+def validation_error(model: TransitionModel, data: TransitionTensors, limit: int = 4096,
+                     net: EnsembleMLP | None = None) -> float:
+    """Mean one-move error of the ensemble's (``net``'s) mean on (at most ``limit``)
+    transitions, metres."""
     idx = torch.arange(min(limit, len(data.grasp)), device=model.device)
-    pred = model(data.start[idx], data.grasp[idx], data.moves[idx]).mean(dim=0)
+    pred = model(data.start[idx], data.grasp[idx], data.moves[idx], net=net).mean(dim=0)
     return float(point_error(pred, data.next[idx]).mean())
+
+
+@torch.no_grad()
+def ensemble_means(model: TransitionModel, data: TransitionTensors, chunk: int = 4096
+                   ) -> torch.Tensor:
+    """The ensemble's mean prediction of every transition, ``(T, n, 2)`` (distillation's
+    targets)."""
+    return torch.cat([model(data.start[lo:lo + chunk], data.grasp[lo:lo + chunk],
+                            data.moves[lo:lo + chunk]).mean(dim=0)
+                      for lo in range(0, len(data.grasp), chunk)])
+
+
+def _distil_from(teacher_path: str, mc: TransitionModelConfig) -> tuple[TransitionModel, dict]:
+    # The teacher, checked against the data's cord; the student's config is the teacher's.
+    teacher = TransitionModel.load(teacher_path, device="cpu")
+    tcfg = teacher.config
+    for field in ("n_points", "cord_length", "max_step"):
+        if getattr(tcfg, field) != getattr(mc, field):
+            raise ValueError(f"teacher {teacher_path!r} was trained for {field}="
+                             f"{getattr(tcfg, field)!r}, the data has {getattr(mc, field)!r}")
+    return teacher, {**asdict(tcfg), "mean_network": True}
 
 
 def train_transition_model(
@@ -193,28 +230,42 @@ def train_transition_model(
                                   "cord_length": float(cord.get("length", mc.cord_length)),
                                   "max_step": float(data.metadata.get("collect", {}).get(
                                       "max_step", mc.max_step))})
+    teacher = None
+    if tc.teacher:
+        teacher, values = _distil_from(tc.teacher, mc)
+        mc = TransitionModelConfig(**values)
     torch.manual_seed(tc.seed)
     model = model_class(mc, device=device)
-    if tc.init:
+    trained = model.net
+    if teacher is not None:  # the ensemble is the teacher's, frozen; the mean network learns
+        model.net.load_state_dict(teacher.net.state_dict())
+        model.net.requires_grad_(False)
+        trained = model.mean_net
+        with torch.no_grad():  # start from the ensemble's first member
+            for mine, theirs in zip(trained.parameters(), model.net.parameters()):
+                mine.copy_(theirs[:1])
+    elif tc.init:
         start = TransitionModel.load(tc.init, device="cpu")
         if asdict(start.config) != asdict(mc):
             raise ValueError(f"init {tc.init!r} is a model of another architecture or cord "
                              f"({start.config}) than the one trained ({mc})")
         model.net.load_state_dict(start.net.state_dict())
-    optimiser = torch.optim.Adam(model.net.parameters(), lr=tc.lr)
+    net = None if teacher is None else trained  # what the losses run
+    optimiser = torch.optim.Adam(trained.parameters(), lr=tc.lr)
     step = 0
     if resume and checkpoint.is_file():
         saved = load_checkpoint(checkpoint, str(checkpoint), kind=CHECKPOINT_FORMAT, version=1)
         if saved["train_config"] != asdict(tc) or saved["model_config"] != asdict(mc):
             raise ValueError(f"resume: {checkpoint} was written with other settings; use the "
                              "same settings or another --out")
-        model.net.load_state_dict(saved["net"])
+        trained.load_state_dict(saved["net"])
         optimiser.load_state_dict(saved["optimiser"])
         step = int(saved["step"])
     train, validation = split_transitions(data, tc.validation_fraction, seed=tc.seed)
     tr, va = as_tensors(model, train), as_tensors(model, validation)
     chains = {k: chain_starts(tr.episode, tr.step, k) for k in range(2, tc.chain_moves + 1)}
     chains = {k: torch.from_numpy(v).to(model.device) for k, v in chains.items() if len(v)}
+    targets = ensemble_means(model, tr) if teacher is not None else None
     gen = torch.Generator(device="cpu").manual_seed(tc.seed * 1_000_003 + step)
     info = {"data": data.metadata.get("collect", {}), "files": data.metadata.get("files"),
             "train_config": asdict(tc),
@@ -228,15 +279,18 @@ def train_transition_model(
         for group in optimiser.param_groups:
             group["lr"] = tc.lr * factor
         idx = torch.randint(len(tr.grasp), (tc.batch_size,), generator=gen).to(model.device)
-        pred = model(tr.start[idx], tr.grasp[idx], tr.moves[idx])
+        pred = model(tr.start[idx], tr.grasp[idx], tr.moves[idx], net=net)
         loss_one = point_error(pred, tr.next[idx][None]).mean()
         loss = loss_one
-        loss_chain = torch.zeros(())
+        loss_teacher = loss_chain = torch.zeros(())
+        if targets is not None:
+            loss_teacher = point_error(pred, targets[idx][None]).mean()
+            loss = loss + tc.teacher_weight * loss_teacher
         if chains and tc.chain_batch and tc.chain_weight:
             k = list(chains)[step % len(chains)]
             pick = torch.randint(len(chains[k]), (tc.chain_batch,), generator=gen)
             first = chains[k][pick.to(model.device)]
-            preds = rollout(model, tr, first, k)
+            preds = rollout(model, tr, first, k, net)
             loss_chain = torch.stack([point_error(p, tr.next[first + j][None]).mean()
                                       for j, p in enumerate(preds[1:], start=1)]).mean()
             loss = loss + tc.chain_weight * loss_chain
@@ -245,20 +299,25 @@ def train_transition_model(
         optimiser.step()
         step += 1
         stats = {"loss": float(loss_one.detach()), "chain": float(loss_chain.detach())}
+        if targets is not None:
+            stats["teacher"] = float(loss_teacher.detach())
         if step % tc.eval_every == 0 or step == tc.steps:
             model.eval()
-            stats["validation_cm"] = 100 * validation_error(model, va)
+            stats["validation_cm"] = 100 * validation_error(model, va, net=net)
             model.train()
             _curve_row(out / CURVE_FILE, {"step": step, "lr": tc.lr * factor, **stats,
                                           "seconds": round(time.perf_counter() - started, 1)})
             save_atomic({"format": CHECKPOINT_FORMAT, "format_version": 1, "step": step,
                          "train_config": asdict(tc), "model_config": asdict(mc),
-                         "net": model.net.state_dict(), "optimiser": optimiser.state_dict()},
+                         "net": trained.state_dict(), "optimiser": optimiser.state_dict()},
                         checkpoint)
         if progress is not None:
             progress(step, stats)
     model.eval()
-    model.info = {**info, "steps": step, "validation_cm": 100 * validation_error(model, va)}
+    model.info = {**info, "steps": step,
+                  "validation_cm": 100 * validation_error(model, va, net=net)}
+    if teacher is not None:  # the ensemble's own provenance, as the teacher recorded it
+        model.info["ensemble"] = teacher.info
     model.save(out)
     with atomic_path(out / "transition-info.json") as tmp:
         tmp.write_text(json.dumps(model.info, indent=1, sort_keys=True))

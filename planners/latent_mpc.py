@@ -30,8 +30,10 @@ class LatentMPCConfig(CEMConfig):
     once a plan is predicted within 1 cm halves the time for the same success.
 
     Attributes:
-        members: Ensemble members that score the candidates (the first ones; None: all).
-            Fewer is proportionally faster; the spread needs at least two.
+        members: Ensemble members that score the candidates (the first ones), or None: the
+            model's own prediction, its mean network when it has one (the shipped model: one
+            network's cost), else the whole ensemble. Fewer members is proportionally
+            faster; the spread needs at least two.
         spread_weight: Weight of the ensemble's spread of the final shape in the cost.
         settle_actions: Zero actions after each executed move, for the cord to come to rest
             (the model predicts shapes at rest).
@@ -47,7 +49,7 @@ class LatentMPCConfig(CEMConfig):
     init_std: float = 0.08
     max_move: float = 0.35
     stop_error: float = 0.01
-    members: int | None = 1
+    members: int | None = None
     spread_weight: float = 0.0
     settle_actions: int = 3
     inextensible: bool = False

@@ -32,6 +32,16 @@ def test_collect_then_train_a_transition_model_from_two_files(tmp_path, capsys):
     assert model.info["files"] == [str(first), str(second)]
     for name in ("transition-metrics.csv", "transition-metrics.png", "transition-training.csv"):
         assert (out / name).is_file()
+    mean = tmp_path / "mean"
+    distil = ["train", "--stage", "transition", "--data", str(first), "--heldout", str(second),
+              "--out", str(mean), "--steps", "10", "--batch-size", "32", "--eval-every", "10",
+              "--teacher", str(out / "transition.pt"), "--no-progress"]
+    assert main(distil + ["--width", "32"]) == 2
+    assert "not --teacher's mean network" in capsys.readouterr().err
+    assert main(distil) == 0
+    assert f"distilling {out / 'transition.pt'}" in capsys.readouterr().out
+    student = TransitionModel.load(mean)
+    assert student.config.mean_network and student.config.width == 16
 
 
 def test_each_kind_needs_its_own_count(tmp_path, capsys):

@@ -74,9 +74,11 @@ def test_near_the_rim_the_model_sees_the_rim(model):
 class _RimRecorder(TransitionModel):
     """Keeps the rim vectors the network was given."""
 
-    def predict_points(self, points, lead, other, both, rim, members_batch, members=None):
+    def predict_points(self, points, lead, other, both, rim, members_batch, members=None,
+                       net=None):
         self.rim = rim.clone()
-        return super().predict_points(points, lead, other, both, rim, members_batch, members)
+        return super().predict_points(points, lead, other, both, rim, members_batch, members,
+                                      net)
 
 
 @pytest.mark.parametrize("lead", ["head", "tail"])
@@ -287,3 +289,49 @@ def test_training_can_start_from_a_saved_model(data, tmp_path):
     wider = TransitionModelConfig(**{**TINY.__dict__, "width": 16})
     with pytest.raises(ValueError, match="another architecture"):
         train_transition_model(data, tmp_path / "c", still, wider, device="cpu")
+
+
+def test_distilling_keeps_the_ensemble_and_predicts_with_the_mean_network(data, tmp_path):
+    tc = TransitionTrainConfig(steps=40, batch_size=64, chain_batch=16, eval_every=20,
+                               validation_fraction=0.2)
+    train_transition_model(data, tmp_path / "teacher", tc, TINY, device="cpu")
+    teacher = TransitionModel.load(tmp_path / "teacher", device="cpu")  # as on disk: float16
+    distil = TransitionTrainConfig(**{**tc.__dict__, "lr": 3e-3, "teacher_weight": 20,
+                                      "teacher": str(tmp_path / "teacher" / "transition.pt")})
+    student = train_transition_model(data, tmp_path / "student", distil, device="cpu")
+    assert student.config.mean_network and student.mean_net.members == 1
+    assert student.config.width == TINY.width  # the teacher's architecture, not the default's
+    for mine, theirs in zip(student.net.state_dict().values(),
+                            teacher.net.state_dict().values()):
+        assert torch.equal(mine, theirs)  # the ensemble is the teacher's, unchanged
+    idx = np.flatnonzero(data.grasp == 0)
+    shapes, d = data.start[idx], data.end_displacement(idx)
+    ensemble = teacher.predict(shapes, "head", d)
+    assert np.array_equal(student.predict(shapes, "head", d, members=TINY.members), ensemble)
+    pred, spread = student.predict(shapes, "head", d, return_std=True)
+    assert np.array_equal(pred, student.predict(shapes, "head", d))  # one prediction
+    assert not np.allclose(pred, ensemble, atol=1e-4)  # ... and it is the mean network's
+    assert np.array_equal(spread, teacher.predict(shapes, "head", d, return_std=True)[1])
+
+    # The mean network learnt: closer to the ensemble's mean than the member it started from.
+    first = student.predict(shapes, "head", d, members=1)
+    assert error(pred, ensemble).mean() < error(first, ensemble).mean()
+    # Equivariant like the ensemble (away from the rim), and saved with the model.
+    away, move = _shapes(6, seed=11), np.full((6, 2), 0.05, dtype=np.float32)
+    turned = student.predict(_turn(away, 0.7, np.array([0.05, -0.1])), "head",
+                             _turn(move, 0.7, np.zeros(2)))
+    assert np.abs(turned - _turn(student.predict(away, "head", move), 0.7,
+                                 np.array([0.05, -0.1]))).max() < 1e-5
+    loaded = TransitionModel.load(tmp_path / "student", device="cpu")
+    assert loaded.config.mean_network
+    for mine, saved in zip(student.mean_net.parameters(), loaded.mean_net.parameters()):
+        assert torch.equal(mine.detach().half().float(), saved)  # float16 on disk
+
+    with pytest.raises(ValueError, match="not both"):
+        TransitionTrainConfig(init="a.pt", teacher="b.pt")
+    other = TransitionModel(TransitionModelConfig(n_points=12, width=8, depth=1, members=2),
+                            device="cpu")
+    other.save(tmp_path / "other.pt")
+    wrong = TransitionTrainConfig(**{**distil.__dict__, "teacher": str(tmp_path / "other.pt")})
+    with pytest.raises(ValueError, match="n_points"):
+        train_transition_model(data, tmp_path / "wrong", wrong, device="cpu")
