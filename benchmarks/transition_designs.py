@@ -39,16 +39,17 @@ class LatentTransitionModel(TransitionModel):
 
     def __init__(self, config: TransitionModelConfig | None = None,
                  device: str | torch.device = "auto", info: dict | None = None) -> None:
-        super().__init__(config, device, info)
         gan = self.shape_model
         assert gan is not None, "set LatentTransitionModel.shape_model first"
         for p in list(gan.generator.parameters()) + list(gan.encoder.parameters()):
             p.requires_grad_(False)
-        c = self.config
         self.latent_dim = gan.latent_dim
+        super().__init__(config, device, info)
+
+    def networks(self, members: int) -> EnsembleMLP:  # noqa: D102
+        c = self.config
         inputs = self.latent_dim + 2 * (c.n_points + 1) + 4  # latent, rim vectors, the move
-        self.net = EnsembleMLP(c.members, inputs, c.width, c.depth,
-                               self.latent_dim).to(self.device)
+        return EnsembleMLP(members, inputs, c.width, c.depth, self.latent_dim)
 
     def predict_points(self, points, lead, other, both, rim, members_batch,  # noqa: D102
                        members=None, net=None):

@@ -250,7 +250,7 @@ def predictors(model: TransitionModel) -> dict[str, int | None]:
     e = model.config.members
     ways: dict[str, int | None] = {"mean network": None} if model.mean_net is not None else {}
     for k in range(1, e + 1):
-        ways[f"{k} of {e}"] = None if k == e and not ways else k
+        ways[f"{k} of {e}"] = None if k == e and model.mean_net is None else k
     return ways
 
 

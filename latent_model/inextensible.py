@@ -67,4 +67,6 @@ def make_inextensible(points: np.ndarray, rest: float, pin_first: np.ndarray,
             ya += share_a * dy
             xb -= share_b * dx
             yb -= share_b * dy
-    return np.stack([x.T, y.T], axis=-1)
+    out = np.empty(p.shape, dtype=np.float32)
+    out[..., 0], out[..., 1] = x.T, y.T
+    return out

@@ -164,9 +164,8 @@ class TransitionModel(nn.Module):
         super().__init__()
         self.config = config if config is not None else TransitionModelConfig()
         c = self.config
-        self.net = EnsembleMLP(c.members, c.inputs, c.width, c.depth, 2 * c.n_points)
-        self.mean_net = (EnsembleMLP(1, c.inputs, c.width, c.depth, 2 * c.n_points)
-                         if c.mean_network else None)
+        self.net = self.networks(c.members)
+        self.mean_net = self.networks(1) if c.mean_network else None
         self.device = resolve_device(device)
         self.info = dict(info or {})
         self.to(self.device)
@@ -178,6 +177,11 @@ class TransitionModel(nn.Module):
         return CordParams(n_points=self.config.n_points, length=self.config.cord_length)
 
     # ------------------------------------------------------------- torch core
+    def networks(self, members: int) -> EnsembleMLP:
+        """``members`` new networks of this design (the ensemble, or one: the mean network)."""
+        c = self.config
+        return EnsembleMLP(members, c.inputs, c.width, c.depth, 2 * c.n_points)
+
     def features(self, points: torch.Tensor, lead: torch.Tensor, other: torch.Tensor,
                  both: torch.Tensor, rim: torch.Tensor) -> torch.Tensor:
         """Network input ``(B, inputs)`` from a batch described in the move frames."""

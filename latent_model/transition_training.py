@@ -17,12 +17,13 @@ cost of one network and keeps the ensemble for the spread.
 from __future__ import annotations
 
 import csv
+import hashlib
 import json
 import math
 import os
 import time
 from collections.abc import Callable
-from dataclasses import asdict, dataclass
+from dataclasses import asdict, dataclass, replace
 from pathlib import Path
 from typing import Any
 
@@ -34,7 +35,12 @@ from dlo_env.checks import non_negative, positive, positive_ints
 from dlo_env.dataset.transitions import GRASP_NAMES, TransitionDataset, split_transitions
 from latent_model.checkpoint import load_checkpoint, save_atomic
 from latent_model.config import LR_SCHEDULES, config_from_dict
-from latent_model.transition_model import EnsembleMLP, TransitionModel, TransitionModelConfig
+from latent_model.transition_model import (
+    LEGACY_CONFIG,
+    EnsembleMLP,
+    TransitionModel,
+    TransitionModelConfig,
+)
 
 #: Marks a file as a transition-training checkpoint (resumable state).
 CHECKPOINT_FORMAT = "dlo-transition-training"
@@ -59,7 +65,9 @@ class TransitionTrainConfig:
         eval_every: Steps between validation, checkpoint and a row of the training curve.
         seed: Seed of the initialisation, the split and the batches.
         init: Start from the weights of this transition model file (fine-tuning, e.g. after
-            adding data); its architecture must be the one trained. None: random weights.
+            adding data); its architecture must be the one trained. A mean network it holds
+            is not kept (it would not fit the tuned ensemble: distil again). None: random
+            weights.
         teacher: Distil a mean network for this transition model file (its ensemble is
             copied unchanged; the architecture is the teacher's). None: train an ensemble.
         teacher_weight: Weight of the error to the teacher's mean against the error to the
@@ -180,6 +188,15 @@ def ensemble_means(model: TransitionModel, data: TransitionTensors, chunk: int =
                       for lo in range(0, len(data.grasp), chunk)])
 
 
+def fingerprint(net: EnsembleMLP) -> str:
+    """A short SHA-256 of a network's weights: which ensemble a mean network was distilled
+    from, whatever file it came in."""
+    digest = hashlib.sha256()
+    for value in net.state_dict().values():
+        digest.update(value.detach().float().cpu().numpy().tobytes())
+    return digest.hexdigest()[:16]
+
+
 def _distil_from(teacher_path: str, mc: TransitionModelConfig) -> tuple[TransitionModel, dict]:
     # The teacher, checked against the data's cord; the student's config is the teacher's.
     teacher = TransitionModel.load(teacher_path, device="cpu")
@@ -230,6 +247,10 @@ def train_transition_model(
                                   "cord_length": float(cord.get("length", mc.cord_length)),
                                   "max_step": float(data.metadata.get("collect", {}).get(
                                       "max_step", mc.max_step))})
+    if mc.mean_network and not tc.teacher:
+        raise ValueError("model_config.mean_network: a mean network is made by distilling a "
+                         "trained ensemble (TransitionTrainConfig.teacher, --teacher), not "
+                         "trained with it")
     teacher = None
     if tc.teacher:
         teacher, values = _distil_from(tc.teacher, mc)
@@ -246,18 +267,24 @@ def train_transition_model(
                 mine.copy_(theirs[:1])
     elif tc.init:
         start = TransitionModel.load(tc.init, device="cpu")
-        if asdict(start.config) != asdict(mc):
+        if asdict(replace(start.config, mean_network=False)) != asdict(mc):
             raise ValueError(f"init {tc.init!r} is a model of another architecture or cord "
                              f"({start.config}) than the one trained ({mc})")
         model.net.load_state_dict(start.net.state_dict())
     net = None if teacher is None else trained  # what the losses run
+    teacher_ensemble = None if teacher is None else fingerprint(model.net)
     optimiser = torch.optim.Adam(trained.parameters(), lr=tc.lr)
     step = 0
     if resume and checkpoint.is_file():
         saved = load_checkpoint(checkpoint, str(checkpoint), kind=CHECKPOINT_FORMAT, version=1)
-        if saved["train_config"] != asdict(tc) or saved["model_config"] != asdict(mc):
+        saved_mc = config_from_dict(TransitionModelConfig,
+                                    {**LEGACY_CONFIG, **saved["model_config"]}, "model_config")
+        if config_from_json(saved["train_config"]) != tc or saved_mc != mc:
             raise ValueError(f"resume: {checkpoint} was written with other settings; use the "
                              "same settings or another --out")
+        if saved.get("teacher_ensemble", teacher_ensemble) != teacher_ensemble:
+            raise ValueError(f"resume: {checkpoint} distils another ensemble than teacher "
+                             f"{tc.teacher!r} holds now; use that teacher or another --out")
         trained.load_state_dict(saved["net"])
         optimiser.load_state_dict(saved["optimiser"])
         step = int(saved["step"])
@@ -309,15 +336,18 @@ def train_transition_model(
                                           "seconds": round(time.perf_counter() - started, 1)})
             save_atomic({"format": CHECKPOINT_FORMAT, "format_version": 1, "step": step,
                          "train_config": asdict(tc), "model_config": asdict(mc),
-                         "net": trained.state_dict(), "optimiser": optimiser.state_dict()},
+                         "net": trained.state_dict(), "optimiser": optimiser.state_dict(),
+                         "teacher_ensemble": teacher_ensemble},
                         checkpoint)
         if progress is not None:
             progress(step, stats)
     model.eval()
     model.info = {**info, "steps": step,
                   "validation_cm": 100 * validation_error(model, va, net=net)}
-    if teacher is not None:  # the ensemble's own provenance, as the teacher recorded it
-        model.info["ensemble"] = teacher.info
+    if teacher is not None:  # the ensemble's own provenance, as its training recorded it
+        model.info["ensemble"] = (teacher.info.get("ensemble", teacher.info)
+                                  if teacher.config.mean_network else teacher.info)
+        model.info["teacher_ensemble"] = teacher_ensemble
     model.save(out)
     with atomic_path(out / "transition-info.json") as tmp:
         tmp.write_text(json.dumps(model.info, indent=1, sort_keys=True))

@@ -25,15 +25,15 @@ from planners.cem import CEMConfig, CEMPolicy
 class LatentMPCConfig(CEMConfig):
     """CEM budget of latent-mpc (the model is cheap: many more samples than physics-mpc) and
     how it uses the model. The defaults were chosen on the train splits of linear-1 to
-    linear-5 (``benchmarks/tune_latent_mpc.py``; the sweep is in docs/planners.md): one member
+    linear-5 (``benchmarks/tune_latent_mpc.py``; the sweep is in docs/planners.md): one network
     scores as well as five at a fifth of the cost, a horizon of 3 moves beats 2, and stopping
     once a plan is predicted within 1 cm halves the time for the same success.
 
     Attributes:
         members: Ensemble members that score the candidates (the first ones), or None: the
-            model's own prediction, its mean network when it has one (the shipped model: one
-            network's cost), else the whole ensemble. Fewer members is proportionally
-            faster; the spread needs at least two.
+            model's mean network when it has one (the shipped model), else the ensemble's
+            first network (all of them with ``spread_weight``), one network's cost either way.
+            More members cost proportionally more; the spread needs at least two.
         spread_weight: Weight of the ensemble's spread of the final shape in the cost.
         settle_actions: Zero actions after each executed move, for the cord to come to rest
             (the model predicts shapes at rest).
@@ -86,6 +86,10 @@ class LatentMPCPolicy(CEMPolicy):
                              f"got {config.members}")
         super().__init__(model.cord_params, grasp, model.config.max_step, success_threshold,
                          config)
+        #: ``predict``'s ``members``: None runs the mean network, or the whole ensemble.
+        self.members = config.members
+        if config.members is None and getattr(model, "mean_net", None) is None:
+            self.members = None if config.spread_weight > 0 else 1
 
     @classmethod
     def for_env(cls, env: object, config: LatentMPCConfig | None = None,
@@ -126,10 +130,10 @@ class LatentMPCPolicy(CEMPolicy):
             moves = candidates[:, k].reshape(len(candidates), -1)
             if cfg.spread_weight > 0:
                 shapes, spread = self.model.predict(shapes, self.grasp, moves, return_std=True,
-                                                    members=cfg.members,
+                                                    members=self.members,
                                                     inextensible=cfg.inextensible)
             else:
-                shapes = self.model.predict(shapes, self.grasp, moves, members=cfg.members,
+                shapes = self.model.predict(shapes, self.grasp, moves, members=self.members,
                                             inextensible=cfg.inextensible)
         return error(shapes, goal) + cfg.spread_weight * spread
 

@@ -133,6 +133,25 @@ def test_the_held_ends_go_exactly_where_the_simulators_grippers_go(model):
                 assert np.allclose(p[0], grips["head"], atol=1e-5)
 
 
+def test_a_held_end_starting_beyond_the_grippers_reach_moves_as_the_simulators_does(model):
+    # The grippers stay rim_margin inside the edge; a cord may lie closer. From there the
+    # clipping goes action by action, as the environment's actions do.
+    shapes = _shapes(6, seed=12)
+    shapes = shapes - shapes[:, :1] + np.array([0.995, 0.0], dtype=np.float32)  # head at the rim
+    shapes[:, :, 0] -= np.maximum(shapes[:, :, 0].max(axis=1, keepdims=True) - 0.999, 0.0)
+    assert (shapes[:, 0, 0] > 1.0 - model.cord_params.rim_margin).any()
+    d = np.random.default_rng(12).uniform(-0.3, 0.3, size=(6, 2)).astype(np.float32)
+    d[0] = [-0.01, 0.2]  # barely away from the edge: the first actions are clipped
+    d[1] = [0.1, 0.0]  # into the edge
+    pred = model.predict(shapes, "head", d)
+    for shape, m, p in zip(shapes, d, pred):
+        cord = Cord(grasp="head")
+        cord.reset(shape)
+        for action in split_move(m, DEFAULT_MAX_STEP):
+            apply_action(cord, action, DEFAULT_MAX_STEP)
+        assert np.allclose(p[0], cord.gripper_positions()["head"], atol=1e-5)
+
+
 def test_no_move_leaves_the_cord_where_it_lies_and_targets_are_clipped_like_the_cord(model):
     shapes = _shapes(4, seed=4)
     assert np.array_equal(model.predict(shapes, "head", np.zeros((4, 2))), shapes)
@@ -196,6 +215,8 @@ def test_the_first_members_alone_are_the_first_members_of_the_ensemble(model):
     assert (spread > 0).all()
     with pytest.raises(ValueError, match="return_std needs members >= 2"):
         model.predict(shapes, "tail", d, return_std=True, members=1)
+    with pytest.raises(ValueError, match="return_std needs members >= 2"):
+        solo.predict(shapes, "tail", d, return_std=True)  # a one-network ensemble
     for bad in (0, 4, 1.5, True):
         with pytest.raises(ValueError, match="members must be an int in 1..3"):
             model.predict(shapes, "tail", d, members=bad)
@@ -327,11 +348,79 @@ def test_distilling_keeps_the_ensemble_and_predicts_with_the_mean_network(data, 
     for mine, saved in zip(student.mean_net.parameters(), loaded.mean_net.parameters()):
         assert torch.equal(mine.detach().half().float(), saved)  # float16 on disk
 
+    # predict's result is an ordinary C-ordered array, as the caller's next call expects
+    assert pred.flags["C_CONTIGUOUS"] and spread.flags["C_CONTIGUOUS"]
     with pytest.raises(ValueError, match="not both"):
         TransitionTrainConfig(init="a.pt", teacher="b.pt")
+    with pytest.raises(ValueError, match="mean network is made by distilling"):
+        train_transition_model(data, tmp_path / "x", tc,
+                               TransitionModelConfig(**{**TINY.__dict__, "mean_network": True}),
+                               device="cpu")
+    # Fine-tuning a distilled model tunes its ensemble; the old mean network is not kept.
+    still = TransitionTrainConfig(**{**tc.__dict__, "steps": 1, "lr": 1e-12,
+                                     "init": str(tmp_path / "student" / "transition.pt")})
+    tuned = train_transition_model(data, tmp_path / "tuned", still, TINY, device="cpu")
+    assert not tuned.config.mean_network and tuned.mean_net is None
+    assert np.allclose(tuned.predict(shapes, "head", d), ensemble, atol=1e-3)
     other = TransitionModel(TransitionModelConfig(n_points=12, width=8, depth=1, members=2),
                             device="cpu")
     other.save(tmp_path / "other.pt")
     wrong = TransitionTrainConfig(**{**distil.__dict__, "teacher": str(tmp_path / "other.pt")})
     with pytest.raises(ValueError, match="n_points"):
         train_transition_model(data, tmp_path / "wrong", wrong, device="cpu")
+
+
+class _Stop(Exception):
+    pass
+
+
+def test_an_interrupted_distillation_resumes_from_its_checkpoint_and_only_with_its_teacher(
+        data, tmp_path):
+    tc = TransitionTrainConfig(steps=20, batch_size=32, chain_batch=8, eval_every=20,
+                               validation_fraction=0.2)
+    train_transition_model(data, tmp_path / "teacher", tc, TINY, device="cpu")
+    teacher = str(tmp_path / "teacher" / "transition.pt")
+    distil = TransitionTrainConfig(**{**tc.__dict__, "steps": 40, "eval_every": 10,
+                                      "teacher": teacher})
+
+    def stop_at_25(step, stats):
+        if step == 25:
+            raise _Stop
+
+    with pytest.raises(_Stop):
+        train_transition_model(data, tmp_path / "student", distil, device="cpu",
+                               progress=stop_at_25)
+    assert len((tmp_path / "student" / CURVE_FILE).read_text().splitlines()) == 3  # 10, 20
+    steps = []
+    done = train_transition_model(data, tmp_path / "student", distil, device="cpu",
+                                  resume=True, progress=lambda step, stats: steps.append(step))
+    assert steps[0] == 21 and steps[-1] == 40 and done.info["steps"] == 40
+    assert done.info["teacher_ensemble"] and done.config.mean_network
+
+    # A teacher file that now holds another ensemble is refused, not silently mixed in.
+    torch.manual_seed(5)
+    TransitionModel(TINY, device="cpu").save(teacher)
+    longer = TransitionTrainConfig(**{**distil.__dict__, "steps": 40})
+    with pytest.raises(ValueError, match="distils another ensemble"):
+        train_transition_model(data, tmp_path / "student", longer, device="cpu", resume=True)
+
+
+def test_a_checkpoint_from_before_distillation_existed_still_resumes(data, tmp_path):
+    tc = TransitionTrainConfig(steps=20, batch_size=32, chain_batch=8, eval_every=10,
+                               validation_fraction=0.2)
+
+    def stop_at_15(step, stats):
+        if step == 15:
+            raise _Stop
+
+    with pytest.raises(_Stop):
+        train_transition_model(data, tmp_path, tc, TINY, device="cpu", progress=stop_at_15)
+    path = tmp_path / "transition-checkpoint.pt"
+    saved = torch.load(path, weights_only=True)
+    for key in ("teacher", "teacher_weight"):  # as the files written before these fields
+        del saved["train_config"][key]
+    del saved["model_config"]["mean_network"]
+    del saved["teacher_ensemble"]
+    torch.save(saved, path)
+    done = train_transition_model(data, tmp_path, tc, TINY, device="cpu", resume=True)
+    assert done.info["steps"] == 20

@@ -85,3 +85,14 @@ def test_an_episode_plans_the_same_whatever_ran_before_it():
     np.testing.assert_array_equal(first_action(tasks[0], True), fresh)
     policy.reset()
     np.testing.assert_array_equal(first_action(tasks[0], False), fresh)
+
+
+def test_by_default_it_scores_with_one_network_the_mean_network_when_there_is_one():
+    ensemble_only = TransitionModel(TINY, device="cpu")
+    assert LatentMPCPolicy(ensemble_only).members == 1  # the ensemble's first network
+    spread = LatentMPCConfig(spread_weight=0.1)
+    assert LatentMPCPolicy(ensemble_only, config=spread).members is None  # all: a spread
+    with_mean = TransitionModel(TransitionModelConfig(**{**TINY.__dict__, "mean_network": True}),
+                                device="cpu")
+    assert LatentMPCPolicy(with_mean).members is None  # predict's default: the mean network
+    assert LatentMPCPolicy(with_mean, config=LatentMPCConfig(members=2)).members == 2
