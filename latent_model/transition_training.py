@@ -173,19 +173,23 @@ def validation_error(model: TransitionModel, data: TransitionTensors, limit: int
                      net: EnsembleMLP | None = None) -> float:
     """Mean one-move error of the ensemble's (``net``'s) mean on (at most ``limit``)
     transitions, metres."""
-    idx = torch.arange(min(limit, len(data.grasp)), device=model.device)
-    pred = model(data.start[idx], data.grasp[idx], data.moves[idx], net=net).mean(dim=0)
-    return float(point_error(pred, data.next[idx]).mean())
+    pred = mean_predictions(model, data, net, limit)
+    return float(point_error(pred, data.next[:len(pred)]).mean())
 
 
 @torch.no_grad()
-def ensemble_means(model: TransitionModel, data: TransitionTensors, chunk: int = 4096
-                   ) -> torch.Tensor:
-    """The ensemble's mean prediction of every transition, ``(T, n, 2)`` (distillation's
-    targets)."""
-    return torch.cat([model(data.start[lo:lo + chunk], data.grasp[lo:lo + chunk],
-                            data.moves[lo:lo + chunk]).mean(dim=0)
-                      for lo in range(0, len(data.grasp), chunk)])
+def mean_predictions(model: TransitionModel, data: TransitionTensors,
+                     net: EnsembleMLP | None = None, limit: int | None = None,
+                     chunk: int = 4096) -> torch.Tensor:
+    """The mean prediction of the ensemble (``net``) for the first ``limit`` (None: every)
+    transitions, ``(T, n, 2)``: validation, and distillation's targets."""
+    count = len(data.grasp) if limit is None else min(limit, len(data.grasp))
+    parts = []
+    for lo in range(0, count, chunk):
+        part = slice(lo, min(lo + chunk, count))
+        parts.append(model(data.start[part], data.grasp[part], data.moves[part],
+                           net=net).mean(dim=0))
+    return torch.cat(parts)
 
 
 def fingerprint(net: EnsembleMLP) -> str:
@@ -197,7 +201,8 @@ def fingerprint(net: EnsembleMLP) -> str:
     return digest.hexdigest()[:16]
 
 
-def _distil_from(teacher_path: str, mc: TransitionModelConfig) -> tuple[TransitionModel, dict]:
+def _distil_from(teacher_path: str, mc: TransitionModelConfig
+                 ) -> tuple[TransitionModel, TransitionModelConfig]:
     # The teacher, checked against the data's cord; the student's config is the teacher's.
     teacher = TransitionModel.load(teacher_path, device="cpu")
     tcfg = teacher.config
@@ -205,7 +210,7 @@ def _distil_from(teacher_path: str, mc: TransitionModelConfig) -> tuple[Transiti
         if getattr(tcfg, field) != getattr(mc, field):
             raise ValueError(f"teacher {teacher_path!r} was trained for {field}="
                              f"{getattr(tcfg, field)!r}, the data has {getattr(mc, field)!r}")
-    return teacher, {**asdict(tcfg), "mean_network": True}
+    return teacher, replace(tcfg, mean_network=True)
 
 
 def train_transition_model(
@@ -253,8 +258,7 @@ def train_transition_model(
                          "trained with it")
     teacher = None
     if tc.teacher:
-        teacher, values = _distil_from(tc.teacher, mc)
-        mc = TransitionModelConfig(**values)
+        teacher, mc = _distil_from(tc.teacher, mc)
     torch.manual_seed(tc.seed)
     model = model_class(mc, device=device)
     trained = model.net
@@ -292,7 +296,7 @@ def train_transition_model(
     tr, va = as_tensors(model, train), as_tensors(model, validation)
     chains = {k: chain_starts(tr.episode, tr.step, k) for k in range(2, tc.chain_moves + 1)}
     chains = {k: torch.from_numpy(v).to(model.device) for k, v in chains.items() if len(v)}
-    targets = ensemble_means(model, tr) if teacher is not None else None
+    targets = mean_predictions(model, tr) if teacher is not None else None
     gen = torch.Generator(device="cpu").manual_seed(tc.seed * 1_000_003 + step)
     info = {"data": data.metadata.get("collect", {}), "files": data.metadata.get("files"),
             "train_config": asdict(tc),
