@@ -32,6 +32,12 @@ from latent_model.transition_model import EnsembleMLP, TransitionModel, Transiti
 from latent_model.transition_training import TransitionTrainConfig, train_transition_model
 
 
+#: The settings both designs train with: those of the comparison in docs/transition_model.md
+#: (the defaults when it was run; later defaults are the shape-space model's own tuning).
+DESIGN_MODEL = TransitionModelConfig(rim_reach=0.15, rim_targets=1, mirror=False)
+DESIGN_CHAIN_WEIGHT = 0.5
+
+
 class LatentTransitionModel(TransitionModel):
     """Design (b): predict the next GAN latent of the cord in the move frame."""
 
@@ -48,7 +54,7 @@ class LatentTransitionModel(TransitionModel):
 
     def networks(self, members: int) -> EnsembleMLP:  # noqa: D102
         c = self.config
-        inputs = self.latent_dim + 2 * (c.n_points + 1) + 4  # latent, rim vectors, the move
+        inputs = self.latent_dim + 2 * (c.n_points + c.rim_targets) + 4  # latent, rim, move
         return EnsembleMLP(members, inputs, c.width, c.depth, self.latent_dim)
 
     def predict_points(self, points, lead, other, both, rim, members_batch,  # noqa: D102
@@ -76,12 +82,13 @@ def main() -> None:
     args = parser.parse_args()
     data, heldout = load_transitions(args.data), load_transitions(args.heldout)
     LatentTransitionModel.shape_model = ShapeModel.load_or_pretrained(args.shape_model, "cpu")
-    tc = TransitionTrainConfig(steps=args.steps, eval_every=max(args.steps // 4, 1))
+    tc = TransitionTrainConfig(steps=args.steps, eval_every=max(args.steps // 4, 1),
+                               chain_weight=DESIGN_CHAIN_WEIGHT)
     results = {}
     for name, cls in (("shape space", TransitionModel), ("latent space", LatentTransitionModel)):
         out = Path(args.out) / name.replace(" ", "-")
         started = time.perf_counter()
-        model = train_transition_model(data, out, tc, resume=True, device="cpu",
+        model = train_transition_model(data, out, tc, DESIGN_MODEL, resume=True, device="cpu",
                                        model_class=cls)
         minutes = (time.perf_counter() - started) / 60
         rows, rank = transition_report(model, heldout, max_moves=2)

@@ -36,6 +36,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--teacher-weight", type=float, default=None,
                         help="--stage transition with --teacher: weight of the error to the "
                              "teacher's mean against the error to the data (None: 1)")
+    parser.add_argument("--chain-weight", type=float, default=None,
+                        help="--stage transition: weight of the loss on rolled-out chains of "
+                             "2-3 moves (0: one-move loss only; None: TransitionTrainConfig's)")
     parser.add_argument("--lr", type=float, default=None,
                         help="--stage transition: starting learning rate (None: "
                              "TransitionTrainConfig's; lower it when fine-tuning with --init)")

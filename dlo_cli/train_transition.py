@@ -53,7 +53,8 @@ def run(args: argparse.Namespace) -> int:
                                   "eval_every": args.eval_every, "seed": args.seed,
                                   "init": args.init, "lr": args.lr,
                                   "teacher": args.teacher,
-                                  "teacher_weight": args.teacher_weight}.items()
+                                  "teacher_weight": args.teacher_weight,
+                                  "chain_weight": args.chain_weight}.items()
                 if v is not None}
     model_kw = {k: v for k, v in {"width": args.width, "members": args.members,
                                   "rim_reach": args.rim_reach,

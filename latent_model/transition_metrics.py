@@ -25,11 +25,31 @@ from latent_model.transition_training import chain_starts
 LENGTH_BINS = ((0, 5), (5, 15), (15, 25), (25, 36))
 #: A prediction within this of the simulator is "within 1 cm", metres.
 WITHIN = 0.01
+#: Resamples of the bootstrap interval of a mean, and its seed (the interval is reproducible).
+BOOTSTRAP = 2000
+BOOTSTRAP_SEED = 0
+
+
+def mean_interval(errors: np.ndarray, level: float = 0.95) -> tuple[float, float]:
+    """Percentile-bootstrap interval of the mean of ``errors``: how far the mean of another
+    file of as many moves from the same distribution may lie (a few large misses move it)."""
+    e = np.asarray(errors, dtype=np.float64)
+    if len(e) < 2:
+        return float("nan"), float("nan")
+    rng = np.random.default_rng(BOOTSTRAP_SEED)
+    means = np.empty(BOOTSTRAP)
+    for lo in range(0, BOOTSTRAP, 250):  # bounded memory for large files
+        k = min(250, BOOTSTRAP - lo)
+        means[lo:lo + k] = e[rng.integers(0, len(e), (k, len(e)))].mean(axis=1)
+    tail = 100 * (1 - level) / 2
+    low, high = np.percentile(means, [tail, 100 - tail])
+    return float(low), float(high)
 
 
 @dataclass(frozen=True)
 class ErrorRow:
-    """Error statistics of one group of predictions, centimetres."""
+    """Error statistics of one group of predictions, centimetres; ``mean_low_cm`` and
+    ``mean_high_cm`` bound the mean's 95 % bootstrap interval."""
 
     moves: int
     group: str
@@ -38,6 +58,8 @@ class ErrorRow:
     median_cm: float
     p99_cm: float
     within_1cm: float
+    mean_low_cm: float = float("nan")
+    mean_high_cm: float = float("nan")
 
     @classmethod
     def of(cls, moves: int, group: str, errors: np.ndarray) -> ErrorRow:
@@ -45,8 +67,10 @@ class ErrorRow:
         e = np.asarray(errors, dtype=np.float64)
         if len(e) == 0:
             return cls(moves, group, 0, *(float("nan"),) * 4)
+        low, high = mean_interval(e)
         return cls(moves, group, len(e), 100 * e.mean(), 100 * float(np.median(e)),
-                   100 * float(np.percentile(e, 99)), float((e <= WITHIN).mean()))
+                   100 * float(np.percentile(e, 99)), float((e <= WITHIN).mean()),
+                   100 * low, 100 * high)
 
 
 def rollout_errors(model: TransitionModel, data: TransitionDataset, moves: int
@@ -107,10 +131,11 @@ def transition_report(model: TransitionModel, data: TransitionDataset, max_moves
 
 def report_lines(rows: list[ErrorRow], rank: float) -> list[str]:
     """The report as a printed table."""
-    lines = [f"{'moves':>5} {'group':<10} {'count':>6} {'mean':>8} {'median':>8} "
-             f"{'p99':>8} {'<=1cm':>7}"]
+    lines = [f"{'moves':>5} {'group':<10} {'count':>6} {'mean':>8} {'95% interval':>15} "
+             f"{'median':>8} {'p99':>8} {'<=1cm':>7}"]
     for r in rows:
         lines.append(f"{r.moves:>5} {r.group:<10} {r.count:>6} {r.mean_cm:>6.3f}cm "
+                     f"{r.mean_low_cm:>6.3f}-{r.mean_high_cm:.3f}cm "
                      f"{r.median_cm:>6.3f}cm {r.p99_cm:>6.2f}cm {100 * r.within_1cm:>6.2f}%")
     lines.append(f"spread-error rank correlation (one move): {rank:.3f}")
     return lines

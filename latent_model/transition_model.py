@@ -56,7 +56,7 @@ MODEL_FILE = "transition.pt"
 #: Predictions per network call in ``predict`` (keeps activations in cache).
 PREDICT_CHUNK = 4096
 #: Values of config fields added after the first files were written, for files without them.
-LEGACY_CONFIG = {"rim_targets": 1, "mean_network": False}
+LEGACY_CONFIG = {"rim_targets": 1, "mean_network": False, "mirror": False}
 
 
 @dataclass(frozen=True)
@@ -80,6 +80,10 @@ class TransitionModelConfig:
             held).
         mean_network: The model also holds one network distilled from the ensemble's mean,
             which makes ``predict``'s prediction (the ensemble gives the spread).
+        mirror: Mirror-equivariant by construction: a move whose cord lies mostly on the
+            right of the move's line (centroid below the frame's x axis) is predicted as the
+            mirror image of its mirror image, so the networks learn one handedness only (the
+            physics has no handedness).
     """
 
     n_points: int = 20
@@ -93,6 +97,7 @@ class TransitionModelConfig:
     rim_reach: float = 0.35
     rim_targets: int = 2
     mean_network: bool = False
+    mirror: bool = True
 
     def __post_init__(self) -> None:
         positive_ints(self, "n_points", "members", "width", "depth")
@@ -226,8 +231,16 @@ class TransitionModel(nn.Module):
         rim = torch.cat([into_frame(rim_vectors(shapes, TABLE_HALF, c.rim_reach), frame),
                          into_frame(rim_vectors(target, TABLE_HALF, c.rim_reach),
                                     frame, reorder=False)], dim=1)  # (B, n + targets, 2)
-        moved = self.predict_points(points, lead, other, both, rim,
-                                    (e, b) if per_member else None, members, net)
+        if c.mirror:  # one handedness: the cord's centroid on the left of the move's line
+            sign = torch.where(points[..., 1].mean(dim=-1) < 0, -1.0, 1.0).to(points.dtype)
+            flip = torch.stack([torch.ones_like(sign), sign], dim=-1)  # (B', 2)
+            moved = self.predict_points(points * flip[:, None], lead, other * flip, both,
+                                        rim * flip[:, None], (e, b) if per_member else None,
+                                        members, net)
+            moved = moved * flip.reshape(-1, b, 1, 2)
+        else:
+            moved = self.predict_points(points, lead, other, both, rim,
+                                        (e, b) if per_member else None, members, net)
         if per_member:
             points, lead, other, both = (t.reshape(e, b, *t.shape[1:])
                                          for t in (points, lead, other, both))

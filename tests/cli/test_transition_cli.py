@@ -23,12 +23,13 @@ def test_collect_then_train_a_transition_model_from_two_files(tmp_path, capsys):
     assert main(["train", "--stage", "transition", "--data", str(first), str(second),
                  "--heldout", str(second), "--out", str(out), "--steps", "20",
                  "--width", "16", "--members", "2", "--batch-size", "32", "--eval-every", "10",
-                 "--no-progress"]) == 0
+                 "--chain-weight", "0.25", "--no-progress"]) == 0
     text = capsys.readouterr().out
     assert "50 transitions" in text
     assert "spread-error rank correlation" in text
     model = TransitionModel.load(out)
     assert model.config.members == 2 and model.info["steps"] == 20
+    assert model.info["train_config"]["chain_weight"] == 0.25 and model.config.mirror
     assert model.info["files"] == [str(first), str(second)]
     for name in ("transition-metrics.csv", "transition-metrics.png", "transition-training.csv"):
         assert (out / name).is_file()

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from dataclasses import replace
+
 import numpy as np
 import pytest
 import torch
@@ -63,6 +65,27 @@ def test_rotating_and_shifting_the_input_rotates_and_shifts_the_output(model, en
     assert np.abs(pred - shapes).max() > 0.01  # the model does move the cord
 
 
+@pytest.mark.parametrize("end", ["head", "tail", "both"])
+def test_a_mirrored_input_gives_the_mirrored_output_and_without_mirror_it_does_not(model, end):
+    # Mirroring across the table's axis x = 0 maps the table onto itself: it holds at the rim too.
+    shapes = _shapes(32, seed=4, margin=0.05)
+    rng = np.random.default_rng(2)
+    d = rng.uniform(-0.2, 0.2, size=(32, 4 if end == "both" else 2)).astype(np.float32)
+    flip = np.array([-1.0, 1.0], dtype=np.float32)
+
+    def gap(m):
+        pred = m.predict(shapes, end, d)
+        mirrored = m.predict(shapes * flip, end, (d.reshape(32, -1, 2) * flip).reshape(32, -1))
+        return np.abs(mirrored - pred * flip).max()
+
+    assert model.config.mirror and gap(model) < 1e-5
+    torch.manual_seed(0)
+    plain = TransitionModel(replace(TINY, mirror=False), device="cpu")
+    with torch.no_grad():
+        plain.net.weights[-1].mul_(30.0)
+    assert gap(plain.eval()) > 1e-3  # a network alone learns each handedness on its own
+
+
 def test_near_the_rim_the_model_sees_the_rim(model):
     shapes = _shapes(4, seed=9, margin=0.5)
     d = np.full((4, 2), 0.05, dtype=np.float32)
@@ -85,7 +108,8 @@ class _RimRecorder(TransitionModel):
 def test_with_rim_targets_2_the_network_sees_the_rim_at_both_held_ends_targets(lead):
     from latent_model.move_frame import rim_vectors
 
-    config = TransitionModelConfig(width=16, depth=1, members=2, rim_reach=0.35, rim_targets=2)
+    config = TransitionModelConfig(width=16, depth=1, members=2, rim_reach=0.35, rim_targets=2,
+                                   mirror=False)  # the rim in the move frame, not mirrored
     assert config.inputs == TINY.inputs + 2
     model = _RimRecorder(config, device="cpu").eval()
     # A bent cord (ends 0.8 m apart) whose other end moves less than the leading one, onto
@@ -250,10 +274,11 @@ def test_save_and_load_round_trip_and_a_corrupt_file_is_refused(model, tmp_path)
 
 
 def test_a_file_from_before_rim_targets_loads_with_the_leading_ends_target_only():
-    old = TransitionModel(TransitionModelConfig(width=16, depth=1, members=2, rim_targets=1),
-                          device="cpu")
+    old = TransitionModel(TransitionModelConfig(width=16, depth=1, members=2, rim_targets=1,
+                                                mirror=False), device="cpu")
     state = old.state()
     del state["config"]["rim_targets"]  # as the files written before the field existed
+    del state["config"]["mirror"]
     loaded = TransitionModel.from_state(state, device="cpu")
     assert loaded.config.rim_targets == 1 and loaded.config == old.config
 
@@ -268,11 +293,13 @@ def test_chain_starts_only_link_consecutive_moves_of_one_cord():
 
 @pytest.mark.slow
 def test_training_learns_resumes_and_reports(data, tmp_path):
-    tc = TransitionTrainConfig(steps=60, batch_size=64, chain_batch=16, eval_every=30,
-                               validation_fraction=0.2)
+    tc = TransitionTrainConfig(steps=60, batch_size=64, chain_batch=16, chain_weight=0.5,
+                               eval_every=30, validation_fraction=0.2)
     model = train_transition_model(data, tmp_path, tc, TINY, device="cpu")
     curve = (tmp_path / CURVE_FILE).read_text().splitlines()
     assert curve[0].startswith("step,") and len(curve) == 3
+    chain = curve[0].split(",").index("chain")
+    assert float(curve[1].split(",")[chain]) > 0  # the chain loss was trained
     untrained = TransitionModel(TINY, device="cpu")
     idx = np.flatnonzero(data.grasp == 0)
     trained_err = error(model.predict(data.start[idx], "head", data.end_displacement(idx)),
@@ -424,3 +451,20 @@ def test_a_checkpoint_from_before_distillation_existed_still_resumes(data, tmp_p
     torch.save(saved, path)
     done = train_transition_model(data, tmp_path, tc, TINY, device="cpu", resume=True)
     assert done.info["steps"] == 20
+
+
+def test_mean_interval_covers_the_true_mean_and_narrows_with_more_moves():
+    from latent_model.transition_metrics import ErrorRow, mean_interval
+
+    rng = np.random.default_rng(3)
+    covered = []
+    for _ in range(60):  # heavy-tailed errors of true mean exp(0.5)
+        low, high = mean_interval(rng.lognormal(0.0, 1.0, 300))
+        covered.append(low <= np.exp(0.5) <= high)
+    assert 0.83 <= np.mean(covered) <= 1.0  # a 95 % interval; 60 trials
+    few, many = rng.lognormal(0.0, 1.0, 100), rng.lognormal(0.0, 1.0, 10_000)
+    assert np.ptp(mean_interval(many)) < 0.2 * np.ptp(mean_interval(few))
+    assert mean_interval(few) == mean_interval(few)  # reproducible
+    row = ErrorRow.of(1, "head", few / 100)
+    assert row.mean_low_cm < row.mean_cm < row.mean_high_cm
+    assert np.isnan(mean_interval(np.ones(1))).all()
