@@ -363,9 +363,6 @@ def main() -> None:
     for name, value, ok in checks:
         shown = f"{value:.4f}" if isinstance(value, float) else str(value)
         print(f"   {name:<48} {shown:>10}  {'PASS' if ok else 'FAIL'}")
-    print("   95 % bootstrap intervals of the held-out one-move means (where the mean of another "
-          "file of as many moves may lie): " + ", ".join(
-              f"{g} {one[g].mean_low_cm:.3f}-{one[g].mean_high_cm:.3f} cm" for g in GRASP_NAMES))
     out = Path(args.out)
     write_text_atomic(out / "transition-benchmark.json", json.dumps(json_ready({
         "heldout": [r.__dict__ for r in rows], "spread_rank": rank, "chained_linear3": chain,

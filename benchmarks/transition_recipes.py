@@ -6,8 +6,8 @@ seed and data, and is scored on a validation file none of them trained on:
 
 - ``chain``: the one-move loss plus the loss on rolled-out 2-3 move chains (weight 0.5, the
   recipe of the models before mirror), ``--chain-steps`` steps;
-- ``one-move``: the one-move loss alone, ``--steps`` steps (a step costs about 0.6 of a chain
-  step, so the defaults take about the same time as ``chain``'s);
+- ``one-move``: the one-move loss alone, ``--steps`` steps (a step costs about half a chain
+  step, so the defaults take a little less time than ``chain``'s);
 - ``one-move + mirror``: the same, one handedness (``TransitionModelConfig.mirror``).
 
 Prints, per recipe, the minutes and the one-, two- and three-move mean errors by grasp::
@@ -55,32 +55,38 @@ def main() -> None:
                              "file of the floors: recipes are chosen here)")
     parser.add_argument("--chain-steps", type=int, default=8000)
     parser.add_argument("--steps", type=int, default=13000)
-    parser.add_argument("--only", nargs="+", default=None, help="run only these recipes")
+    parser.add_argument("--only", nargs="+", default=None, choices=list(recipes(1, 1)),
+                        help="run only these recipes")
     parser.add_argument("--out", default="runs/transition-recipes")
     args = parser.parse_args()
     torch.set_num_threads(1)
     data = TransitionDataset.concatenate([load_transitions(p) for p in args.data])
     validation = load_transitions(args.validation)
-    results = {}
+    summary = Path(args.out) / "recipes.json"
+    results = json.loads(summary.read_text()) if summary.is_file() else {}
     for name, (tc, mc) in recipes(args.chain_steps, args.steps).items():
         if args.only and name not in args.only:
             continue
-        out = Path(args.out) / f"{name.replace(' + ', '-')}-{tc.steps}"
+        key = f"{name.replace(' + ', '-')}-{tc.steps}"
+        out = Path(args.out) / key
+        done = (out / "transition.pt").is_file()  # trained by an earlier run: its time stands
         started = time.perf_counter()
         model = train_transition_model(data, out, tc, mc, resume=True, device="cpu")
-        minutes = (time.perf_counter() - started) / 60
-        row = {"steps": tc.steps, "minutes": round(minutes, 2)}
+        minutes = (results.get(key, {}).get("minutes") if done
+                   else round((time.perf_counter() - started) / 60, 2))
+        row = {"recipe": name, "steps": tc.steps, "minutes": minutes}
         for moves in (1, 2, 3):
             first, errors = rollout_errors(model, validation, moves)
             for code, grasp in enumerate(("head", "tail", "both")):
                 row[f"{moves}_{grasp}_cm"] = 100 * float(errors[validation.grasp[first]
                                                                 == code].mean())
-        results[name] = row
-        print(f"{name:<18} {tc.steps:>6} steps {minutes:5.1f} min   " + "   ".join(
+        results[key] = row
+        shown = "   ?" if minutes is None else f"{minutes:5.1f}"
+        print(f"{name:<18} {tc.steps:>6} steps {shown} min   " + "   ".join(
             f"{k} moves " + " / ".join(f"{row[f'{k}_{g}_cm']:.3f}" for g in ("head", "tail",
                                                                              "both"))
             for k in (1, 2, 3)) + " cm (head / tail / both)", flush=True)
-    write_text_atomic(Path(args.out) / "recipes.json", json.dumps(results, indent=1))
+    write_text_atomic(summary, json.dumps(results, indent=1))
 
 
 if __name__ == "__main__":

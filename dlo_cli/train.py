@@ -27,6 +27,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--rim-targets", type=int, choices=(1, 2), default=None,
                         help="--stage transition: rim vectors of the leading end's target only "
                              "(1) or of both ends' targets (2) (None: TransitionModelConfig's)")
+    parser.add_argument("--no-mirror", action="store_true",
+                        help="--stage transition: networks that see both handednesses (the "
+                             "models before TransitionModelConfig.mirror)")
     parser.add_argument("--init", default=None,
                         help="--stage transition: start from this transition model file "
                              "(fine-tuning; same architecture), None: random weights")

@@ -58,11 +58,13 @@ def run(args: argparse.Namespace) -> int:
                 if v is not None}
     model_kw = {k: v for k, v in {"width": args.width, "members": args.members,
                                   "rim_reach": args.rim_reach,
-                                  "rim_targets": args.rim_targets}.items()
+                                  "rim_targets": args.rim_targets,
+                                  "mirror": False if args.no_mirror else None}.items()
                 if v is not None}
     if args.teacher and model_kw:
-        raise ValueError("--width, --members, --rim-reach and --rim-targets shape a new ensemble, "
-                         "not --teacher's mean network (its architecture is the teacher's)")
+        raise ValueError("--width, --members, --rim-reach, --rim-targets and --no-mirror shape "
+                         "a new ensemble, not --teacher's mean network (its architecture is the "
+                         "teacher's)")
     tc = replace(TransitionTrainConfig(), **train_kw)
     mc = replace(TransitionModelConfig(), **model_kw)
     out = Path(args.out)

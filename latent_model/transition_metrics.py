@@ -30,17 +30,34 @@ BOOTSTRAP = 2000
 BOOTSTRAP_SEED = 0
 
 
-def mean_interval(errors: np.ndarray, level: float = 0.95) -> tuple[float, float]:
-    """Percentile-bootstrap interval of the mean of ``errors``: how far the mean of another
-    file of as many moves from the same distribution may lie (a few large misses move it)."""
+def mean_interval(errors: np.ndarray, groups: np.ndarray | None = None, level: float = 0.95
+                  ) -> tuple[float, float]:
+    """Bootstrap interval of the mean of ``errors``: where the expected error of moves drawn
+    like these lies (a few large misses move a mean a lot).
+
+    Args:
+        errors: One value per prediction.
+        groups: Optional ``(len(errors),)`` labels of correlated predictions (the episode of
+            each move: moves of one cord are not independent); whole groups are resampled.
+            None: every prediction its own group.
+        level: Coverage of the interval, in (0, 1).
+    """
+    if not 0.0 < level < 1.0:
+        raise ValueError(f"level must be in (0, 1), got {level!r}")
     e = np.asarray(errors, dtype=np.float64)
-    if len(e) < 2:
+    labels = np.arange(len(e)) if groups is None else np.asarray(groups)
+    if labels.shape != e.shape:
+        raise ValueError(f"groups must have shape {e.shape}, got {labels.shape}")
+    _, which = np.unique(labels, return_inverse=True)
+    sums = np.bincount(which, weights=e)
+    counts = np.bincount(which).astype(np.float64)
+    if len(sums) < 2:
         return float("nan"), float("nan")
     rng = np.random.default_rng(BOOTSTRAP_SEED)
     means = np.empty(BOOTSTRAP)
     for lo in range(0, BOOTSTRAP, 250):  # bounded memory for large files
-        k = min(250, BOOTSTRAP - lo)
-        means[lo:lo + k] = e[rng.integers(0, len(e), (k, len(e)))].mean(axis=1)
+        pick = rng.integers(0, len(sums), (min(250, BOOTSTRAP - lo), len(sums)))
+        means[lo:lo + len(pick)] = sums[pick].sum(axis=1) / counts[pick].sum(axis=1)
     tail = 100 * (1 - level) / 2
     low, high = np.percentile(means, [tail, 100 - tail])
     return float(low), float(high)
@@ -49,7 +66,7 @@ def mean_interval(errors: np.ndarray, level: float = 0.95) -> tuple[float, float
 @dataclass(frozen=True)
 class ErrorRow:
     """Error statistics of one group of predictions, centimetres; ``mean_low_cm`` and
-    ``mean_high_cm`` bound the mean's 95 % bootstrap interval."""
+    ``mean_high_cm`` bound the 95 % bootstrap interval of the mean (over episodes)."""
 
     moves: int
     group: str
@@ -62,12 +79,14 @@ class ErrorRow:
     mean_high_cm: float = float("nan")
 
     @classmethod
-    def of(cls, moves: int, group: str, errors: np.ndarray) -> ErrorRow:
-        """Statistics of ``errors`` (metres)."""
+    def of(cls, moves: int, group: str, errors: np.ndarray,
+           episodes: np.ndarray | None = None) -> ErrorRow:
+        """Statistics of ``errors`` (metres); ``episodes`` labels correlated predictions for
+        the interval (:func:`mean_interval`)."""
         e = np.asarray(errors, dtype=np.float64)
         if len(e) == 0:
             return cls(moves, group, 0, *(float("nan"),) * 4)
-        low, high = mean_interval(e)
+        low, high = mean_interval(e, episodes)
         return cls(moves, group, len(e), 100 * e.mean(), 100 * float(np.median(e)),
                    100 * float(np.percentile(e, 99)), float((e <= WITHIN).mean()),
                    100 * low, 100 * high)
@@ -119,13 +138,16 @@ def transition_report(model: TransitionModel, data: TransitionDataset, max_moves
     lengths = 100 * np.linalg.norm(data.displacement, axis=-1).max(axis=-1)
     for moves in range(1, max_moves + 1):
         first, errors = rollout_errors(model, data, moves)
-        rows.append(ErrorRow.of(moves, "all", errors))
+        episodes = data.episode[first]
+        rows.append(ErrorRow.of(moves, "all", errors, episodes))
         for code, name in enumerate(GRASP_NAMES):
-            rows.append(ErrorRow.of(moves, name, errors[data.grasp[first] == code]))
+            sel = data.grasp[first] == code
+            rows.append(ErrorRow.of(moves, name, errors[sel], episodes[sel]))
         if moves == 1:
             for lo, hi in LENGTH_BINS:
                 sel = (lengths[first] >= lo) & (lengths[first] < hi)
-                rows.append(ErrorRow.of(1, f"{lo}-{min(hi, 35)} cm", errors[sel]))
+                rows.append(ErrorRow.of(1, f"{lo}-{min(hi, 35)} cm", errors[sel],
+                                        episodes[sel]))
     return rows, spread_rank_correlation(model, data)
 
 
@@ -134,8 +156,9 @@ def report_lines(rows: list[ErrorRow], rank: float) -> list[str]:
     lines = [f"{'moves':>5} {'group':<10} {'count':>6} {'mean':>8} {'95% interval':>15} "
              f"{'median':>8} {'p99':>8} {'<=1cm':>7}"]
     for r in rows:
+        interval = f"{r.mean_low_cm:.3f}-{r.mean_high_cm:.3f}cm"
         lines.append(f"{r.moves:>5} {r.group:<10} {r.count:>6} {r.mean_cm:>6.3f}cm "
-                     f"{r.mean_low_cm:>6.3f}-{r.mean_high_cm:.3f}cm "
+                     f"{interval:>15} "
                      f"{r.median_cm:>6.3f}cm {r.p99_cm:>6.2f}cm {100 * r.within_1cm:>6.2f}%")
     lines.append(f"spread-error rank correlation (one move): {rank:.3f}")
     return lines

@@ -80,10 +80,12 @@ class TransitionModelConfig:
             held).
         mean_network: The model also holds one network distilled from the ensemble's mean,
             which makes ``predict``'s prediction (the ensemble gives the spread).
-        mirror: Mirror-equivariant by construction: a move whose cord lies mostly on the
-            right of the move's line (centroid below the frame's x axis) is predicted as the
-            mirror image of its mirror image, so the networks learn one handedness only (the
-            physics has no handedness).
+        mirror: Mirror-equivariant by construction: the networks only see cords whose
+            centroid lies on the left of the move's line (y >= 0 in the move frame); a cord
+            on the right is mirrored across the line, predicted, and the prediction mirrored
+            back. The physics has no handedness, so the networks learn one instead of two.
+            Where the centroid crosses the line (a cord lying along the move) the prediction
+            may jump by twice the network's sideways error there.
     """
 
     n_points: int = 20
@@ -205,7 +207,9 @@ class TransitionModel(nn.Module):
         ``shapes`` is ``(B, n, 2)`` (one frame per move, shared by the members) or
         ``(members, B, n, 2)`` (one start per member; frames then cover ``members * B``).
         ``members`` runs only the first networks (shared frames only). ``net`` is the
-        networks to run (None: the ensemble; ``self.mean_net`` for the mean network).
+        networks to run (None: the ensemble; ``self.mean_net`` for the mean network). With
+        ``config.mirror`` the networks (``predict_points``) get the mirrored inputs of cords
+        on the right of the move's line and their outputs are mirrored back here.
         """
         net = self.net if net is None else net
         e, n = net.members, self.config.n_points
@@ -251,7 +255,8 @@ class TransitionModel(nn.Module):
                        members_batch: tuple[int, int] | None, members: int | None = None,
                        net: EnsembleMLP | None = None) -> torch.Tensor:
         """The members' points in the move frames, ``(members, B, n, 2)``, before the held
-        ends are pinned: the one place where a model design differs.
+        ends are pinned: the one place where a model design differs. With ``config.mirror``
+        every input is a cord on the left of its move's line (``in_frame`` mirrors).
 
         Args:
             points, lead, other, both: The batch in the move frames (flat over members and
@@ -448,7 +453,7 @@ class TransitionModel(nn.Module):
                    name: str = "path") -> TransitionModel:
         """Rebuild a model from a checkpoint dict (as written by ``save``)."""
         try:
-            # Files written before rim_targets existed saw the leading end's target only.
+            # Fields added later take the value that files written before them behaved by.
             values = {**LEGACY_CONFIG, **data["config"]}
             config = config_from_dict(TransitionModelConfig, values, "config")
             model = cls(config, device="cpu", info=data.get("info"))

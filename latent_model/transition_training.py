@@ -1,12 +1,14 @@
-"""Training the transition model: one-move loss plus rolled-out multi-move chains.
+"""Training the transition model: the one-move loss, optionally rolled-out multi-move chains.
 
-Each step takes a batch of single transitions and a batch of chains of 2 to ``chain_moves``
-consecutive moves of one episode. Every member predicts the first move from the real start
-and each later move from its own previous prediction, so errors that would compound along a
-plan are trained away. The loss is the mean per-point distance (the project's ``error``).
-The frame of the move makes rigid-transform augmentation redundant: the model is exactly
-equivariant. Checkpoints are written atomically every ``eval_every`` steps; a run resumes
-from the last one. The learning rate follows a cosine decay over ``steps``.
+Each step takes a batch of single transitions; the loss is the mean per-point distance (the
+project's ``error``). With ``chain_weight`` > 0 it also takes a batch of chains of 2 to
+``chain_moves`` consecutive moves of one episode: every member predicts the first move from
+the real start and each later move from its own previous prediction, so errors that would
+compound along a plan are trained (off by default: at equal time more one-move steps did
+better, on chains too). The frame of the move makes rigid-transform augmentation redundant:
+the model is exactly equivariant (and, with ``mirror``, mirror-equivariant). Checkpoints are
+written atomically every ``eval_every`` steps; a run resumes from the last one. The learning
+rate follows a cosine decay over ``steps``.
 
 With a ``teacher`` (a trained model file) the run distils instead: the teacher's ensemble is
 copied and frozen, and only a *mean network* is trained, starting from the ensemble's first
@@ -58,9 +60,9 @@ class TransitionTrainConfig:
         batch_size: Single transitions per step.
         chain_batch: Chains per step (each of 2 to ``chain_moves`` moves).
         chain_moves: Longest chain rolled out.
-        chain_weight: Weight of the chain loss against the one-move loss (0: none). A chain
-            step costs as much as 0.75 of a one-move step; at equal training time the
-            one-move loss alone was more accurate, on chained moves too (docs).
+        chain_weight: Weight of the chain loss against the one-move loss (0: none). A step
+            with chains costs about twice one without; in as much time, the one-move loss
+            alone was more accurate, on chained moves too (docs/transition_model.md).
         lr: Adam learning rate at the start.
         lr_schedule: ``"cosine"`` (decays to 0 over ``steps``) or ``"constant"``.
         validation_fraction: Share of the training episodes kept out to watch progress.
@@ -273,7 +275,8 @@ def train_transition_model(
                 mine.copy_(theirs[:1])
     elif tc.init:
         start = TransitionModel.load(tc.init, device="cpu")
-        if asdict(replace(start.config, mean_network=False)) != asdict(mc):
+        # A network that learnt both handednesses is a fine start for one that sees one.
+        if asdict(replace(start.config, mean_network=False, mirror=mc.mirror)) != asdict(mc):
             raise ValueError(f"init {tc.init!r} is a model of another architecture or cord "
                              f"({start.config}) than the one trained ({mc})")
         model.net.load_state_dict(start.net.state_dict())
@@ -285,9 +288,12 @@ def train_transition_model(
         saved = load_checkpoint(checkpoint, str(checkpoint), kind=CHECKPOINT_FORMAT, version=1)
         saved_mc = config_from_dict(TransitionModelConfig,
                                     {**LEGACY_CONFIG, **saved["model_config"]}, "model_config")
-        if config_from_json(saved["train_config"]) != tc or saved_mc != mc:
-            raise ValueError(f"resume: {checkpoint} was written with other settings; use the "
-                             "same settings or another --out")
+        saved_tc = config_from_json(saved["train_config"])
+        if saved_tc != tc or saved_mc != mc:
+            differ = [f"{k}={a!r} (now {b!r})" for old, new in ((saved_tc, tc), (saved_mc, mc))
+                      for (k, a), b in zip(asdict(old).items(), asdict(new).values()) if a != b]
+            raise ValueError(f"resume: {checkpoint} was written with other settings: "
+                             f"{', '.join(differ)}; use the same settings or another --out")
         if saved.get("teacher_ensemble", teacher_ensemble) != teacher_ensemble:
             raise ValueError(f"resume: {checkpoint} distils another ensemble than teacher "
                              f"{tc.teacher!r} holds now; use that teacher or another --out")

@@ -30,6 +30,11 @@ def test_collect_then_train_a_transition_model_from_two_files(tmp_path, capsys):
     model = TransitionModel.load(out)
     assert model.config.members == 2 and model.info["steps"] == 20
     assert model.info["train_config"]["chain_weight"] == 0.25 and model.config.mirror
+    again = ["train", "--stage", "transition", "--data", str(first), str(second), "--heldout",
+             str(second), "--out", str(out), "--steps", "20", "--width", "16", "--members", "2",
+             "--batch-size", "32", "--eval-every", "10", "--no-progress"]
+    assert main(again + ["--no-mirror"]) == 2  # resuming with other settings names them
+    assert "chain_weight=0.25 (now 0.0), mirror=True (now False)" in capsys.readouterr().err
     assert model.info["files"] == [str(first), str(second)]
     for name in ("transition-metrics.csv", "transition-metrics.png", "transition-training.csv"):
         assert (out / name).is_file()
@@ -37,8 +42,9 @@ def test_collect_then_train_a_transition_model_from_two_files(tmp_path, capsys):
     distil = ["train", "--stage", "transition", "--data", str(first), "--heldout", str(second),
               "--out", str(mean), "--steps", "10", "--batch-size", "32", "--eval-every", "10",
               "--teacher", str(out / "transition.pt"), "--no-progress"]
-    assert main(distil + ["--width", "32"]) == 2
-    assert "not --teacher's mean network" in capsys.readouterr().err
+    for flag in (["--width", "32"], ["--no-mirror"]):
+        assert main(distil + flag) == 2
+        assert "not --teacher's mean network" in capsys.readouterr().err
     assert main(distil) == 0
     assert f"distilling {out / 'transition.pt'}" in capsys.readouterr().out
     student = TransitionModel.load(mean)

@@ -86,6 +86,22 @@ def test_a_mirrored_input_gives_the_mirrored_output_and_without_mirror_it_does_n
     assert gap(plain.eval()) > 1e-3  # a network alone learns each handedness on its own
 
 
+def test_members_with_their_own_starts_mirror_each_start_on_its_own(model):
+    # Chains roll out one start per member: each member must see its own start mirrored or
+    # not, as it would alone.
+    shapes = _shapes(6, seed=7)
+    rng = np.random.default_rng(3)
+    starts = torch.from_numpy(np.stack([shapes[rng.permutation(6)] for _ in range(3)]))
+    grasp = torch.tensor([0, 1, 2, 0, 1, 2])
+    moves = torch.from_numpy(rng.uniform(-0.1, 0.1, (6, 2, 2)).astype(np.float32))
+    moves[grasp == 0, 1] = 0
+    moves[grasp == 1, 0] = 0
+    with torch.no_grad():
+        together = model(starts, grasp, moves)
+        for k in range(3):
+            assert torch.allclose(together[k], model(starts[k], grasp, moves)[k], atol=1e-6)
+
+
 def test_near_the_rim_the_model_sees_the_rim(model):
     shapes = _shapes(4, seed=9, margin=0.5)
     d = np.full((4, 2), 0.05, dtype=np.float32)
@@ -337,6 +353,16 @@ def test_training_can_start_from_a_saved_model(data, tmp_path):
     wider = TransitionModelConfig(**{**TINY.__dict__, "width": 16})
     with pytest.raises(ValueError, match="another architecture"):
         train_transition_model(data, tmp_path / "c", still, wider, device="cpu")
+    # A model from before mirror (it learnt both handednesses) starts a mirrored one.
+    legacy = first.state()
+    del legacy["config"]["mirror"]
+    torch.save(legacy, tmp_path / "legacy.pt")
+    assert not TransitionModel.load(tmp_path / "legacy.pt").config.mirror
+    from_legacy = TransitionTrainConfig(**{**still.__dict__, "init": str(tmp_path / "legacy.pt")})
+    tuned = train_transition_model(data, tmp_path / "d", from_legacy, TINY, device="cpu")
+    assert tuned.config.mirror
+    for mine, theirs in zip(tuned.net.parameters(), first.net.parameters()):
+        assert torch.allclose(mine, theirs, atol=1e-3)  # its weights, trained at lr 1e-12
 
 
 def test_distilling_keeps_the_ensemble_and_predicts_with_the_mean_network(data, tmp_path):
@@ -468,3 +494,9 @@ def test_mean_interval_covers_the_true_mean_and_narrows_with_more_moves():
     row = ErrorRow.of(1, "head", few / 100)
     assert row.mean_low_cm < row.mean_cm < row.mean_high_cm
     assert np.isnan(mean_interval(np.ones(1))).all()
+    # Moves of one episode are correlated: resampling whole episodes widens the interval.
+    twice = np.repeat(few, 4)
+    alone, grouped = mean_interval(twice), mean_interval(twice, np.repeat(np.arange(100), 4))
+    assert np.ptp(grouped) > 1.5 * np.ptp(alone)
+    with pytest.raises(ValueError, match="level must be in"):
+        mean_interval(few, level=95)
