@@ -27,8 +27,8 @@ from pathlib import Path
 import torch
 
 from dlo_env.atomic import write_text_atomic
-from dlo_env.dataset.transitions import TransitionDataset, load_transitions
-from latent_model.transition_metrics import rollout_errors
+from dlo_env.dataset.transitions import GRASP_NAMES, TransitionDataset, load_transitions
+from latent_model.transition_metrics import transition_report
 from latent_model.transition_model import TransitionModelConfig
 from latent_model.transition_training import TransitionTrainConfig, train_transition_model
 
@@ -75,16 +75,12 @@ def main() -> None:
         minutes = (results.get(key, {}).get("minutes") if done
                    else round((time.perf_counter() - started) / 60, 2))
         row = {"recipe": name, "steps": tc.steps, "minutes": minutes}
-        for moves in (1, 2, 3):
-            first, errors = rollout_errors(model, validation, moves)
-            for code, grasp in enumerate(("head", "tail", "both")):
-                row[f"{moves}_{grasp}_cm"] = 100 * float(errors[validation.grasp[first]
-                                                                == code].mean())
+        rows, _ = transition_report(model, validation)
+        row.update({f"{r.moves}_{r.group}_cm": r.mean_cm for r in rows if r.group in GRASP_NAMES})
         results[key] = row
         shown = "   ?" if minutes is None else f"{minutes:5.1f}"
         print(f"{name:<18} {tc.steps:>6} steps {shown} min   " + "   ".join(
-            f"{k} moves " + " / ".join(f"{row[f'{k}_{g}_cm']:.3f}" for g in ("head", "tail",
-                                                                             "both"))
+            f"{k} moves " + " / ".join(f"{row[f'{k}_{g}_cm']:.3f}" for g in GRASP_NAMES)
             for k in (1, 2, 3)) + " cm (head / tail / both)", flush=True)
     write_text_atomic(summary, json.dumps(results, indent=1))
 

@@ -3,7 +3,8 @@
 A move of the held end(s) is described in its own frame: the cord is reordered so that the
 end that moves farther is point 0 (a tail move is a head move of the reversed cord), point 0
 is the origin and its displacement points along +x. Anything computed in that frame and mapped
-back with :func:`from_frame` turns and shifts exactly with the input. Batched torch code, so
+back with :func:`from_frame` turns and shifts exactly with the input; :func:`handedness`
+mirrors it onto one side of the move's line, so it mirrors exactly too. Batched torch code, so
 multi-move chains can be rolled out and differentiated through.
 """
 
@@ -96,6 +97,14 @@ def out_of_frame(vectors: torch.Tensor, frame: MoveFrame) -> torch.Tensor:
     """Direction vectors ``(B, k, 2)`` in the frames turned back into the world (the inverse
     of ``into_frame(..., reorder=False)``)."""
     return _rotate(vectors, frame.cos, frame.sin)
+
+
+def handedness(points: torch.Tensor) -> torch.Tensor:
+    """``(B, 2)`` factors ``(1, +-1)`` that mirror cords in the frames ``(B, n, 2)`` whose
+    centroid lies on the right of the move's line (y < 0) onto its left; applying them twice
+    is the identity, so the same factors map a prediction back."""
+    sign = torch.where(points[..., 1].mean(dim=-1) < 0, -1.0, 1.0).to(points.dtype)
+    return torch.stack([torch.ones_like(sign), sign], dim=-1)
 
 
 def rim_vectors(points: torch.Tensor, half: float, reach: float) -> torch.Tensor:

@@ -113,7 +113,10 @@ def rollout_errors(model: TransitionModel, data: TransitionDataset, moves: int
 
 
 def spread_rank_correlation(model: TransitionModel, data: TransitionDataset) -> float:
-    """Spearman rank correlation between the ensemble's spread and the one-move error."""
+    """Spearman rank correlation between the ensemble's spread and the one-move error (NaN
+    for a model of one network: it has no spread)."""
+    if model.config.members < 2:
+        return float("nan")
     spreads, errors = [], []
     for code, name in enumerate(GRASP_NAMES):
         idx = np.flatnonzero(data.grasp == code)

@@ -40,6 +40,7 @@ from latent_model.move_frame import (
     GRASP_CODES,
     MoveFrame,
     from_frame,
+    handedness,
     into_frame,
     out_of_frame,
     rim_vectors,
@@ -235,16 +236,14 @@ class TransitionModel(nn.Module):
         rim = torch.cat([into_frame(rim_vectors(shapes, TABLE_HALF, c.rim_reach), frame),
                          into_frame(rim_vectors(target, TABLE_HALF, c.rim_reach),
                                     frame, reorder=False)], dim=1)  # (B, n + targets, 2)
-        if c.mirror:  # one handedness: the cord's centroid on the left of the move's line
-            sign = torch.where(points[..., 1].mean(dim=-1) < 0, -1.0, 1.0).to(points.dtype)
-            flip = torch.stack([torch.ones_like(sign), sign], dim=-1)  # (B', 2)
-            moved = self.predict_points(points * flip[:, None], lead, other * flip, both,
-                                        rim * flip[:, None], (e, b) if per_member else None,
-                                        members, net)
+        # One handedness: cords on the right of the move's line are seen mirrored.
+        flip = handedness(points) if c.mirror else None
+        seen = (points, other, rim) if flip is None else (
+            points * flip[:, None], other * flip, rim * flip[:, None])
+        moved = self.predict_points(seen[0], lead, seen[1], both, seen[2],
+                                    (e, b) if per_member else None, members, net)
+        if flip is not None:
             moved = moved * flip.reshape(-1, b, 1, 2)
-        else:
-            moved = self.predict_points(points, lead, other, both, rim,
-                                        (e, b) if per_member else None, members, net)
         if per_member:
             points, lead, other, both = (t.reshape(e, b, *t.shape[1:])
                                          for t in (points, lead, other, both))

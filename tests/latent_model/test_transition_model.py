@@ -500,3 +500,12 @@ def test_mean_interval_covers_the_true_mean_and_narrows_with_more_moves():
     assert np.ptp(grouped) > 1.5 * np.ptp(alone)
     with pytest.raises(ValueError, match="level must be in"):
         mean_interval(few, level=95)
+
+
+def test_a_model_of_one_network_reports_without_a_spread(data):
+    from latent_model.transition_metrics import spread_rank_correlation
+
+    one = TransitionModel(replace(TINY, members=1), device="cpu").eval()
+    assert np.isnan(spread_rank_correlation(one, data))
+    rows, rank = transition_report(one, data, max_moves=1)
+    assert np.isnan(rank) and rows[0].count == len(data)
