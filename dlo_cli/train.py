@@ -39,6 +39,10 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--teacher-weight", type=float, default=None,
                         help="--stage transition with --teacher: weight of the error to the "
                              "teacher's mean against the error to the data (None: 1)")
+    parser.add_argument("--teacher-moves", type=int, default=None,
+                        help="--stage transition with --teacher: extra inputs per training "
+                             "transition, its start with another transition's move, labelled "
+                             "by the teacher's mean alone (None: 0, the data's moves only)")
     parser.add_argument("--chain-weight", type=float, default=None,
                         help="--stage transition: weight of the loss on rolled-out chains of "
                              "2-3 moves (0: one-move loss only; None: TransitionTrainConfig's)")

@@ -54,6 +54,7 @@ def run(args: argparse.Namespace) -> int:
                                   "init": args.init, "lr": args.lr,
                                   "teacher": args.teacher,
                                   "teacher_weight": args.teacher_weight,
+                                  "teacher_moves": args.teacher_moves,
                                   "chain_weight": args.chain_weight}.items()
                 if v is not None}
     model_kw = {k: v for k, v in {"width": args.width, "members": args.members,

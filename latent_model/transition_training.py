@@ -13,7 +13,10 @@ rate follows a cosine decay over ``steps``.
 With a ``teacher`` (a trained model file) the run distils instead: the teacher's ensemble is
 copied and frozen, and only a *mean network* is trained, starting from the ensemble's first
 member, towards both the data and the ensemble's mean prediction. The result predicts at the
-cost of one network and keeps the ensemble for the spread.
+cost of one network and keeps the ensemble for the spread. With ``teacher_moves`` the mean
+network also learns the ensemble's mean on moves the data never made: each training start
+paired with the move of another transition of its grasp (made reachable from it), a denser
+sample of what the ensemble knows than the data alone.
 """
 
 from __future__ import annotations
@@ -76,6 +79,11 @@ class TransitionTrainConfig:
             copied unchanged; the architecture is the teacher's). None: train an ensemble.
         teacher_weight: Weight of the error to the teacher's mean against the error to the
             data, when distilling.
+        teacher_moves: When distilling, this many extra inputs per training transition: its
+            start with the move of another transition of the same grasp, labelled by the
+            teacher's mean alone (no simulation). They take this share of every batch,
+            ``teacher_moves / (teacher_moves + 1)`` (the batch size is unchanged). 0: the
+            data's moves only.
     """
 
     steps: int = 96_000
@@ -91,10 +99,17 @@ class TransitionTrainConfig:
     init: str | None = None
     teacher: str | None = None
     teacher_weight: float = 1.0
+    teacher_moves: int = 0
 
     def __post_init__(self) -> None:
         positive_ints(self, "steps", "batch_size", "eval_every", "chain_moves")
         non_negative(self, "chain_batch", "chain_weight", "teacher_weight")
+        if not (isinstance(self.teacher_moves, int) and self.teacher_moves >= 0):
+            raise ValueError("TransitionTrainConfig.teacher_moves must be an int >= 0, "
+                             f"got {self.teacher_moves!r}")
+        if self.teacher_moves and not self.teacher:
+            raise ValueError("TransitionTrainConfig.teacher_moves: moves labelled by a teacher "
+                             "need one (teacher, --teacher)")
         if self.init and self.teacher:
             raise ValueError("TransitionTrainConfig: give init (fine-tune the ensemble) or "
                              "teacher (distil a mean network), not both")
@@ -131,6 +146,33 @@ def as_tensors(model: TransitionModel, data: TransitionDataset) -> TransitionTen
         start=torch.from_numpy(data.start).to(dev), next=torch.from_numpy(data.next).to(dev),
         grasp=torch.from_numpy(data.grasp.astype(np.int64)).to(dev),
         moves=torch.from_numpy(moves).to(dev), episode=data.episode, step=data.step)
+
+
+def paired_moves(model: TransitionModel, data: TransitionDataset, copies: int, seed: int
+                 ) -> TransitionTensors:
+    """``copies`` inputs per transition of ``data`` that the data never made: its start with
+    the commanded move of a random other transition of the same grasp, made reachable from
+    that start. Their ``next`` is left zero (distillation labels them with the teacher)."""
+    rng = np.random.default_rng(seed)
+    order = np.concatenate([np.flatnonzero(data.grasp == code)
+                            for code in range(len(GRASP_NAMES))])
+    starts = np.concatenate([data.start[order]] * copies)
+    grasp = np.concatenate([data.grasp[order]] * copies).astype(np.int64)
+    moves = np.zeros((len(starts), 2, 2), dtype=np.float32)
+    lo = 0
+    for _ in range(copies):
+        for code, name in enumerate(GRASP_NAMES):
+            idx = np.flatnonzero(data.grasp == code)
+            part = slice(lo, lo + len(idx))
+            lo += len(idx)
+            if len(idx):
+                moves[part] = model.reachable_moves(starts[part], name,
+                                                    data.end_displacement(rng.permutation(idx)))
+    dev = model.device
+    return TransitionTensors(
+        start=torch.from_numpy(starts).to(dev), next=torch.zeros(starts.shape, device=dev),
+        grasp=torch.from_numpy(grasp).to(dev), moves=torch.from_numpy(moves).to(dev),
+        episode=np.full(len(starts), -1), step=np.zeros(len(starts), dtype=np.int64))
 
 
 def chain_starts(episode: np.ndarray, step: np.ndarray, moves: int) -> np.ndarray:
@@ -305,6 +347,12 @@ def train_transition_model(
     chains = {k: chain_starts(tr.episode, tr.step, k) for k in range(2, tc.chain_moves + 1)}
     chains = {k: torch.from_numpy(v).to(model.device) for k, v in chains.items() if len(v)}
     targets = mean_predictions(model, tr) if teacher is not None else None
+    extra = extra_targets = None
+    real = tc.batch_size
+    if teacher is not None and tc.teacher_moves:
+        extra = paired_moves(model, train, tc.teacher_moves, seed=tc.seed)
+        extra_targets = mean_predictions(model, extra)
+        real = max(1, round(tc.batch_size / (tc.teacher_moves + 1)))
     gen = torch.Generator(device="cpu").manual_seed(tc.seed * 1_000_003 + step)
     info = {"data": data.metadata.get("collect", {}), "files": data.metadata.get("files"),
             "train_config": asdict(tc),
@@ -317,13 +365,22 @@ def train_transition_model(
         factor = 0.5 * (1 + math.cos(math.pi * fraction)) if tc.lr_schedule == "cosine" else 1.0
         for group in optimiser.param_groups:
             group["lr"] = tc.lr * factor
-        idx = torch.randint(len(tr.grasp), (tc.batch_size,), generator=gen).to(model.device)
-        pred = model(tr.start[idx], tr.grasp[idx], tr.moves[idx], net=net)
-        loss_one = point_error(pred, tr.next[idx][None]).mean()
+        idx = torch.randint(len(tr.grasp), (real,), generator=gen).to(model.device)
+        start, grasp, moves, target = tr.start[idx], tr.grasp[idx], tr.moves[idx], None
+        if targets is not None:
+            target = targets[idx]
+        if extra is not None and real < tc.batch_size:  # the teacher's moves fill the batch
+            pick = torch.randint(len(extra.grasp), (tc.batch_size - real,),
+                                 generator=gen).to(model.device)
+            start, grasp, moves, target = (torch.cat([a, b[pick]]) for a, b in (
+                (start, extra.start), (grasp, extra.grasp), (moves, extra.moves),
+                (target, extra_targets)))
+        pred = model(start, grasp, moves, net=net)
+        loss_one = point_error(pred[:, :real], tr.next[idx][None]).mean()
         loss = loss_one
         loss_teacher = loss_chain = torch.zeros(())
-        if targets is not None:
-            loss_teacher = point_error(pred, targets[idx][None]).mean()
+        if target is not None:
+            loss_teacher = point_error(pred, target[None]).mean()
             loss = loss + tc.teacher_weight * loss_teacher
         if chains and tc.chain_batch and tc.chain_weight:
             k = list(chains)[step % len(chains)]

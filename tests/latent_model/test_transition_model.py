@@ -19,6 +19,7 @@ from latent_model.transition_training import (
     CURVE_FILE,
     TransitionTrainConfig,
     chain_starts,
+    paired_moves,
     train_transition_model,
 )
 
@@ -421,6 +422,59 @@ def test_distilling_keeps_the_ensemble_and_predicts_with_the_mean_network(data, 
     wrong = TransitionTrainConfig(**{**distil.__dict__, "teacher": str(tmp_path / "other.pt")})
     with pytest.raises(ValueError, match="n_points"):
         train_transition_model(data, tmp_path / "wrong", wrong, device="cpu")
+
+
+def test_paired_moves_give_each_start_reachable_moves_of_its_grasp_from_other_transitions(
+        data, model):
+    paired = paired_moves(model, data, copies=2, seed=0)
+    assert len(paired.grasp) == 2 * len(data)
+    names = ("head", "tail", "both")
+    for code, name in enumerate(names):
+        mine = paired.grasp.numpy() == code
+        idx = np.flatnonzero(data.grasp == code)
+        assert mine.sum() == 2 * len(idx)  # every start twice, with its own grasp
+        starts, moves = paired.start.numpy()[mine], paired.moves.numpy()[mine]
+        assert np.array_equal(starts, np.concatenate([data.start[idx]] * 2))
+        commanded = data.end_displacement(idx)
+        held = {"head": [0], "tail": [1], "both": [0, 1]}[name]
+        assert not moves[:, [k for k in (0, 1) if k not in held]].any()  # a free end stays
+        made = moves[:, held].reshape(len(moves), -1)
+        # Already reachable: carrying a paired move out again changes nothing.
+        assert np.allclose(model.reachable_moves(starts, name, made), moves, atol=1e-6)
+        # Another transition's command carried out from this start (clipped as it goes).
+        k = len(commanded)
+        options = model.reachable_moves(np.repeat(starts, k, axis=0), name,
+                                        np.tile(commanded, (len(starts), 1)))
+        options = options.reshape(len(starts), k, 2, 2)
+        assert np.isclose(options, moves[:, None], atol=1e-6).all(axis=(2, 3)).any(axis=1).all()
+        own = np.isclose(options[np.arange(len(starts)), np.tile(np.arange(k), 2)], moves,
+                         atol=1e-6).all(axis=(1, 2))
+        assert own.mean() < 0.5  # mostly not the start's own move
+    assert len(paired_moves(model, data, copies=1, seed=0).grasp) == len(data)
+
+
+def test_distilling_with_the_teachers_moves_learns_the_ensemble_on_moves_off_the_data(
+        data, tmp_path):
+    tc = TransitionTrainConfig(steps=40, batch_size=64, chain_batch=16, eval_every=20,
+                               validation_fraction=0.2)
+    train_transition_model(data, tmp_path / "teacher", tc, TINY, device="cpu")
+    teacher = TransitionModel.load(tmp_path / "teacher", device="cpu")
+    distil = TransitionTrainConfig(**{**tc.__dict__, "lr": 3e-3, "teacher_weight": 20,
+                                      "teacher_moves": 3,
+                                      "teacher": str(tmp_path / "teacher" / "transition.pt")})
+    student = train_transition_model(data, tmp_path / "student", distil, device="cpu")
+    assert student.info["train_config"]["teacher_moves"] == 3
+    paired = paired_moves(teacher, data, copies=1, seed=5)  # moves the data never made
+    both = paired.grasp.numpy() == 2
+    starts, moves = paired.start.numpy()[both], paired.moves.numpy()[both].reshape(-1, 4)
+    ensemble = teacher.predict(starts, "both", moves)
+    first = student.predict(starts, "both", moves, members=1)
+    assert error(student.predict(starts, "both", moves), ensemble).mean() < \
+        error(first, ensemble).mean()
+    with pytest.raises(ValueError, match="need one"):
+        TransitionTrainConfig(teacher_moves=1)
+    with pytest.raises(ValueError, match="teacher_moves must be an int >= 0"):
+        TransitionTrainConfig(teacher="t.pt", teacher_moves=-1)
 
 
 class _Stop(Exception):
