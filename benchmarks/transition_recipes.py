@@ -27,7 +27,7 @@ from pathlib import Path
 import torch
 
 from dlo_env.atomic import write_text_atomic
-from dlo_env.dataset.transitions import GRASP_NAMES, TransitionDataset, load_transitions
+from dlo_env.dataset.transitions import GRASP_NAMES, load_transition_files, load_transitions
 from latent_model.transition_metrics import transition_report
 from latent_model.transition_model import TransitionModelConfig
 from latent_model.transition_training import TransitionTrainConfig, train_transition_model
@@ -60,7 +60,7 @@ def main() -> None:
     parser.add_argument("--out", default="runs/transition-recipes")
     args = parser.parse_args()
     torch.set_num_threads(1)
-    data = TransitionDataset.concatenate([load_transitions(p) for p in args.data])
+    data = load_transition_files(args.data)
     validation = load_transitions(args.validation)
     summary = Path(args.out) / "recipes.json"
     results = json.loads(summary.read_text()) if summary.is_file() else {}

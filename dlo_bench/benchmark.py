@@ -13,7 +13,6 @@ difficulty) cell is written at once, so an interrupted run resumes;
 
 from __future__ import annotations
 
-import hashlib
 import json
 import math
 import os
@@ -39,6 +38,7 @@ from dlo_bench.paths import (
     transition_model_file,
 )
 from dlo_bench.report import json_ready, write_evaluation
+from dlo_env.atomic import file_digest
 from dlo_env.envs import ENVIRONMENTS
 from dlo_env.tasks import SPLIT_SIZES, SUITES
 from planners.interfaces import Policy, ShapeSurrogate
@@ -245,14 +245,6 @@ def load_shape_model(path: str | None) -> tuple[ShapeSurrogate | None, str]:
         return load(path), ""
     except (FileNotFoundError, ValueError) as exc:
         return None, str(exc).splitlines()[0]
-
-
-def file_digest(path: str | os.PathLike) -> str:
-    """The first 16 hex digits of the SHA-256 of a file ("" if there is none)."""
-    p = Path(path)
-    if not p.is_file():
-        return ""
-    return hashlib.sha256(p.read_bytes()).hexdigest()[:16]
 
 
 def cell_key(config: BenchmarkConfig, agent: LoadedAgent, env_id: str,

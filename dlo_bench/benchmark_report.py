@@ -12,9 +12,8 @@ import platform
 from pathlib import Path
 from typing import Any
 
-from dlo_bench.benchmark import file_digest
 from dlo_bench.report import cell_label, json_ready
-from dlo_env.atomic import write_text_atomic
+from dlo_env.atomic import file_digest, write_text_atomic
 
 
 def planning_time_ratios(rows: list[dict[str, Any]], slow: str = "physics-mpc",

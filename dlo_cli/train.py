@@ -4,6 +4,8 @@ from __future__ import annotations
 
 import argparse
 
+from dlo_cli.flags import positive_int
+
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     """Flags of ``dlo train``; model and training flags map onto the config dataclasses."""
@@ -19,7 +21,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                              "(the transition model, on transition data)")
     parser.add_argument("--steps", type=int, default=None,
                         help="--stage transition: optimiser steps (None: TransitionTrainConfig's)")
-    parser.add_argument("--members", type=int, default=None,
+    parser.add_argument("--members", type=positive_int, default=None,
                         help="--stage transition: networks in the ensemble (None: 5)")
     parser.add_argument("--rim-reach", type=float, default=None,
                         help="--stage transition: metres from the table's edge within which the "
@@ -64,13 +66,14 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--paper", action="store_true",
                         help="the paper's recipe: points output, batch 1024, 5 D-steps, Adam "
                              "2e-4, Encoder trained only after the GAN (overridable by the flags)")
-    parser.add_argument("--width", type=int, default=None, help="hidden units per layer")
-    parser.add_argument("--batch-size", type=int, default=None, help="shapes per batch")
-    parser.add_argument("--d-steps", type=int, default=None,
+    parser.add_argument("--width", type=positive_int, default=None, help="hidden units per layer")
+    parser.add_argument("--batch-size", type=positive_int, default=None, help="shapes per batch")
+    parser.add_argument("--d-steps", type=positive_int, default=None,
                         help="discriminator steps per generator step")
-    parser.add_argument("--threads", type=int, default=None, help="torch CPU threads")
-    parser.add_argument("--eval-every", type=int, default=None, help="steps between evaluations")
-    parser.add_argument("--report-size", type=int, default=2000,
+    parser.add_argument("--threads", type=positive_int, default=None, help="torch CPU threads")
+    parser.add_argument("--eval-every", type=positive_int, default=None,
+                        help="steps between evaluations")
+    parser.add_argument("--report-size", type=positive_int, default=2000,
                         help="held-out reference shapes of the final report")
     parser.add_argument("--no-progress", action="store_true", help="hide the progress bar")
 

@@ -22,7 +22,7 @@ def run(args: argparse.Namespace) -> int:
 
     from dlo_bench.progress import progress_bar
     from dlo_env.dataset.transitions import (
-        TransitionDataset,
+        load_transition_files,
         load_transitions,
         split_transitions,
     )
@@ -37,13 +37,10 @@ def run(args: argparse.Namespace) -> int:
 
     if args.threads:
         torch.set_num_threads(args.threads)
-    parts = [load_transitions(path) for path in args.data]
-    data = TransitionDataset.concatenate(parts)
-    data = TransitionDataset(**data.arrays(), metadata={**parts[0].metadata,
-                                                         "files": [str(p) for p in args.data]})
-    for path, part in zip(args.data[1:], parts[1:]):
-        if part.metadata.get("cord") != parts[0].metadata.get("cord"):
-            raise ValueError(f"--data {path} was collected with another cord than {args.data[0]}")
+    try:
+        data = load_transition_files(args.data)
+    except ValueError as exc:
+        raise ValueError(f"--data: {exc}") from exc
     if args.heldout is not None:
         heldout = load_transitions(args.heldout)
     else:

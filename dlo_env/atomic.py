@@ -8,6 +8,7 @@ and an interrupted write leaves the previous file as it was.
 
 from __future__ import annotations
 
+import hashlib
 import os
 import tempfile
 from collections.abc import Iterator
@@ -47,3 +48,11 @@ def write_text_atomic(path: str | os.PathLike, text: str) -> Path:
     with atomic_path(path) as tmp:
         tmp.write_text(text, newline="")
     return Path(path)
+
+
+def file_digest(path: str | os.PathLike) -> str:
+    """The first 16 hex digits of the SHA-256 of a file ("" if there is none)."""
+    p = Path(path)
+    if not p.is_file():
+        return ""
+    return hashlib.sha256(p.read_bytes()).hexdigest()[:16]

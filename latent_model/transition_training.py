@@ -355,6 +355,7 @@ def train_transition_model(
         real = max(1, round(tc.batch_size / (tc.teacher_moves + 1)))
     gen = torch.Generator(device="cpu").manual_seed(tc.seed * 1_000_003 + step)
     info = {"data": data.metadata.get("collect", {}), "files": data.metadata.get("files"),
+            "sources": data.metadata.get("sources"),
             "train_config": asdict(tc),
             "transitions": len(train), "data_transitions": len(data),
             "env_steps": data.env_steps()}

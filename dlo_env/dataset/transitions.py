@@ -50,6 +50,7 @@ from typing import Any
 
 import numpy as np
 
+from dlo_env.atomic import file_digest
 from dlo_env.checks import fractions, positive, positive_ints
 from dlo_env.cord import Cord, CordParams
 from dlo_env.dataset.chunks import (
@@ -336,6 +337,29 @@ def load_transitions(path: str | os.PathLike[str]) -> TransitionDataset:
         return TransitionDataset(**arrays, metadata=meta)
     except ValueError as exc:
         raise ValueError(f"{str(path)!r}: {exc}") from exc
+
+
+def load_transition_files(paths: list[str | os.PathLike[str]]) -> TransitionDataset:
+    """The transitions of several files as one dataset, in order, its metadata the first
+    file's plus ``files`` (the paths) and ``sources``: each file's path, count, SHA-256 digest
+    and collection settings, so a model trained on them records exactly what it saw.
+
+    Raises:
+        ValueError: One line: no paths, a file that ``load_transitions`` refuses, or files
+            collected with different cords.
+    """
+    if not paths:
+        raise ValueError("paths must name at least one transition file, got none")
+    parts = [load_transitions(path) for path in paths]
+    for path, part in zip(paths[1:], parts[1:]):
+        if part.metadata.get("cord") != parts[0].metadata.get("cord"):
+            raise ValueError(f"{str(path)!r} was collected with another cord than "
+                             f"{str(paths[0])!r}")
+    sources = [{"file": str(path), "transitions": len(part), "digest": file_digest(path),
+                "collect": part.metadata.get("collect", {})} for path, part in zip(paths, parts)]
+    data = TransitionDataset.concatenate(parts)
+    return TransitionDataset(**data.arrays(), metadata={
+        **parts[0].metadata, "files": [str(p) for p in paths], "sources": sources})
 
 
 def split_transitions(data: TransitionDataset, validation_fraction: float = 0.1,

@@ -12,6 +12,7 @@ from dlo_env.dataset.transitions import (
     TransitionCollectConfig,
     collect_transition_chunk,
     collect_transitions,
+    load_transition_files,
     load_transitions,
     save_transitions,
     split_transitions,
@@ -128,6 +129,37 @@ def test_files_round_trip_and_a_foreign_or_corrupt_file_gets_one_line(tmp_path, 
         assert "\n" not in str(info.value)
     with pytest.raises(FileNotFoundError, match="dlo collect --kind transitions"):
         load_transitions(tmp_path / "missing.npz")
+
+
+def test_several_files_load_as_one_dataset_recording_what_each_file_held(tmp_path, small):
+    other = tmp_path / "other.npz"
+    collect_transitions(other, 14, TransitionCollectConfig(chunk_size=7, seed=5,
+                                                            wide_fraction=0.5))
+    data = load_transition_files([small, other])
+    a, b = load_transitions(small), load_transitions(other)
+    assert len(data) == len(a) + len(b) == 44
+    assert np.array_equal(data.start[len(a):], b.start)
+    assert set(data.episode[:len(a)]).isdisjoint(data.episode[len(a):])  # episodes stay apart
+    assert data.metadata["files"] == [str(small), str(other)]
+    first, second = data.metadata["sources"]
+    assert (first["transitions"], second["transitions"]) == (30, 14)
+    assert (first["collect"]["seed"], second["collect"]["seed"]) == (0, 5)
+    assert second["collect"]["wide_fraction"] == 0.5
+    assert first["digest"] != second["digest"] and len(first["digest"]) == 16
+    copy = tmp_path / "copy.npz"  # the digest is of the content, not the name
+    copy.write_bytes(small.read_bytes())
+    assert load_transition_files([copy]).metadata["sources"][0]["digest"] == first["digest"]
+
+
+def test_files_of_another_cord_or_none_at_all_are_refused_in_one_line(tmp_path, small):
+    data = load_transitions(small)
+    cord = {**data.metadata["cord"], "friction": 0.9}
+    foreign = save_transitions(tmp_path / "foreign-cord.npz", transitions.TransitionDataset(
+        **data.arrays(), metadata={**data.metadata, "cord": cord}))
+    with pytest.raises(ValueError, match="foreign-cord.npz' was collected with another cord"):
+        load_transition_files([small, foreign])
+    with pytest.raises(ValueError, match="paths must name at least one transition file"):
+        load_transition_files([])
 
 
 def test_split_keeps_each_episode_on_one_side(small):
