@@ -15,6 +15,7 @@ from dlo_cli.flags import add_backend, backend_of, engine_text, number_in, posit
 _seed = number_in(int, 0, expected="an integer >= 0")
 _cosine = number_in(float, -1.0, 1.0, expected="a number in [-1, 1]")
 _share = number_in(float, 0.0, 1.0, expected="a number in [0, 1]")
+_weight = number_in(float, 0.0, None, expected="a number >= 0")
 
 
 def _npz_path(text: str) -> str:
@@ -46,6 +47,10 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help="--kind transitions: share of episodes starting from a shape of "
                              "wide_cord_shape (several bends, kinks; default 0: the "
                              "environments' random starts)")
+    parser.add_argument("--grasp-weights", type=_weight, nargs=3, default=None,
+                        metavar=("HEAD", "TAIL", "BOTH"),
+                        help="--kind transitions: relative chances of an episode holding the "
+                             "head, the tail or both ends (default 0.3 0.3 0.4)")
     parser.add_argument("--resume", action="store_true",
                         help="continue an interrupted run from OUT.parts/")
     add_backend(parser)
@@ -71,8 +76,10 @@ def run(args: argparse.Namespace) -> int:
         return run_transitions(args)
     if args.num_shapes is None:
         raise ValueError("--num-shapes is required with --kind shapes")
-    if args.wide_fraction is not None:
-        raise ValueError("--wide-fraction applies to --kind transitions, not to shapes")
+    for flag in ("wide_fraction", "grasp_weights"):
+        if getattr(args, flag) is not None:
+            raise ValueError(f"--{flag.replace('_', '-')} applies to --kind transitions, "
+                             "not to shapes")
 
     from dlo_env.dataset.collect import CollectConfig, collect
     from dlo_env.dataset.diversity import diversity_report

@@ -24,8 +24,12 @@ def run(args: argparse.Namespace) -> int:
 
     if args.num_transitions is None:
         raise ValueError("--num-transitions is required with --kind transitions")
-    wide = {} if args.wide_fraction is None else {"wide_fraction": args.wide_fraction}
-    config = TransitionCollectConfig(seed=args.seed, **wide)
+    if args.grasp_weights is not None and sum(args.grasp_weights) <= 0:
+        raise ValueError(f"--grasp-weights must have a positive sum, got {args.grasp_weights}")
+    given = {"wide_fraction": args.wide_fraction, "grasp_weights": args.grasp_weights and
+             tuple(args.grasp_weights)}
+    config = TransitionCollectConfig(seed=args.seed,
+                                     **{k: v for k, v in given.items() if v is not None})
     result = run_chunked(
         args, lambda progress: collect_transitions(
             args.out, args.num_transitions, config, workers=args.workers, resume=args.resume,

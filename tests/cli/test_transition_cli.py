@@ -60,3 +60,23 @@ def test_each_kind_needs_its_own_count(tmp_path, capsys):
     assert main(["collect", "--num-shapes", "5", "--wide-fraction", "0.5",
                  "--out", str(tmp_path / "z.npz")]) == 2
     assert "--wide-fraction applies to --kind transitions" in capsys.readouterr().err
+    assert main(["collect", "--num-shapes", "5", "--grasp-weights", "0", "0", "1",
+                 "--out", str(tmp_path / "z.npz")]) == 2
+    assert "--grasp-weights applies to --kind transitions" in capsys.readouterr().err
+
+
+def test_grasp_weights_choose_which_ends_the_episodes_hold(tmp_path, capsys):
+    out = tmp_path / "both.npz"
+    assert main(["collect", "--kind", "transitions", "--num-transitions", "12",
+                 "--grasp-weights", "0", "0", "2", "--out", str(out)]) == 0
+    data = load_transitions(out)
+    assert (data.grasp == 2).all()
+    assert data.metadata["collect"]["grasp_weights"] == [0, 0, 2]
+    bad = ["collect", "--kind", "transitions", "--num-transitions", "12", "--out",
+           str(tmp_path / "x.npz"), "--grasp-weights"]
+    assert main([*bad, "0", "0", "0"]) == 2
+    assert "--grasp-weights must have a positive sum" in capsys.readouterr().err
+    with pytest.raises(SystemExit):
+        main([*bad, "1", "-1", "1"])
+    assert "argument --grasp-weights: expected a number >= 0" in capsys.readouterr().err
+    assert not (tmp_path / "x.npz").exists()
