@@ -302,7 +302,7 @@ def train_transition_model(
         raise ValueError("model_config.mean_network: a mean network is made by distilling a "
                          "trained ensemble (TransitionTrainConfig.teacher, --teacher), not "
                          "trained with it")
-    teacher = None
+    teacher = init_record = None
     if tc.teacher:
         teacher, mc = _distil_from(tc.teacher, mc)
     torch.manual_seed(tc.seed)
@@ -322,6 +322,8 @@ def train_transition_model(
             raise ValueError(f"init {tc.init!r} is a model of another architecture or cord "
                              f"({start.config}) than the one trained ({mc})")
         model.net.load_state_dict(start.net.state_dict())
+        # What fine-tuning started from: its weights' fingerprint and its own provenance.
+        init_record = {"fingerprint": fingerprint(start.net), "info": start.info}
     net = None if teacher is None else trained  # what the losses run
     teacher_ensemble = None if teacher is None else fingerprint(model.net)
     optimiser = torch.optim.Adam(trained.parameters(), lr=tc.lr)
@@ -418,6 +420,8 @@ def train_transition_model(
         model.info["ensemble"] = (teacher.info.get("ensemble", teacher.info)
                                   if teacher.config.mean_network else teacher.info)
         model.info["teacher_ensemble"] = teacher_ensemble
+    if init_record is not None:
+        model.info["init_model"] = init_record
     model.save(out)
     with atomic_path(out / "transition-info.json") as tmp:
         tmp.write_text(json.dumps(model.info, indent=1, sort_keys=True))

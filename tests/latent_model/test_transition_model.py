@@ -19,6 +19,7 @@ from latent_model.transition_training import (
     CURVE_FILE,
     TransitionTrainConfig,
     chain_starts,
+    fingerprint,
     paired_moves,
     train_transition_model,
 )
@@ -351,6 +352,10 @@ def test_training_can_start_from_a_saved_model(data, tmp_path):
     d = np.full((3, 2), 0.06, dtype=np.float32)
     assert np.allclose(tuned.predict(shapes, "head", d), first.predict(shapes, "head", d),
                        atol=1e-3)  # float16 weights on disk
+    saved = TransitionModel.load(tmp_path / "a" / "transition.pt")
+    assert tuned.info["init_model"] == {"fingerprint": fingerprint(saved.net),
+                                        "info": saved.info}  # what it started from
+    assert "init_model" not in first.info
     wider = TransitionModelConfig(**{**TINY.__dict__, "width": 16})
     with pytest.raises(ValueError, match="another architecture"):
         train_transition_model(data, tmp_path / "c", still, wider, device="cpu")
