@@ -51,6 +51,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         metavar=("HEAD", "TAIL", "BOTH"),
                         help="--kind transitions: relative chances of an episode holding the "
                              "head, the tail or both ends (default 0.3 0.3 0.4)")
+    parser.add_argument("--rim-fraction", type=_share, default=None,
+                        help="--kind transitions: share of moves aimed at the nearest table edge "
+                             "(default 0.1; with the 0.25 aimed at the cord's middle at most 1)")
     parser.add_argument("--resume", action="store_true",
                         help="continue an interrupted run from OUT.parts/")
     add_backend(parser)
@@ -76,7 +79,7 @@ def run(args: argparse.Namespace) -> int:
         return run_transitions(args)
     if args.num_shapes is None:
         raise ValueError("--num-shapes is required with --kind shapes")
-    for flag in ("wide_fraction", "grasp_weights"):
+    for flag in ("wide_fraction", "grasp_weights", "rim_fraction"):
         if getattr(args, flag) is not None:
             raise ValueError(f"--{flag.replace('_', '-')} applies to --kind transitions, "
                              "not to shapes")

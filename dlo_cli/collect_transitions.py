@@ -22,12 +22,16 @@ def run(args: argparse.Namespace) -> int:
         collect_transitions,
     )
 
+    PUSH = TransitionCollectConfig.push_fraction  # noqa: N806
     if args.num_transitions is None:
         raise ValueError("--num-transitions is required with --kind transitions")
     if args.grasp_weights is not None and sum(args.grasp_weights) <= 0:
         raise ValueError(f"--grasp-weights must have a positive sum, got {args.grasp_weights}")
-    given = {"wide_fraction": args.wide_fraction, "grasp_weights": args.grasp_weights and
-             tuple(args.grasp_weights)}
+    if args.rim_fraction is not None and args.rim_fraction + PUSH > 1:
+        raise ValueError(f"--rim-fraction must be at most {1 - PUSH:g} (a share {PUSH:g} of "
+                         f"the moves is aimed at the cord's middle), got {args.rim_fraction:g}")
+    given = {"wide_fraction": args.wide_fraction, "rim_fraction": args.rim_fraction,
+             "grasp_weights": args.grasp_weights and tuple(args.grasp_weights)}
     config = TransitionCollectConfig(seed=args.seed,
                                      **{k: v for k, v in given.items() if v is not None})
     result = run_chunked(

@@ -65,13 +65,17 @@ def test_each_kind_needs_its_own_count(tmp_path, capsys):
     assert "--grasp-weights applies to --kind transitions" in capsys.readouterr().err
 
 
-def test_grasp_weights_choose_which_ends_the_episodes_hold(tmp_path, capsys):
+def test_grasp_weights_and_rim_fraction_choose_the_grasps_and_the_aims(tmp_path, capsys):
     out = tmp_path / "both.npz"
     assert main(["collect", "--kind", "transitions", "--num-transitions", "12",
                  "--grasp-weights", "0", "0", "2", "--out", str(out)]) == 0
     data = load_transitions(out)
     assert (data.grasp == 2).all()
     assert data.metadata["collect"]["grasp_weights"] == [0, 0, 2]
+    rim = tmp_path / "rim.npz"
+    assert main(["collect", "--kind", "transitions", "--num-transitions", "12",
+                 "--rim-fraction", "0.75", "--out", str(rim)]) == 0
+    assert load_transitions(rim).metadata["collect"]["rim_fraction"] == 0.75
     bad = ["collect", "--kind", "transitions", "--num-transitions", "12", "--out",
            str(tmp_path / "x.npz"), "--grasp-weights"]
     assert main([*bad, "0", "0", "0"]) == 2
@@ -79,4 +83,6 @@ def test_grasp_weights_choose_which_ends_the_episodes_hold(tmp_path, capsys):
     with pytest.raises(SystemExit):
         main([*bad, "1", "-1", "1"])
     assert "argument --grasp-weights: expected a number >= 0" in capsys.readouterr().err
+    assert main([*bad[:-1], "--rim-fraction", "0.8"]) == 2
+    assert "--rim-fraction must be at most 0.75" in capsys.readouterr().err
     assert not (tmp_path / "x.npz").exists()

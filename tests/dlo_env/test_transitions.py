@@ -162,6 +162,23 @@ def test_files_of_another_cord_or_none_at_all_are_refused_in_one_line(tmp_path, 
         load_transition_files([])
 
 
+@pytest.mark.parametrize("rim_fraction", [0.1, 0.75])
+def test_a_share_rim_fraction_of_the_moves_heads_for_the_nearest_edge(rim_fraction):
+    config = TransitionCollectConfig(rim_fraction=rim_fraction, push_fraction=0.0)
+    cord = Cord(CordParams(), grasp="head")
+    cord.reset(np.stack([np.linspace(-0.5, 0.5, 20), np.full(20, 0.6)], axis=1))
+    head = cord.gripper_positions()["head"]
+    axis = int(np.argmax(np.abs(head)))
+    normal = np.zeros(2)
+    normal[axis] = np.sign(head[axis])
+    rng = np.random.default_rng(0)
+    moves = np.array([transitions._draw_move(rng, cord, config) for _ in range(2000)])
+    cosine = moves @ normal / np.linalg.norm(moves, axis=1)
+    # Aimed ones are within 45 degrees of the edge's normal; a quarter of the others too.
+    within = np.mean(cosine > np.cos(np.pi / 4))
+    assert abs(within - (rim_fraction + 0.25 * (1 - rim_fraction))) < 0.03
+
+
 def test_split_keeps_each_episode_on_one_side(small):
     train, validation = split_transitions(load_transitions(small), 0.3, seed=0)
     assert len(train) + len(validation) == 30
