@@ -27,6 +27,7 @@ def _npz_path(text: str) -> str:
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     """Flags of ``dlo collect`` (defaults from ``CollectConfig``)."""
     from dlo_env.dataset.collect import CollectConfig
+    from dlo_env.dataset.transitions import TransitionCollectConfig
 
     parser.add_argument("--kind", choices=("shapes", "transitions"), default="shapes",
                         help="what to collect: cord-like shapes (shape-model data) or one-move "
@@ -50,7 +51,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--grasp-weights", type=_weight, nargs=3, default=None,
                         metavar=("HEAD", "TAIL", "BOTH"),
                         help="--kind transitions: relative chances of an episode holding the "
-                             "head, the tail or both ends (default 0.3 0.3 0.4)")
+                             "head, the tail or both ends (default " + " ".join(
+                                 f"{w:g}" for w in TransitionCollectConfig.grasp_weights) + ")")
     parser.add_argument("--rim-fraction", type=_share, default=None,
                         help="--kind transitions: share of moves aimed at the nearest table edge "
                              "(default 0.1; with the 0.25 aimed at the cord's middle at most 1)")

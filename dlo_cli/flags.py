@@ -6,21 +6,22 @@ Defaults come from the config dataclasses and the agent registry; ``docs/cli.md`
 from __future__ import annotations
 
 import argparse
+import math
 from collections.abc import Callable
 from typing import Any
 
 
 def number_in(kind: type, low: float | None = None, high: float | None = None,
               expected: str = "") -> Callable[[str], Any]:
-    """An argparse type: a ``kind`` (int or float) in ``[low, high]``, else a message saying
-    what was ``expected``."""
+    """An argparse type: a finite ``kind`` (int or float) in ``[low, high]``, else a message
+    saying what was ``expected``."""
 
     def parse(text: str) -> Any:
         try:
             value = kind(text)
         except ValueError:
             value = None
-        if value is None or (low is not None and value < low) or (
+        if value is None or not math.isfinite(value) or (low is not None and value < low) or (
                 high is not None and value > high):
             raise argparse.ArgumentTypeError(f"expected {expected}, got {text!r}")
         return value

@@ -4,7 +4,9 @@ from __future__ import annotations
 
 import argparse
 
-from dlo_cli.flags import positive_int
+from dlo_cli.flags import number_in, positive_int
+
+non_negative_int = number_in(int, 0, expected="an integer >= 0")
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
@@ -19,7 +21,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--stage", choices=("gan", "encoder", "all", "transition"), default="all",
                         help="what to train: gan, encoder, all (the shape model), or transition "
                              "(the transition model, on transition data)")
-    parser.add_argument("--steps", type=int, default=None,
+    parser.add_argument("--steps", type=positive_int, default=None,
                         help="--stage transition: optimiser steps (None: TransitionTrainConfig's)")
     parser.add_argument("--members", type=positive_int, default=None,
                         help="--stage transition: networks in the ensemble (None: 5)")
@@ -41,7 +43,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--teacher-weight", type=float, default=None,
                         help="--stage transition with --teacher: weight of the error to the "
                              "teacher's mean against the error to the data (None: 1)")
-    parser.add_argument("--teacher-moves", type=int, default=None,
+    parser.add_argument("--teacher-moves", type=non_negative_int, default=None,
                         help="--stage transition with --teacher: extra inputs per training "
                              "transition, its start with another transition's move, labelled "
                              "by the teacher's mean alone (None: 0, the data's moves only)")
@@ -53,9 +55,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                              "TransitionTrainConfig's; lower it when fine-tuning with --init)")
     parser.add_argument("--minutes", type=float, default=30.0,
                         help="training wall time of the run, evaluations excluded")
-    parser.add_argument("--gan-steps", type=int, default=None,
+    parser.add_argument("--gan-steps", type=positive_int, default=None,
                         help="train the GAN for this many generator steps instead of minutes")
-    parser.add_argument("--encoder-steps", type=int, default=None,
+    parser.add_argument("--encoder-steps", type=positive_int, default=None,
                         help="train the Encoder for this many steps instead of minutes")
     parser.add_argument("--device", default="auto", help="auto (cuda if available), cpu, cuda")
     parser.add_argument("--seed", type=int, default=0, help="seed of the training")

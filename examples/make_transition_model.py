@@ -2,10 +2,11 @@
 
 One command runs the whole documented recipe, each step through the ``dlo`` command line:
 collect the training files and the held-out file (``dlo collect --kind transitions``; a file
-already there is reused when its settings are the recipe's), train the ensemble, then distil
-its mean network (``dlo train --stage transition``). Every step resumes where a killed run
-stopped, so the same command continues it. About 2.8 hours on 2 cores (collection 30 min,
-the ensemble 95, the mean network 15). Nothing tracked is written; to ship the result:
+already there is reused when its settings are the recipe's), then the trainings of
+``TRAININGS`` in order (``dlo train --stage transition``): the ensemble, then its mean network
+distilled from it. Every step resumes where a killed run stopped, so the same command continues
+it. About 2.8 hours on 2 cores (collection 30 min, the ensemble 95, the mean network 15).
+Nothing tracked is written; to ship the result:
 
     python examples/make_transition_model.py --out runs/transition-recipe
     cp runs/transition-recipe/mean/transition.pt \
@@ -20,25 +21,31 @@ from __future__ import annotations
 
 import argparse
 from pathlib import Path
+from typing import Any
 
 from dlo_cli.flags import positive_int
 
 ROOT = Path(__file__).resolve().parents[1]
 
-#: The shipped data: (file name, transitions, seed, share of wide starts). The first files
-#: train; the last is the held-out file of the reports (never trained on or tuned with).
-DATA = (
-    ("transitions-train.npz", 60_000, 0, 0.0),
-    ("transitions-train-2.npz", 40_000, 2, 0.0),
-    ("transitions-train-3.npz", 60_000, 3, 1.0),
-    ("transitions-train-5.npz", 60_000, 5, 0.5),
-    ("transitions-train-6.npz", 60_000, 6, 0.5),
-    ("transitions-heldout.npz", 6_000, 1, 0.0),
+#: The shipped data: (file name, transitions, collection settings of
+#: ``TransitionCollectConfig``; the others are its defaults). The last file is the held-out
+#: file of the reports (never trained on or tuned with).
+DATA: tuple[tuple[str, int, dict[str, Any]], ...] = (
+    ("transitions-train.npz", 60_000, {"seed": 0}),
+    ("transitions-train-2.npz", 40_000, {"seed": 2}),
+    ("transitions-train-3.npz", 60_000, {"seed": 3, "wide_fraction": 1.0}),
+    ("transitions-train-5.npz", 60_000, {"seed": 5, "wide_fraction": 0.5}),
+    ("transitions-train-6.npz", 60_000, {"seed": 6, "wide_fraction": 0.5}),
+    ("transitions-heldout.npz", 6_000, {"seed": 1}),
 )
-#: Training steps of the ensemble; of the mean network, with its learning rate and the
-#: teacher-labelled moves per training transition (``--teacher-moves``).
-ENSEMBLE_STEPS = 200_000
-MEAN_STEPS, MEAN_LR, MEAN_TEACHER_MOVES = 100_000, 5e-4, 1
+#: The trainings, in order: (folder, how many of DATA's first files it trains on, settings of
+#: ``TransitionTrainConfig``). ``teacher`` and ``init`` name an earlier training's folder.
+TRAININGS: tuple[tuple[str, int, dict[str, Any]], ...] = (
+    ("ensemble", 5, {"steps": 200_000}),
+    ("mean", 5, {"teacher": "ensemble", "steps": 100_000, "lr": 5e-4, "teacher_moves": 1}),
+)
+#: The training whose model ships.
+SHIPPED = TRAININGS[-1][0]
 
 
 def dlo(*argv: object) -> None:
@@ -52,7 +59,16 @@ def dlo(*argv: object) -> None:
         raise SystemExit(code)
 
 
-def mismatch(path: Path, count: int, seed: int, wide: float) -> str | None:
+def flags(settings: dict[str, Any]) -> list[object]:
+    """``--name value...`` of settings (a tuple gives several values)."""
+    out: list[object] = []
+    for key, value in settings.items():
+        out += [f"--{key.replace('_', '-')}",
+                *(value if isinstance(value, (tuple, list)) else [value])]
+    return out
+
+
+def mismatch(path: Path, count: int, settings: dict[str, Any]) -> str | None:
     """Why the file at ``path`` is not the recipe's (one line), or None if it is."""
     from dlo_env.dataset.transitions import TransitionCollectConfig, load_transitions
 
@@ -61,30 +77,22 @@ def mismatch(path: Path, count: int, seed: int, wide: float) -> str | None:
     except (ValueError, OSError) as exc:
         return f"{path} cannot be read: {exc}"
     # Every setting as the recipe's; one a file predates was its default then and now.
-    want = TransitionCollectConfig(seed=seed, wide_fraction=wide).to_json()
+    want = TransitionCollectConfig(**settings).to_json()
     made = {**TransitionCollectConfig().to_json(), **data.metadata.get("collect", {})}
     differ = [k for k in want if made.get(k) != want[k]] + ([] if len(data) == count
                                                            else ["transitions"])
     if differ:
-        return (f"{path} is not the recipe's file ({count} transitions, seed {seed}, wide "
-                f"fraction {wide}): {', '.join(differ)} differ")
+        said = ", ".join(f"{k} {v}" for k, v in settings.items())
+        return (f"{path} is not the recipe's file ({count} transitions, {said}): "
+                f"{', '.join(differ)} differ")
     return None
-
-
-def collect(path: Path, count: int, seed: int, wide: float, workers: int) -> None:
-    """``path`` holding the recipe's transitions: collected (or resumed) unless there."""
-    if path.exists():
-        print(f"{path}: there, {count} transitions as the recipe says", flush=True)
-        return
-    dlo("collect", "--kind", "transitions", "--num-transitions", count, "--seed", seed,
-        "--wide-fraction", wide, "--workers", workers, "--out", path, "--resume")
 
 
 def main(argv: list[str] | None = None) -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--out", type=Path, default=None,
-                        help="folder of the ensemble (ensemble/) and the mean network (mean/); "
-                             "default runs/transition-recipe (with --scale: "
+                        help="folder of the trainings (ensemble/, mean/); default "
+                             "runs/transition-recipe (with --scale: "
                              "runs/transition-recipe-scale-S)")
     parser.add_argument("--data-dir", type=Path, default=None,
                         help="where the transition files are read or collected; default data "
@@ -106,23 +114,28 @@ def main(argv: list[str] | None = None) -> None:
 
     files = [data_dir / name for name, *_ in DATA]
     # Every file already there is checked before anything is collected or trained.
-    wrong = [why for path, (_, count, seed, wide) in zip(files, DATA) if path.exists()
-             if (why := mismatch(path, scaled(count), seed, wide))]
+    wrong = [why for path, (_, count, settings) in zip(files, DATA) if path.exists()
+             if (why := mismatch(path, scaled(count), settings))]
     if wrong:
         raise SystemExit("; ".join(wrong) + "; move them away or pass another --data-dir")
     data_dir.mkdir(parents=True, exist_ok=True)
-    for path, (_, count, seed, wide) in zip(files, DATA):
-        collect(path, scaled(count), seed, wide, args.workers)
-    train, heldout = files[:-1], files[-1]
-    common = ["--data", *train, "--heldout", heldout, "--threads", args.threads]
-    ensemble, mean = out / "ensemble", out / "mean"
-    dlo("train", "--stage", "transition", "--steps", scaled(ENSEMBLE_STEPS),
-        "--out", ensemble, *common)
-    dlo("train", "--stage", "transition", "--teacher", ensemble / "transition.pt",
-        "--steps", scaled(MEAN_STEPS), "--lr", MEAN_LR, "--teacher-moves", MEAN_TEACHER_MOVES,
-        "--out", mean, *common)
-    print(f"the model: {mean / 'transition.pt'}; to ship it: cp {mean}/transition.pt "
-          f"{mean}/transition-metrics.* latent_model/pretrained/")
+    for path, (_, count, settings) in zip(files, DATA):
+        if path.exists():
+            print(f"{path}: there, {count} transitions as the recipe says", flush=True)
+        else:
+            dlo("collect", "--kind", "transitions", "--num-transitions", scaled(count),
+                *flags(settings), "--workers", args.workers, "--out", path, "--resume")
+    heldout = files[-1]
+    for folder, used, settings in TRAININGS:
+        settings = {**settings, "steps": scaled(settings["steps"])}
+        for key in ("teacher", "init"):  # an earlier training's model
+            if key in settings:
+                settings[key] = out / settings[key] / "transition.pt"
+        dlo("train", "--stage", "transition", *flags(settings), "--data", *files[:used],
+            "--heldout", heldout, "--threads", args.threads, "--out", out / folder)
+    shipped = out / SHIPPED
+    print(f"the model: {shipped / 'transition.pt'}; to ship it: cp {shipped}/transition.pt "
+          f"{shipped}/transition-metrics.* {ROOT / 'latent_model' / 'pretrained'}/")
 
 
 if __name__ == "__main__":

@@ -341,6 +341,10 @@ def train_transition_model(
         if saved.get("teacher_ensemble", teacher_ensemble) != teacher_ensemble:
             raise ValueError(f"resume: {checkpoint} distils another ensemble than teacher "
                              f"{tc.teacher!r} holds now; use that teacher or another --out")
+        started_from = init_record and init_record["fingerprint"]
+        if saved.get("init_fingerprint", started_from) != started_from:
+            raise ValueError(f"resume: {checkpoint} fine-tunes another model than init "
+                             f"{tc.init!r} holds now; use that model or another --out")
         trained.load_state_dict(saved["net"])
         optimiser.load_state_dict(saved["optimiser"])
         step = int(saved["step"])
@@ -409,7 +413,8 @@ def train_transition_model(
             save_atomic({"format": CHECKPOINT_FORMAT, "format_version": 1, "step": step,
                          "train_config": asdict(tc), "model_config": asdict(mc),
                          "net": trained.state_dict(), "optimiser": optimiser.state_dict(),
-                         "teacher_ensemble": teacher_ensemble},
+                         "teacher_ensemble": teacher_ensemble,
+                         "init_fingerprint": init_record and init_record["fingerprint"]},
                         checkpoint)
         if progress is not None:
             progress(step, stats)

@@ -102,7 +102,8 @@ class TransitionCollectConfig:
     Attributes:
         seed: Root seed; chunk ``i`` uses the ``i``-th child of ``SeedSequence(seed)``.
         moves_per_episode: Moves applied to one cord after its random start.
-        grasp_weights: Probabilities of an episode holding the head, the tail, or both ends.
+        grasp_weights: Relative chances of an episode holding the head, the tail, or both
+            ends (normalised to probabilities when drawn).
         min_move: Shortest move of an end, metres.
         max_move: Longest move of an end, metres.
         push_fraction: Share of moves aimed at the cord's middle (within +-60 degrees).
@@ -136,7 +137,8 @@ class TransitionCollectConfig:
             raise ValueError(f"seed must be an integer >= 0, got {self.seed!r}")
         positive_ints(self, "moves_per_episode", "chunk_size")
         weights = np.asarray(self.grasp_weights, dtype=np.float64)
-        if weights.shape != (3,) or (weights < 0).any() or weights.sum() <= 0:
+        if weights.shape != (3,) or not np.isfinite(weights).all() or (weights < 0).any() \
+                or weights.sum() <= 0:
             raise ValueError("grasp_weights must be 3 non-negative weights (head, tail, both) "
                              f"with a positive sum, got {self.grasp_weights!r}")
         if not 0.0 < self.min_move <= self.max_move:
@@ -331,7 +333,7 @@ def load_transitions(path: str | os.PathLike[str]) -> TransitionDataset:
     arrays, meta = load_npz(
         path, format_name=FORMAT_NAME, format_version=FORMAT_VERSION, names=ARRAY_NAMES,
         what="transition dataset",
-        missing_hint=("make one with `dlo collect --kind transitions --num N "
+        missing_hint=("make one with `dlo collect --kind transitions --num-transitions N "
                       f"--out {Path(path).name}`"))
     try:
         return TransitionDataset(**arrays, metadata=meta)
@@ -339,27 +341,46 @@ def load_transitions(path: str | os.PathLike[str]) -> TransitionDataset:
         raise ValueError(f"{str(path)!r}: {exc}") from exc
 
 
-def load_transition_files(paths: list[str | os.PathLike[str]]) -> TransitionDataset:
-    """The transitions of several files as one dataset, in order, its metadata the first
-    file's plus ``files`` (the paths) and ``sources``: each file's path, count, SHA-256 digest
-    and collection settings, so a model trained on them records exactly what it saw.
+def load_transition_files(paths: str | os.PathLike[str] | list[str | os.PathLike[str]]
+                          ) -> TransitionDataset:
+    """The transitions of one or several files as one dataset, in order.
+
+    Its metadata holds what the files share (the format, the cord, the collection settings
+    they agree on, under ``collect``), ``files`` (the paths) and ``sources``: each file's path,
+    count, SHA-256 digest and collection settings, so a model trained on them records exactly
+    what it saw.
 
     Raises:
-        ValueError: One line: no paths, a file that ``load_transitions`` refuses, or files
-            collected with different cords.
+        FileNotFoundError: A path with no file.
+        ValueError: One line: no paths, the same file twice, a file that ``load_transitions``
+            refuses, or files collected with different cords or action sizes.
     """
+    paths = [paths] if isinstance(paths, (str, os.PathLike)) else list(paths)
     if not paths:
         raise ValueError("paths must name at least one transition file, got none")
     parts = [load_transitions(path) for path in paths]
-    for path, part in zip(paths[1:], parts[1:]):
-        if part.metadata.get("cord") != parts[0].metadata.get("cord"):
-            raise ValueError(f"{str(path)!r} was collected with another cord than "
-                             f"{str(paths[0])!r}")
     sources = [{"file": str(path), "transitions": len(part), "digest": file_digest(path),
                 "collect": part.metadata.get("collect", {})} for path, part in zip(paths, parts)]
+    first = parts[0].metadata
+    for path, part, source in zip(paths[1:], parts[1:], sources[1:]):
+        if part.metadata.get("cord") != first.get("cord"):
+            raise ValueError(f"{str(path)!r} was collected with another cord than "
+                             f"{str(paths[0])!r}")
+        if source["collect"].get("max_step") != sources[0]["collect"].get("max_step"):
+            raise ValueError(f"{str(path)!r} was collected with another max_step than "
+                             f"{str(paths[0])!r}")
+    digests = [source["digest"] for source in sources]
+    for k, digest in enumerate(digests):
+        if digest in digests[:k]:
+            raise ValueError(f"{str(paths[k])!r} holds the same transitions as "
+                             f"{str(paths[digests.index(digest)])!r}; give each file once")
+    shared = {k: v for k, v in sources[0]["collect"].items()
+              if all(source["collect"].get(k) == v for source in sources)}
+    keep = {k: first[k] for k in ("format", "format_version", "cord", "n_points", "grasp_names")
+            if k in first}
     data = TransitionDataset.concatenate(parts)
     return TransitionDataset(**data.arrays(), metadata={
-        **parts[0].metadata, "files": [str(p) for p in paths], "sources": sources})
+        **keep, "collect": shared, "files": [str(p) for p in paths], "sources": sources})
 
 
 def split_transitions(data: TransitionDataset, validation_fraction: float = 0.1,

@@ -146,9 +146,15 @@ def test_several_files_load_as_one_dataset_recording_what_each_file_held(tmp_pat
     assert (first["collect"]["seed"], second["collect"]["seed"]) == (0, 5)
     assert second["collect"]["wide_fraction"] == 0.5
     assert first["digest"] != second["digest"] and len(first["digest"]) == 16
+    assert "seed" not in data.metadata["collect"]  # the files differ in it
+    assert data.metadata["collect"]["max_step"] == first["collect"]["max_step"]  # shared
+    assert "num_transitions" not in data.metadata  # no one file's counts for the whole
     copy = tmp_path / "copy.npz"  # the digest is of the content, not the name
     copy.write_bytes(small.read_bytes())
-    assert load_transition_files([copy]).metadata["sources"][0]["digest"] == first["digest"]
+    alone = load_transition_files(str(copy))  # one path
+    assert alone.metadata["sources"][0]["digest"] == first["digest"] and len(alone) == 30
+    with pytest.raises(ValueError, match="copy.npz' holds the same transitions as .*small.npz'"):
+        load_transition_files([small, other, copy])
 
 
 def test_files_of_another_cord_or_none_at_all_are_refused_in_one_line(tmp_path, small):

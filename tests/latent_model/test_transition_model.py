@@ -517,6 +517,26 @@ def test_an_interrupted_distillation_resumes_from_its_checkpoint_and_only_with_i
         train_transition_model(data, tmp_path / "student", longer, device="cpu", resume=True)
 
 
+def test_a_fine_tuning_resumes_only_from_the_model_it_started_from(data, tmp_path):
+    tc = TransitionTrainConfig(steps=10, batch_size=32, chain_batch=8, eval_every=10,
+                               validation_fraction=0.2)
+    train_transition_model(data, tmp_path / "first", tc, TINY, device="cpu")
+    init = str(tmp_path / "first" / "transition.pt")
+    tune = TransitionTrainConfig(**{**tc.__dict__, "steps": 20, "init": init})
+
+    def stop_at_15(step, stats):
+        if step == 15:
+            raise _Stop
+
+    with pytest.raises(_Stop):
+        train_transition_model(data, tmp_path / "tuned", tune, TINY, device="cpu",
+                               progress=stop_at_15)
+    torch.manual_seed(7)
+    TransitionModel(TINY, device="cpu").save(init)  # another model where init was
+    with pytest.raises(ValueError, match="fine-tunes another model than init"):
+        train_transition_model(data, tmp_path / "tuned", tune, TINY, device="cpu", resume=True)
+
+
 def test_a_checkpoint_from_before_distillation_existed_still_resumes(data, tmp_path):
     tc = TransitionTrainConfig(steps=20, batch_size=32, chain_batch=8, eval_every=10,
                                validation_fraction=0.2)
