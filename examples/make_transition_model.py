@@ -68,6 +68,14 @@ def flags(settings: dict[str, Any]) -> list[object]:
     return out
 
 
+def short(path: Path) -> Path:
+    """``path`` relative to the working directory when inside it (what a model records)."""
+    try:
+        return path.resolve().relative_to(Path.cwd().resolve())
+    except ValueError:
+        return path
+
+
 def mismatch(path: Path, count: int, settings: dict[str, Any]) -> str | None:
     """Why the file at ``path`` is not the recipe's (one line), or None if it is."""
     from dlo_env.dataset.transitions import TransitionCollectConfig, load_transitions
@@ -112,7 +120,7 @@ def main(argv: list[str] | None = None) -> None:
     def scaled(n: int) -> int:
         return max(1, round(n * args.scale))
 
-    files = [data_dir / name for name, *_ in DATA]
+    files = [short(data_dir / name) for name, *_ in DATA]
     # Every file already there is checked before anything is collected or trained.
     wrong = [why for path, (_, count, settings) in zip(files, DATA) if path.exists()
              if (why := mismatch(path, scaled(count), settings))]
@@ -125,7 +133,7 @@ def main(argv: list[str] | None = None) -> None:
         else:
             dlo("collect", "--kind", "transitions", "--num-transitions", scaled(count),
                 *flags(settings), "--workers", args.workers, "--out", path, "--resume")
-    heldout = files[-1]
+    heldout, out = files[-1], short(out)
     for folder, used, settings in TRAININGS:
         settings = {**settings, "steps": scaled(settings["steps"])}
         for key in ("teacher", "init"):  # an earlier training's model

@@ -143,10 +143,11 @@ def test_the_full_recipe_reads_data_and_writes_runs_of_the_repository(tmp_path, 
     calls = []
     monkeypatch.setattr(recipe, "dlo", lambda *argv: calls.append([str(a) for a in argv]))
     monkeypatch.setattr(recipe, "ROOT", tmp_path)
+    monkeypatch.chdir(tmp_path)  # paths inside the working directory are given relative to it
     recipe.main([])
     outs = [c[c.index("--out") + 1] for c in calls]
-    assert outs == [str(tmp_path / "data" / name) for name, *_ in recipe.DATA] + [
-        str(tmp_path / "runs" / "transition-recipe" / folder) for folder, *_ in recipe.TRAININGS]
+    assert outs == [str(Path("data") / name) for name, *_ in recipe.DATA] + [
+        str(Path("runs") / "transition-recipe" / folder) for folder, *_ in recipe.TRAININGS]
     count = calls[0][calls[0].index("--num-transitions") + 1]
     assert count == str(recipe.DATA[0][1])  # unscaled
 
