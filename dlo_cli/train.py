@@ -8,6 +8,18 @@ from dlo_cli.flags import number_in, positive_int
 
 non_negative_int = number_in(int, 0, expected="an integer >= 0")
 
+#: Flags that only one kind of stage reads: "transition", or "shape" (gan, encoder, all).
+#: Given to the other kind they would be silently ignored, so they are an error there.
+STAGE_FLAGS = {
+    "transition": ("steps", "members", "rim_reach", "rim_targets", "no_mirror", "init",
+                   "teacher", "teacher_weight", "teacher_moves", "chain_weight", "lr"),
+    "shape": ("minutes", "gan_steps", "encoder_steps", "representation", "output", "paper",
+              "d_steps", "report_size"),
+}
+#: Defaults of the shape stages' flags that are None on the command line (so that giving one
+#: with --stage transition can be told apart from leaving it).
+SHAPE_DEFAULTS = {"minutes": 30.0, "report_size": 2000}
+
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     """Flags of ``dlo train``; model and training flags map onto the config dataclasses."""
@@ -53,8 +65,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--lr", type=float, default=None,
                         help="--stage transition: starting learning rate (None: "
                              "TransitionTrainConfig's; lower it when fine-tuning with --init)")
-    parser.add_argument("--minutes", type=float, default=30.0,
-                        help="training wall time of the run, evaluations excluded")
+    parser.add_argument("--minutes", type=float, default=None,
+                        help="training wall time of the GAN and Encoder, evaluations excluded "
+                             f"(None: {SHAPE_DEFAULTS['minutes']:g})")
     parser.add_argument("--gan-steps", type=positive_int, default=None,
                         help="train the GAN for this many generator steps instead of minutes")
     parser.add_argument("--encoder-steps", type=positive_int, default=None,
@@ -75,13 +88,30 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--threads", type=positive_int, default=None, help="torch CPU threads")
     parser.add_argument("--eval-every", type=positive_int, default=None,
                         help="steps between evaluations")
-    parser.add_argument("--report-size", type=positive_int, default=2000,
-                        help="held-out reference shapes of the final report")
+    parser.add_argument("--report-size", type=positive_int, default=None,
+                        help="held-out reference shapes of the shape model's final report "
+                             f"(None: {SHAPE_DEFAULTS['report_size']})")
     parser.add_argument("--no-progress", action="store_true", help="hide the progress bar")
+
+
+def check_stage_flags(args: argparse.Namespace) -> None:
+    """Refuse a flag the chosen stage would ignore (one line naming it and the stages)."""
+    kind = "transition" if args.stage == "transition" else "shape"
+    for other, names in STAGE_FLAGS.items():
+        given = [n for n in names if other != kind and getattr(args, n) not in (None, False)]
+        if given:
+            stages = "--stage transition" if other == "transition" else \
+                "--stage gan, encoder or all"
+            flag = "--" + given[0].replace("_", "-")
+            raise ValueError(f"{flag} applies to {stages} only, not to --stage {args.stage}")
 
 
 def run(args: argparse.Namespace) -> int:
     """Train, then print the quality report against the floors."""
+    check_stage_flags(args)
+    for name, value in SHAPE_DEFAULTS.items():
+        if getattr(args, name) is None:
+            setattr(args, name, value)
     if args.stage == "transition":
         from dlo_cli.train_transition import run as run_transition
 

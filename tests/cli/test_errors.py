@@ -121,3 +121,20 @@ def test_collect_runs_on_the_core_install_without_tqdm_torch_or_matplotlib(tmp_p
     assert done.returncode == 0, done.stderr
     with np.load(out, allow_pickle=False) as data:
         assert data["shapes"].shape == (30, 20, 2)
+
+
+@pytest.mark.parametrize("stage, flags, named", [
+    ("gan", ["--teacher", "model.pt"], "--teacher applies to --stage transition only"),
+    ("all", ["--lr", "1e-3"], "--lr applies to --stage transition only"),
+    ("encoder", ["--no-mirror"], "--no-mirror applies to --stage transition only"),
+    ("transition", ["--gan-steps", "5"], "--gan-steps applies to --stage gan, encoder or all"),
+    ("transition", ["--minutes", "3"], "--minutes applies to --stage gan, encoder or all"),
+    ("transition", ["--report-size", "9"], "--report-size applies to --stage gan, encoder"),
+])
+def test_a_flag_the_stage_would_ignore_is_one_line_naming_it(stage, flags, named, tmp_path,
+                                                             capsys):
+    line = _one_line_error(capsys, main(["train", "--stage", stage, "--data",
+                                         str(tmp_path / "x.npz"), "--out", str(tmp_path / "r"),
+                                         *flags]))
+    assert named in line and f"not to --stage {stage}" in line
+    assert not (tmp_path / "r").exists()
