@@ -12,7 +12,8 @@ non_negative_int = number_in(int, 0, expected="an integer >= 0")
 #: Given to the other kind they would be silently ignored, so they are an error there.
 STAGE_FLAGS = {
     "transition": ("steps", "members", "rim_reach", "rim_targets", "no_mirror", "init",
-                   "teacher", "teacher_weight", "teacher_moves", "chain_weight", "lr"),
+                   "teacher", "mean_by_grasp", "teacher_weight", "teacher_moves",
+                   "chain_weight", "lr"),
     "shape": ("minutes", "gan_steps", "encoder_steps", "representation", "output", "paper",
               "d_steps", "report_size"),
 }
@@ -52,6 +53,10 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--teacher", default=None,
                         help="--stage transition: distil a mean network for this transition "
                              "model file (its ensemble is kept; predict then runs one network)")
+    parser.add_argument("--mean-by-grasp", action="store_true",
+                        help="--stage transition with --teacher: the mean network is two, one "
+                             "for moves of one end and one for moves of both ends (each "
+                             "prediction runs one)")
     parser.add_argument("--teacher-weight", type=float, default=None,
                         help="--stage transition with --teacher: weight of the error to the "
                              "teacher's mean against the error to the data (None: 1)")

@@ -63,6 +63,11 @@ def run(args: argparse.Namespace) -> int:
         raise ValueError("--width, --members, --rim-reach, --rim-targets and --no-mirror shape "
                          "a new ensemble, not --teacher's mean network (its architecture is the "
                          "teacher's)")
+    if args.mean_by_grasp and not args.teacher:
+        raise ValueError("--mean-by-grasp shapes the mean network a distillation makes; it "
+                         "needs --teacher")
+    if args.mean_by_grasp:
+        model_kw = {"mean_network": True, "mean_by_grasp": True}
     tc = replace(TransitionTrainConfig(), **train_kw)
     mc = replace(TransitionModelConfig(), **model_kw)
     out = Path(args.out)

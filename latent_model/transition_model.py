@@ -57,7 +57,8 @@ MODEL_FILE = "transition.pt"
 #: Predictions per network call in ``predict`` (keeps activations in cache).
 PREDICT_CHUNK = 4096
 #: Values of config fields added after the first files were written, for files without them.
-LEGACY_CONFIG = {"rim_targets": 1, "mean_network": False, "mirror": False}
+LEGACY_CONFIG = {"rim_targets": 1, "mean_network": False, "mirror": False,
+                 "mean_by_grasp": False}
 
 
 @dataclass(frozen=True)
@@ -81,6 +82,9 @@ class TransitionModelConfig:
             held).
         mean_network: The model also holds one network distilled from the ensemble's mean,
             which makes ``predict``'s prediction (the ensemble gives the spread).
+        mean_by_grasp: The mean network is two networks of this size, one for moves of one
+            end and one for moves of both ends (``GraspRoutedMLP``): twice the weights, each
+            prediction still at the cost of one network. Needs ``mean_network``.
         mirror: Mirror-equivariant by construction: the networks only see cords whose
             centroid lies on the left of the move's line (y >= 0 in the move frame); a cord
             on the right is mirrored across the line, predicted, and the prediction mirrored
@@ -101,6 +105,7 @@ class TransitionModelConfig:
     rim_targets: int = 2
     mean_network: bool = False
     mirror: bool = True
+    mean_by_grasp: bool = False
 
     def __post_init__(self) -> None:
         positive_ints(self, "n_points", "members", "width", "depth")
@@ -108,6 +113,9 @@ class TransitionModelConfig:
             raise ValueError(f"TransitionModelConfig.rim_targets must be 1 or 2, "
                              f"got {self.rim_targets!r}")
         positive(self, "cord_length", "max_step", "move_scale", "output_scale", "rim_reach")
+        if self.mean_by_grasp and not self.mean_network:
+            raise ValueError("TransitionModelConfig.mean_by_grasp needs mean_network=True "
+                             "(it splits the mean network by grasp)")
 
     @property
     def inputs(self) -> int:
@@ -145,6 +153,16 @@ class EnsembleMLP(nn.Module):
         """Networks in the ensemble."""
         return self.weights[0].shape[0]
 
+    def member(self, x: torch.Tensor, index: int) -> torch.Tensor:
+        """Network ``index`` alone: ``(B, inputs)`` -> ``(B, outputs)``."""
+        last = len(self.weights) - 1
+        h = x
+        for i, (w, b) in enumerate(zip(self.weights, self.biases)):
+            h = torch.addmm(b[index], h, w[index])
+            if i < last:
+                h = nn.functional.silu(h)
+        return h
+
     def forward(self, x: torch.Tensor, members: int | None = None) -> torch.Tensor:
         """``(B, inputs)`` or ``(members, B, inputs)`` -> ``(members, B, outputs)``; with
         ``members`` (``x`` shared, 2-D) only the first ``members`` networks run."""
@@ -156,6 +174,44 @@ class EnsembleMLP(nn.Module):
             if i < last:
                 h = nn.functional.silu(h)
         return h
+
+
+class GraspRoutedMLP(nn.Module):
+    """One network to its callers, two inside: rows of moves of one end go to the first,
+    rows of moves of both ends to the second (``TransitionModel.features`` ends with that
+    flag). Each row costs one network; the two do not share capacity.
+
+    Args:
+        inputs, width, depth, outputs: As ``EnsembleMLP``'s.
+    """
+
+    def __init__(self, inputs: int, width: int, depth: int, outputs: int) -> None:
+        super().__init__()
+        self.routes = EnsembleMLP(2, inputs, width, depth, outputs)
+        self.outputs = outputs
+
+    @property
+    def members(self) -> int:
+        """It predicts as one network."""
+        return 1
+
+    def forward(self, x: torch.Tensor, members: int | None = None) -> torch.Tensor:
+        """``(B, inputs)`` or ``(1, B, inputs)`` -> ``(1, B, outputs)``."""
+        if x.dim() == 3:
+            if x.shape[0] != 1:
+                raise ValueError(f"a grasp-routed mean network is one network, got inputs for "
+                                 f"{x.shape[0]}")
+            x = x[0]
+        both = x[:, -1] > 0.5
+        if not both.any():
+            return self.routes.member(x, 0)[None]
+        if both.all():
+            return self.routes.member(x, 1)[None]
+        rows = [torch.nonzero(~both).squeeze(1), torch.nonzero(both).squeeze(1)]
+        out = x.new_zeros(len(x), self.outputs)
+        for route, idx in enumerate(rows):
+            out = out.index_put((idx,), self.routes.member(x[idx], route))
+        return out[None]
 
 
 class TransitionModel(nn.Module):
@@ -173,7 +229,10 @@ class TransitionModel(nn.Module):
         self.config = config if config is not None else TransitionModelConfig()
         c = self.config
         self.net = self.networks(c.members)
-        self.mean_net = self.networks(1) if c.mean_network else None
+        self.mean_net: EnsembleMLP | GraspRoutedMLP | None = None
+        if c.mean_network:
+            self.mean_net = (GraspRoutedMLP(c.inputs, c.width, c.depth, 2 * c.n_points)
+                             if c.mean_by_grasp else self.networks(1))
         self.device = resolve_device(device)
         self.info = dict(info or {})
         self.to(self.device)
@@ -193,7 +252,7 @@ class TransitionModel(nn.Module):
     def features(self, points: torch.Tensor, lead: torch.Tensor, other: torch.Tensor,
                  both: torch.Tensor, rim: torch.Tensor) -> torch.Tensor:
         """Network input ``(B, inputs)`` from a batch described in the move frames."""
-        c = self.config
+        c = self.config  # the both-ends flag comes last: GraspRoutedMLP routes by it
         seg = points[:, 1:] - points[:, :-1]
         seg = seg / seg.norm(dim=-1, keepdim=True).clamp_min(1e-9)
         return torch.cat([points.flatten(1) / c.cord_length, seg.flatten(1), rim.flatten(1),
@@ -497,4 +556,5 @@ class TransitionModel(nn.Module):
     def extra_repr(self) -> str:
         c = self.config
         return (f"members={c.members}, width={c.width}, depth={c.depth}, "
-                f"mean_network={c.mean_network}, n_points={c.n_points}, device={self.device}")
+                f"mean_network={c.mean_network}, mean_by_grasp={c.mean_by_grasp}, "
+                f"n_points={c.n_points}, device={self.device}")

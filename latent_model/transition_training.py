@@ -256,7 +256,7 @@ def _distil_from(teacher_path: str, mc: TransitionModelConfig
         if getattr(tcfg, field) != getattr(mc, field):
             raise ValueError(f"teacher {teacher_path!r} was trained for {field}="
                              f"{getattr(tcfg, field)!r}, the data has {getattr(mc, field)!r}")
-    return teacher, replace(tcfg, mean_network=True)
+    return teacher, replace(tcfg, mean_network=True, mean_by_grasp=mc.mean_by_grasp)
 
 
 def train_transition_model(
@@ -318,7 +318,8 @@ def train_transition_model(
     elif tc.init:
         start = TransitionModel.load(tc.init, device="cpu")
         # A network that learnt both handednesses is a fine start for one that sees one.
-        if asdict(replace(start.config, mean_network=False, mirror=mc.mirror)) != asdict(mc):
+        if asdict(replace(start.config, mean_network=False, mean_by_grasp=False,
+                          mirror=mc.mirror)) != asdict(mc):
             raise ValueError(f"init {tc.init!r} is a model of another architecture or cord "
                              f"({start.config}) than the one trained ({mc})")
         model.net.load_state_dict(start.net.state_dict())

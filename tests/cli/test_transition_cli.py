@@ -49,6 +49,15 @@ def test_collect_then_train_a_transition_model_from_two_files(tmp_path, capsys):
     assert f"distilling {out / 'transition.pt'}" in capsys.readouterr().out
     student = TransitionModel.load(mean)
     assert student.config.mean_network and student.config.width == 16
+    assert not student.config.mean_by_grasp
+    split_out = [str(tmp_path / "split") if a == str(mean) else a for a in distil]
+    assert main(split_out + ["--mean-by-grasp"]) == 0
+    split = TransitionModel.load(tmp_path / "split")
+    assert split.config.mean_by_grasp and split.config.width == 16
+    no_teacher = [str(tmp_path / "x") if a == str(out) else a for a in again]
+    assert main(no_teacher + ["--mean-by-grasp"]) == 2
+    err = capsys.readouterr().err
+    assert "--mean-by-grasp" in err and "needs --teacher" in err
 
 
 def test_each_kind_needs_its_own_count(tmp_path, capsys):

@@ -18,6 +18,7 @@ from latent_model.transition_model import TransitionModelConfig
 from latent_model.transition_training import (
     CURVE_FILE,
     TransitionTrainConfig,
+    as_tensors,
     chain_starts,
     fingerprint,
     paired_moves,
@@ -427,6 +428,44 @@ def test_distilling_keeps_the_ensemble_and_predicts_with_the_mean_network(data, 
     wrong = TransitionTrainConfig(**{**distil.__dict__, "teacher": str(tmp_path / "other.pt")})
     with pytest.raises(ValueError, match="n_points"):
         train_transition_model(data, tmp_path / "wrong", wrong, device="cpu")
+
+
+def test_a_mean_network_by_grasp_runs_one_network_per_move_and_learns_each_grasp_apart(
+        data, tmp_path):
+    tc = TransitionTrainConfig(steps=40, batch_size=64, chain_batch=16, eval_every=20,
+                               validation_fraction=0.2)
+    train_transition_model(data, tmp_path / "teacher", tc, TINY, device="cpu")
+    distil = TransitionTrainConfig(**{**tc.__dict__, "lr": 3e-3,
+                                      "teacher": str(tmp_path / "teacher" / "transition.pt")})
+    split = TransitionModelConfig(**{**TINY.__dict__, "mean_network": True,
+                                     "mean_by_grasp": True})
+    student = train_transition_model(data, tmp_path / "student", distil, split, device="cpu")
+    assert student.config.mean_by_grasp and student.mean_net.members == 1
+    first, second = (w for w in student.mean_net.routes.weights[0])
+    assert not torch.equal(first, second)  # both started from the same member, each learnt
+    tensors = as_tensors(student, data)
+    with torch.no_grad():  # a mixed batch: every row as if it came alone
+        mixed = student(tensors.start, tensors.grasp, tensors.moves, net=student.mean_net)
+        for code in range(3):
+            idx = torch.nonzero(tensors.grasp == code).squeeze(1)
+            alone = student(tensors.start[idx], tensors.grasp[idx], tensors.moves[idx],
+                            net=student.mean_net)
+            assert torch.allclose(mixed[:, idx], alone, atol=1e-6)
+    idx = np.flatnonzero(data.grasp == 2)
+    both = student.predict(data.start[idx], "both", data.end_displacement(idx))
+    head = student.predict(data.start[:5], "head", np.full((5, 2), 0.05, dtype=np.float32))
+    with torch.no_grad():  # the second network alone makes both-ends predictions
+        student.mean_net.routes.weights[-1][1].mul_(2.0)
+    assert not np.allclose(student.predict(data.start[idx], "both",
+                                           data.end_displacement(idx)), both, atol=1e-4)
+    assert np.array_equal(student.predict(data.start[:5], "head",
+                                          np.full((5, 2), 0.05, dtype=np.float32)), head)
+    loaded = TransitionModel.load(tmp_path / "student", device="cpu")
+    assert loaded.config.mean_by_grasp
+    assert np.allclose(loaded.predict(data.start[idx], "both", data.end_displacement(idx)),
+                       both, atol=1e-3)  # float16 on disk
+    with pytest.raises(ValueError, match="mean_by_grasp needs mean_network"):
+        TransitionModelConfig(mean_by_grasp=True)
 
 
 def test_paired_moves_give_each_start_reachable_moves_of_its_grasp_from_other_transitions(
