@@ -67,9 +67,10 @@ def test_the_recipe_collects_trains_distils_and_resumes(tmp_path, capsys):
         assert len(data) == max(1, round(count * scale))
         assert data.metadata["collect"] == {**defaults, **TransitionCollectConfig(
             **settings).to_json()}
-    for name, used, _ in recipe.TRAININGS:
+    for name, used, settings in recipe.TRAININGS:
         model = TransitionModel.load(tmp_path / "run" / name / "transition.pt")
         _check_training(recipe, model.info, name, scale)
+        assert model.config.mean_by_grasp == settings.get("mean_by_grasp", False)
         assert [src["collect"] for src in model.info["sources"]] == [
             load_transitions(tmp_path / "data" / file).metadata["collect"]
             for file, *_ in recipe.DATA[:used]]
@@ -133,6 +134,8 @@ def test_the_recipe_runs_these_dlo_commands_and_a_trial_keeps_to_its_own_folder(
                 assert value(flag) == str(trial / setting / "transition.pt")
             elif key == "steps":
                 assert value(flag) == str(max(1, round(setting * 0.001)))
+            elif isinstance(setting, bool):  # a switch: there, with no value, when True
+                assert (flag in command) == setting
             else:
                 assert value(flag) == str(setting)
     assert not (tmp_path / "data").exists()  # the full recipe's data folder is not touched
@@ -174,4 +177,6 @@ def test_the_shipped_model_was_trained_with_exactly_the_recipes_settings():
     model = TransitionModel.load_or_pretrained()
     _check_training(recipe, model.info, recipe.SHIPPED)
     assert model.info["teacher_ensemble"] == fingerprint(model.net)
-    assert asdict(model.config) == asdict(TransitionModelConfig(mean_network=True))
+    split = _stage(recipe, recipe.SHIPPED)[2].get("mean_by_grasp", False)
+    assert asdict(model.config) == asdict(TransitionModelConfig(mean_network=True,
+                                                                mean_by_grasp=split))
