@@ -103,7 +103,9 @@ def check_stage_flags(args: argparse.Namespace) -> None:
     """Refuse a flag the chosen stage would ignore (one line naming it and the stages)."""
     kind = "transition" if args.stage == "transition" else "shape"
     for other, names in STAGE_FLAGS.items():
-        given = [n for n in names if other != kind and getattr(args, n) not in (None, False)]
+        # "is not": a flag given as 0 (--chain-weight 0) is given, though 0 == False.
+        given = [n for n in names if other != kind
+                 and getattr(args, n) is not None and getattr(args, n) is not False]
         if given:
             stages = "--stage transition" if other == "transition" else \
                 "--stage gan, encoder or all"

@@ -182,13 +182,15 @@ class GraspRoutedMLP(nn.Module):
     flag). Each row costs one network; the two do not share capacity.
 
     Args:
-        inputs, width, depth, outputs: As ``EnsembleMLP``'s.
+        routes: The two networks (the model's design: ``TransitionModel.networks(2)``).
     """
 
-    def __init__(self, inputs: int, width: int, depth: int, outputs: int) -> None:
+    def __init__(self, routes: EnsembleMLP) -> None:
         super().__init__()
-        self.routes = EnsembleMLP(2, inputs, width, depth, outputs)
-        self.outputs = outputs
+        if routes.members != 2:
+            raise ValueError(f"routes must be 2 networks, got {routes.members}")
+        self.routes = routes
+        self.outputs = routes.weights[-1].shape[-1]
 
     @property
     def members(self) -> int:
@@ -231,8 +233,8 @@ class TransitionModel(nn.Module):
         self.net = self.networks(c.members)
         self.mean_net: EnsembleMLP | GraspRoutedMLP | None = None
         if c.mean_network:
-            self.mean_net = (GraspRoutedMLP(c.inputs, c.width, c.depth, 2 * c.n_points)
-                             if c.mean_by_grasp else self.networks(1))
+            self.mean_net = (GraspRoutedMLP(self.networks(2)) if c.mean_by_grasp
+                             else self.networks(1))
         self.device = resolve_device(device)
         self.info = dict(info or {})
         self.to(self.device)

@@ -130,6 +130,8 @@ def test_collect_runs_on_the_core_install_without_tqdm_torch_or_matplotlib(tmp_p
     ("transition", ["--gan-steps", "5"], "--gan-steps applies to --stage gan, encoder or all"),
     ("transition", ["--minutes", "3"], "--minutes applies to --stage gan, encoder or all"),
     ("transition", ["--report-size", "9"], "--report-size applies to --stage gan, encoder"),
+    ("all", ["--chain-weight", "0"], "--chain-weight applies to --stage transition only"),
+    ("transition", ["--minutes", "0"], "--minutes applies to --stage gan, encoder or all"),
 ])
 def test_a_flag_the_stage_would_ignore_is_one_line_naming_it(stage, flags, named, tmp_path,
                                                              capsys):
