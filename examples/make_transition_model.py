@@ -5,8 +5,8 @@ collect the training files and the held-out file (``dlo collect --kind transitio
 already there is reused when its settings are the recipe's), then the trainings of
 ``TRAININGS`` in order (``dlo train --stage transition``): the ensemble, the same ensemble
 fine-tuned on one more file, then its mean network by grasp distilled from it. Every step
-resumes where a killed run stopped, so the same command continues it. About 3.5 hours on 2
-cores (collection 38 min, the ensemble 95, the fine-tuning 31, the mean network 11).
+resumes where a killed run stopped, so the same command continues it. About 3 hours on 2
+cores (collection 38 min, the ensemble 95, the fine-tuning 31, the mean network 18).
 Nothing tracked is written; to ship the result:
 
     python examples/make_transition_model.py --out runs/transition-recipe
@@ -47,7 +47,7 @@ DATA: tuple[tuple[str, int, dict[str, Any]], ...] = (
 TRAININGS: tuple[tuple[str, int, dict[str, Any]], ...] = (
     ("ensemble", 5, {"steps": 200_000}),
     ("finetune", 6, {"init": "ensemble", "steps": 100_000, "lr": 5e-4}),
-    ("mean", 6, {"teacher": "finetune", "mean_by_grasp": True, "steps": 100_000, "lr": 5e-4,
+    ("mean", 6, {"teacher": "finetune", "mean_by_grasp": True, "steps": 150_000, "lr": 5e-4,
                  "teacher_moves": 1}),
 )
 #: The training whose model ships.
