@@ -71,9 +71,11 @@ def flags(settings: dict[str, Any]) -> list[object]:
     for key, value in settings.items():
         if value is False:
             continue
-        out += [f"--{key.replace('_', '-')}",
-                *(value if isinstance(value, (tuple, list)) else [] if value is True
-                  else [value])]
+        if value is True:
+            values: list[object] = []
+        else:
+            values = list(value) if isinstance(value, (tuple, list)) else [value]
+        out += [f"--{key.replace('_', '-')}", *values]
     return out
 
 

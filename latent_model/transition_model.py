@@ -153,27 +153,24 @@ class EnsembleMLP(nn.Module):
         """Networks in the ensemble."""
         return self.weights[0].shape[0]
 
-    def member(self, x: torch.Tensor, index: int) -> torch.Tensor:
-        """Network ``index`` alone: ``(B, inputs)`` -> ``(B, outputs)``."""
+    def _layers(self, h: torch.Tensor, nets: slice) -> torch.Tensor:
+        # The networks ``nets`` on their inputs h (k, B, inputs) -> (k, B, outputs).
         last = len(self.weights) - 1
-        h = x
         for i, (w, b) in enumerate(zip(self.weights, self.biases)):
-            h = torch.addmm(b[index], h, w[index])
+            h = torch.baddbmm(b[nets], h, w[nets])
             if i < last:
                 h = nn.functional.silu(h)
         return h
+
+    def member(self, x: torch.Tensor, index: int) -> torch.Tensor:
+        """Network ``index`` alone: ``(B, inputs)`` -> ``(B, outputs)``."""
+        return self._layers(x[None], slice(index, index + 1))[0]
 
     def forward(self, x: torch.Tensor, members: int | None = None) -> torch.Tensor:
         """``(B, inputs)`` or ``(members, B, inputs)`` -> ``(members, B, outputs)``; with
         ``members`` (``x`` shared, 2-D) only the first ``members`` networks run."""
         k = self.members if members is None else members
-        h = x.expand(k, *x.shape) if x.dim() == 2 else x
-        last = len(self.weights) - 1
-        for i, (w, b) in enumerate(zip(self.weights, self.biases)):
-            h = torch.baddbmm(b[:k], h, w[:k])
-            if i < last:
-                h = nn.functional.silu(h)
-        return h
+        return self._layers(x.expand(k, *x.shape) if x.dim() == 2 else x, slice(0, k))
 
 
 class GraspRoutedMLP(nn.Module):
