@@ -155,22 +155,26 @@ def throughput(model: TransitionModel, heldout, batch: int = 1024, repeats: int 
     result: dict[str, Any] = {"batch": batch}
     default_threads = torch.get_num_threads()
     for code, end in enumerate(GRASP_NAMES):
-        idx = np.resize(np.flatnonzero(heldout.grasp == code), batch)
+        idx = np.flatnonzero(heldout.grasp == code)
+        if not len(idx):
+            raise ValueError(f"the held-out file has no {end} moves to time")
+        idx = np.resize(idx, batch)
         starts, moves = heldout.start[idx], heldout.end_displacement(idx)
 
         row: dict[str, float] = {}
-        for threads in sorted({1, default_threads}):
-            torch.set_num_threads(threads)
-            model.predict(starts, end, moves)
-            row[f"model_threads_{threads}_s"] = _seconds(model, starts, end, moves, repeats)
-        torch.set_num_threads(1)
-        if end == "head":  # the first k networks of the ensemble alone
-            for members in predictors(model).values():
-                if members is not None and (members < model.config.members
-                                            or model.mean_net is not None):
-                    row[f"members_{members}_threads_1_s"] = _seconds(
-                        model, starts, end, moves, repeats, members)
-        torch.set_num_threads(default_threads)
+        try:
+            for threads in sorted({1, default_threads}):
+                torch.set_num_threads(threads)
+                model.predict(starts, end, moves)
+                row[f"model_threads_{threads}_s"] = _seconds(model, starts, end, moves, repeats)
+            torch.set_num_threads(1)
+            if end == "head":  # the first k networks of the ensemble alone
+                for members in predictors(model).values():
+                    if members is not None:  # None: the default, timed above
+                        row[f"members_{members}_threads_1_s"] = _seconds(
+                            model, starts, end, moves, repeats, members)
+        finally:
+            torch.set_num_threads(default_threads)
         t = time.perf_counter()
         for start, move in zip(starts, moves):
             simulate(start, end, move)
