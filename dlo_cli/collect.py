@@ -48,6 +48,10 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help="--kind transitions: share of episodes starting from a shape of "
                              "wide_cord_shape (several bends, kinks; default 0: the "
                              "environments' random starts)")
+    parser.add_argument("--wavy-fraction", type=_share, default=None,
+                        help="--kind transitions: share of episodes starting from a shape of "
+                             "wavy_cord_shape (smooth, bent both ways and several times; "
+                             "default 0; with --wide-fraction at most 1)")
     parser.add_argument("--grasp-weights", type=_weight, nargs=3, default=None,
                         metavar=("HEAD", "TAIL", "BOTH"),
                         help="--kind transitions: relative chances of an episode holding the "
@@ -81,7 +85,7 @@ def run(args: argparse.Namespace) -> int:
         return run_transitions(args)
     if args.num_shapes is None:
         raise ValueError("--num-shapes is required with --kind shapes")
-    for flag in ("wide_fraction", "grasp_weights", "rim_fraction"):
+    for flag in ("wide_fraction", "wavy_fraction", "grasp_weights", "rim_fraction"):
         if getattr(args, flag) is not None:
             raise ValueError(f"--{flag.replace('_', '-')} applies to --kind transitions, "
                              "not to shapes")

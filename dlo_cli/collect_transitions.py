@@ -30,7 +30,11 @@ def run(args: argparse.Namespace) -> int:
     if args.rim_fraction is not None and args.rim_fraction + PUSH > 1:
         raise ValueError(f"--rim-fraction must be at most {1 - PUSH:g} (a share {PUSH:g} of "
                          f"the moves is aimed at the cord's middle), got {args.rim_fraction:g}")
-    given = {"wide_fraction": args.wide_fraction, "rim_fraction": args.rim_fraction,
+    if (args.wide_fraction or 0) + (args.wavy_fraction or 0) > 1:
+        raise ValueError("--wide-fraction and --wavy-fraction must have a sum <= 1, got "
+                         f"{args.wide_fraction:g} and {args.wavy_fraction:g}")
+    given = {"wide_fraction": args.wide_fraction, "wavy_fraction": args.wavy_fraction,
+             "rim_fraction": args.rim_fraction,
              "grasp_weights": args.grasp_weights and tuple(args.grasp_weights)}
     config = TransitionCollectConfig(seed=args.seed,
                                      **{k: v for k, v in given.items() if v is not None})

@@ -17,6 +17,7 @@ from dlo_env.shapes import (
     max_error,
     random_cord_shape,
     validate_shape,
+    wavy_cord_shape,
     wide_cord_shape,
 )
 
@@ -30,6 +31,7 @@ __all__ = [
     "max_error",
     "random_cord_shape",
     "validate_shape",
+    "wavy_cord_shape",
     "wide_cord_shape",
 ]
 

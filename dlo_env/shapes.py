@@ -287,6 +287,56 @@ def wide_cord_shape(
     return _first_placed(rng, turns, segment, margin, threshold, "a cord shape")
 
 
+def wavy_cord_shape(
+    rng: np.random.Generator,
+    *,
+    n_points: int = 20,
+    length: float = 1.0,
+    margin: float = 0.1,
+    max_curvature: float = 9.0,
+    threshold: float = COSINE_THRESHOLD,
+    max_modes: int = 6,
+) -> np.ndarray:
+    """Draw a smooth cord-like shape whose bends are as often many and strong as few and weak.
+
+    :func:`random_cord_shape` weakens its higher Fourier modes, so a cord that bends both
+    ways, or three or four times, is rare in what it draws, and most rarely strongly. Here the
+    curvature is a Fourier series over the first ``M`` modes (``M`` uniform in
+    ``1..max_modes``: one mode is an arc, two a spiral or hook, three an S, more a wave), with
+    every mode's coefficient standard normal (a flat spectrum) and a random phase, scaled so
+    its largest magnitude is ``max_curvature * sqrt(u)``, ``u`` uniform in ``(0, 1)``. Placed
+    as ``random_cord_shape`` places.
+
+    Args:
+        rng: Source of randomness.
+        n_points: Number of points.
+        length: Cord length, metres.
+        margin: Distance every point keeps from the table edge, metres.
+        max_curvature: Largest curvature, 1/m.
+        threshold: The cord-like filter the shape must pass, in ``[-1, 1)``.
+        max_modes: Most Fourier modes of the curvature, ``>= 1``.
+
+    Returns:
+        float32 ``(n_points, 2)``.
+    """
+    if not -1.0 <= threshold < 1.0:
+        raise ValueError(f"threshold must be in [-1, 1), got {threshold!r}")
+    if not (isinstance(max_modes, (int, np.integer)) and max_modes >= 1):
+        raise ValueError(f"max_modes must be an int >= 1, got {max_modes!r}")
+    segment = length / (n_points - 1)
+    s = (np.arange(n_points - 2) + 0.5) / (n_points - 2)
+
+    def turns() -> np.ndarray:
+        modes = np.arange(int(rng.integers(1, max_modes + 1)))
+        coef = rng.normal(size=len(modes))
+        phase = rng.uniform(0.0, 2.0 * np.pi, size=len(modes))
+        kappa = (coef * np.cos(np.pi * modes * s[:, None] + phase)).sum(axis=1)
+        peak = max_curvature * np.sqrt(rng.uniform())
+        return kappa * (peak / max(float(np.abs(kappa).max()), 1e-12)) * segment
+
+    return _first_placed(rng, turns, segment, margin, threshold, "a cord shape")
+
+
 #: Families of :func:`analytic_shape`.
 ANALYTIC_KINDS = ("arc", "s-curve", "spiral", "zigzag")
 

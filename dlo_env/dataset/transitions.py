@@ -43,6 +43,7 @@ import math
 import os
 import shutil
 import time
+from collections.abc import Callable
 from dataclasses import asdict, dataclass, field
 from functools import partial
 from pathlib import Path
@@ -63,7 +64,7 @@ from dlo_env.dataset.chunks import (
     run_chunks,
 )
 from dlo_env.dataset.npz_file import check_arrays, load_npz, save_npz
-from dlo_env.shapes import TABLE_HALF, random_cord_shape, wide_cord_shape
+from dlo_env.shapes import TABLE_HALF, random_cord_shape, wavy_cord_shape, wide_cord_shape
 from dlo_env.tasks import (
     DEFAULT_MAX_STEP,
     GRASP_ENDS,
@@ -114,6 +115,9 @@ class TransitionCollectConfig:
         wide_fraction: Share of episodes whose random start is drawn by
             :func:`dlo_env.shapes.wide_cord_shape` (hard bends, several bends, kinks) instead
             of :func:`dlo_env.shapes.random_cord_shape` (the environments' starts).
+        wavy_fraction: Share of episodes whose random start is drawn by
+            :func:`dlo_env.shapes.wavy_cord_shape` (smooth, bent both ways and several
+            times as often as once); ``wide_fraction + wavy_fraction <= 1``.
         max_step: Gripper displacement of an action of 1.0 (the environments' ``max_step``).
         chunk_size: Transitions per chunk (the unit of parallel work, saving and resuming).
         cord: The cord simulated.
@@ -128,6 +132,7 @@ class TransitionCollectConfig:
     rim_fraction: float = 0.1
     log_fraction: float = 0.5
     wide_fraction: float = 0.0
+    wavy_fraction: float = 0.0
     max_step: float = DEFAULT_MAX_STEP
     chunk_size: int = 500
     cord: CordParams = field(default_factory=CordParams)
@@ -148,7 +153,10 @@ class TransitionCollectConfig:
         if min(aims) < 0 or sum(aims) > 1:
             raise ValueError("push_fraction and rim_fraction must be >= 0 with a sum <= 1, "
                              f"got {self.push_fraction!r} and {self.rim_fraction!r}")
-        fractions(self, "log_fraction", "wide_fraction", closed_low=True)
+        fractions(self, "log_fraction", "wide_fraction", "wavy_fraction", closed_low=True)
+        if self.wide_fraction + self.wavy_fraction > 1:
+            raise ValueError("wide_fraction and wavy_fraction must have a sum <= 1, got "
+                             f"{self.wide_fraction!r} and {self.wavy_fraction!r}")
         positive(self, "max_step")
 
     def to_json(self) -> dict[str, Any]:
@@ -249,6 +257,19 @@ def _draw_move(rng: np.random.Generator, cord: Cord, config: TransitionCollectCo
     return np.concatenate(moves)
 
 
+def _start_family(rng: np.random.Generator, config: TransitionCollectConfig
+                  ) -> Callable[..., np.ndarray]:
+    """The drawer of an episode's start: wide, wavy or the environments' random shapes."""
+    # One draw, and none when both shares are 0: files collected before an option existed
+    # (wavy_fraction 0; wide_fraction 0 too before that one) stay reproducible.
+    if config.wide_fraction + config.wavy_fraction == 0:
+        return random_cord_shape
+    u = rng.uniform()
+    if u < config.wide_fraction:
+        return wide_cord_shape
+    return wavy_cord_shape if u < config.wide_fraction + config.wavy_fraction else random_cord_shape
+
+
 def carry_out(cord: Cord, move: np.ndarray, max_step: float
               ) -> tuple[np.ndarray, np.ndarray, np.ndarray, int]:
     """One transition on ``cord`` (at rest): the move as ``split_move`` actions through
@@ -292,9 +313,7 @@ def collect_transition_chunk(config: TransitionCollectConfig, index: int, size: 
         episode += 1
         grasp = int(rng.choice(3, p=weights))
         cord = Cord(config.cord, grasp=GRASP_NAMES[grasp])
-        # No draw at wide_fraction 0: files collected before the option stay reproducible.
-        wide = config.wide_fraction > 0 and rng.uniform() < config.wide_fraction
-        draw = wide_cord_shape if wide else random_cord_shape
+        draw = _start_family(rng, config)
         cord.reset(random_start(rng, cord=cord, draw=draw))  # fresh, as an environment's reset
         start = cord.shape
         for step in range(config.moves_per_episode):

@@ -45,6 +45,7 @@ def test_collect_flags_reach_the_configuration(tmp_path):
         (["--cosine-threshold", "2"], "argument --cosine-threshold: expected a number in [-1, 1]"),
         (["--wide-fraction", "1.5"], "argument --wide-fraction: expected a number in [0, 1]"),
         (["--wide-fraction", "nan"], "argument --wide-fraction: expected a number in [0, 1]"),
+        (["--wavy-fraction", "-1"], "argument --wavy-fraction: expected a number in [0, 1]"),
         (["--grasp-weights", "inf", "1", "1"], "argument --grasp-weights: expected a number >= 0"),
         (["--record-every", "0"], "argument --record-every: expected a positive integer"),
         (["--out", "d.csv"], "argument --out: expected a file name ending in .npz, got 'd.csv'"),

@@ -94,4 +94,17 @@ def test_grasp_weights_and_rim_fraction_choose_the_grasps_and_the_aims(tmp_path,
     assert "argument --grasp-weights: expected a number >= 0" in capsys.readouterr().err
     assert main([*bad[:-1], "--rim-fraction", "0.8"]) == 2
     assert "--rim-fraction must be at most 0.75" in capsys.readouterr().err
+    assert main([*bad[:-1], "--wide-fraction", "0.6", "--wavy-fraction", "0.5"]) == 2
+    assert "--wide-fraction and --wavy-fraction must have a sum <= 1, got 0.6 and 0.5" \
+        in capsys.readouterr().err
     assert not (tmp_path / "x.npz").exists()
+
+
+def test_wavy_fraction_is_recorded_and_applies_to_transitions_only(tmp_path, capsys):
+    out = tmp_path / "wavy.npz"
+    assert main(["collect", "--kind", "transitions", "--num-transitions", "6",
+                 "--wavy-fraction", "0.5", "--out", str(out)]) == 0
+    assert load_transitions(out).metadata["collect"]["wavy_fraction"] == 0.5
+    assert main(["collect", "--num-shapes", "5", "--wavy-fraction", "0.5",
+                 "--out", str(tmp_path / "z.npz")]) == 2
+    assert "--wavy-fraction applies to --kind transitions" in capsys.readouterr().err

@@ -17,6 +17,7 @@ from dlo_env.shapes import (
     spacing_cv,
     turning_cosines,
     validate_shape,
+    wavy_cord_shape,
     wide_cord_shape,
 )
 
@@ -144,6 +145,43 @@ def test_wide_cord_shape_is_seeded_cord_like_and_bends_harder_than_random_cord_s
 def test_wide_cord_shape_rejects_bad_arguments_naming_them(kwargs, match):
     with pytest.raises(ValueError, match=match):
         wide_cord_shape(np.random.default_rng(0), **kwargs)
+
+
+def _sign_changes(shapes: np.ndarray) -> np.ndarray:
+    # How often the cord turns the other way, counting turns above 0.05 rad only.
+    t = _turns(shapes)
+    signs = [np.sign(row[np.abs(row) > 0.05]) for row in t]
+    return np.array([int((np.diff(s) != 0).sum()) for s in signs])
+
+
+def test_wavy_cord_shape_is_seeded_smooth_and_bends_both_ways_more_often():
+    a = wavy_cord_shape(np.random.default_rng(7))
+    assert np.array_equal(a, wavy_cord_shape(np.random.default_rng(7)))
+    wavy = np.stack([wavy_cord_shape(np.random.default_rng(s)) for s in range(300)])
+    plain = np.stack([random_cord_shape(np.random.default_rng(s)) for s in range(300)])
+    assert wavy.dtype == np.float32 and is_cord_like(wavy).all()
+    np.testing.assert_allclose(segment_lengths(wavy), SEG, rtol=1e-4)
+    assert np.abs(wavy).max() <= 0.9 + 1e-6
+    # Smooth: no joint turns more than the largest curvature allows...
+    assert np.abs(_turns(wavy)).max() <= 9.0 * SEG + 1e-4
+    # ...but the cord bends both ways, and several times, far more often than plain shapes,
+    # and strong S-shapes are common.
+    changes, plain_changes = _sign_changes(wavy), _sign_changes(plain)
+    assert (changes >= 2).mean() >= max(0.15, 2 * (plain_changes >= 2).mean())
+    assert _s_like(wavy).mean() >= max(0.03, 2 * _s_like(plain).mean())
+    # One mode only is an arc: every joint turns the same way by the same angle.
+    arcs = np.stack([wavy_cord_shape(np.random.default_rng(s), max_modes=1) for s in range(20)])
+    t = _turns(arcs)
+    np.testing.assert_allclose(t, t[:, :1].repeat(t.shape[1], axis=1), atol=1e-4)
+
+
+@pytest.mark.parametrize(("kwargs", "match"), [
+    ({"max_modes": 0}, "max_modes must be an int >= 1, got 0"),
+    ({"threshold": 1.0}, r"threshold must be in \[-1, 1\), got 1.0"),
+])
+def test_wavy_cord_shape_rejects_bad_arguments_naming_them(kwargs, match):
+    with pytest.raises(ValueError, match=match):
+        wavy_cord_shape(np.random.default_rng(0), **kwargs)
 
 
 def test_random_cord_shape_is_seeded_cord_like_exact_length_and_inside_the_margin():

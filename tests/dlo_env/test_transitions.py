@@ -17,7 +17,7 @@ from dlo_env.dataset.transitions import (
     save_transitions,
     split_transitions,
 )
-from dlo_env.shapes import error, is_cord_like, on_table, wide_cord_shape
+from dlo_env.shapes import error, is_cord_like, on_table, wavy_cord_shape, wide_cord_shape
 from dlo_env.tasks import DEFAULT_MAX_STEP, GRASP_ENDS, apply_action, split_move, wait_for_rest
 
 SMALL = TransitionCollectConfig(chunk_size=12)
@@ -198,10 +198,12 @@ def test_split_keeps_each_episode_on_one_side(small):
     ("push_fraction", 0.95, "push_fraction and rim_fraction"),
     ("log_fraction", 2.0, "log_fraction must be in"),
     ("wide_fraction", -0.1, "wide_fraction must be in"),
+    ("wavy_fraction", 1.5, "wavy_fraction must be in"),
+    ("wavy_fraction", 0.6, "wide_fraction and wavy_fraction must have a sum <= 1"),
 ])
 def test_bad_configuration_is_rejected_naming_the_field(field, value, message):
     with pytest.raises(ValueError, match=message):
-        TransitionCollectConfig(**{field: value})
+        TransitionCollectConfig(**{"wide_fraction": 0.5, field: value})
 
 
 def test_reachable_targets_is_the_rule_the_cord_follows():
@@ -251,4 +253,32 @@ def test_wide_starts_are_drawn_by_wide_cord_shape_and_settled_as_every_start(chu
         [0.1339544, 0.01992647], [0.20646718, -0.3243924], [-0.36117348, -0.37432355]], atol=1e-6)
     np.testing.assert_allclose(chunk.next[-1, [0, 7, 19]], [
         [-0.53157717, 0.11815619], [-0.19679147, -0.00902746], [0.07396714, 0.51108027]],
+        atol=1e-6)
+
+
+def test_wavy_starts_are_drawn_by_wavy_cord_shape_and_leave_wide_files_as_they_were(monkeypatch):
+    calls = []
+
+    def counted(*args, **kwargs):
+        calls.append(1)
+        return wavy_cord_shape(*args, **kwargs)
+
+    monkeypatch.setattr(transitions, "wavy_cord_shape", counted)
+    wavy = collect_transition_chunk(
+        TransitionCollectConfig(chunk_size=12, wavy_fraction=1.0, grasp_weights=(0, 0, 1)), 0, 10)
+    first = wavy.start[wavy.step == 0]
+    assert len(first) == 2 and len(calls) >= 2
+    assert is_cord_like(first).all() and on_table(wavy.next).all()
+    monkeypatch.undo()
+    # With wavy_fraction 0 a file with wide starts is what the code made before the option
+    # existed (points of the first start, the second episode's start and the last shape then).
+    wide = collect_transition_chunk(TransitionCollectConfig(
+        seed=3, chunk_size=12, wide_fraction=0.5, grasp_weights=(0, 0, 1)), 0, 10)
+    np.testing.assert_allclose(wide.start[0, [0, 7, 19]], [
+        [0.33678100, 0.18271548], [0.69303167, 0.09786665], [0.66874880, 0.47911969]], atol=1e-6)
+    np.testing.assert_allclose(wide.start[wide.step == 0][1][[0, 7, 19]], [
+        [0.18375133, -0.22903976], [-0.16510994, -0.11287475], [-0.35961342, 0.41699734]],
+        atol=1e-6)
+    np.testing.assert_allclose(wide.next[-1, [0, 7, 19]], [
+        [0.04766999, -0.51415455], [-0.27706546, -0.34169877], [-0.13605124, 0.08348129]],
         atol=1e-6)
