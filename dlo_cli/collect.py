@@ -17,6 +17,9 @@ _cosine = number_in(float, -1.0, 1.0, expected="a number in [-1, 1]")
 _share = number_in(float, 0.0, 1.0, expected="a number in [0, 1]")
 _weight = number_in(float, 0.0, None, expected="a number >= 0")
 
+#: Flags of ``--kind transitions`` only: fields of ``TransitionCollectConfig`` of the same name.
+TRANSITION_FLAGS = ("wide_fraction", "wavy_fraction", "grasp_weights", "rim_fraction")
+
 
 def _npz_path(text: str) -> str:
     if not text.endswith(".npz"):
@@ -46,12 +49,14 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help="record a shape every K physics substeps (10: about 1 cm of motion)")
     parser.add_argument("--wide-fraction", type=_share, default=None,
                         help="--kind transitions: share of episodes starting from a shape of "
-                             "wide_cord_shape (several bends, kinks; default 0: the "
-                             "environments' random starts)")
+                             "wide_cord_shape (several bends, kinks; default "
+                             f"{TransitionCollectConfig.wide_fraction:g}; starts of neither "
+                             "option are the environments' random starts)")
     parser.add_argument("--wavy-fraction", type=_share, default=None,
                         help="--kind transitions: share of episodes starting from a shape of "
                              "wavy_cord_shape (smooth, bent both ways and several times; "
-                             "default 0; with --wide-fraction at most 1)")
+                             f"default {TransitionCollectConfig.wavy_fraction:g}; with "
+                             "--wide-fraction at most 1)")
     parser.add_argument("--grasp-weights", type=_weight, nargs=3, default=None,
                         metavar=("HEAD", "TAIL", "BOTH"),
                         help="--kind transitions: relative chances of an episode holding the "
@@ -59,7 +64,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                                  f"{w:g}" for w in TransitionCollectConfig.grasp_weights) + ")")
     parser.add_argument("--rim-fraction", type=_share, default=None,
                         help="--kind transitions: share of moves aimed at the nearest table edge "
-                             "(default 0.1; with the 0.25 aimed at the cord's middle at most 1)")
+                             f"(default {TransitionCollectConfig.rim_fraction:g}; with the "
+                             f"{TransitionCollectConfig.push_fraction:g} aimed at the cord's "
+                             "middle at most 1)")
     parser.add_argument("--resume", action="store_true",
                         help="continue an interrupted run from OUT.parts/")
     add_backend(parser)
@@ -85,7 +92,7 @@ def run(args: argparse.Namespace) -> int:
         return run_transitions(args)
     if args.num_shapes is None:
         raise ValueError("--num-shapes is required with --kind shapes")
-    for flag in ("wide_fraction", "wavy_fraction", "grasp_weights", "rim_fraction"):
+    for flag in TRANSITION_FLAGS:
         if getattr(args, flag) is not None:
             raise ValueError(f"--{flag.replace('_', '-')} applies to --kind transitions, "
                              "not to shapes")

@@ -16,6 +16,7 @@ def run(args: argparse.Namespace) -> int:
     import numpy as np
 
     from dlo_cli.chunked_run import run_chunked
+    from dlo_cli.collect import TRANSITION_FLAGS
     from dlo_env.dataset.transitions import (
         GRASP_NAMES,
         TransitionCollectConfig,
@@ -33,11 +34,9 @@ def run(args: argparse.Namespace) -> int:
     if (args.wide_fraction or 0) + (args.wavy_fraction or 0) > 1:
         raise ValueError("--wide-fraction and --wavy-fraction must have a sum <= 1, got "
                          f"{args.wide_fraction:g} and {args.wavy_fraction:g}")
-    given = {"wide_fraction": args.wide_fraction, "wavy_fraction": args.wavy_fraction,
-             "rim_fraction": args.rim_fraction,
-             "grasp_weights": args.grasp_weights and tuple(args.grasp_weights)}
-    config = TransitionCollectConfig(seed=args.seed,
-                                     **{k: v for k, v in given.items() if v is not None})
+    given = {k: getattr(args, k) for k in TRANSITION_FLAGS if getattr(args, k) is not None}
+    config = TransitionCollectConfig(seed=args.seed, **{
+        k: tuple(v) if isinstance(v, list) else v for k, v in given.items()})
     result = run_chunked(
         args, lambda progress: collect_transitions(
             args.out, args.num_transitions, config, workers=args.workers, resume=args.resume,

@@ -302,7 +302,7 @@ def wavy_cord_shape(
     :func:`random_cord_shape` weakens its higher Fourier modes, so a cord that bends both
     ways, or three or four times, is rare in what it draws, and most rarely strongly. Here the
     curvature is a Fourier series over the first ``M`` modes (``M`` uniform in
-    ``1..max_modes``: one mode is an arc, two a spiral or hook, three an S, more a wave), with
+    ``1..max_modes``: one mode is an arc, two a hook, spiral or S, more a wave), with
     every mode's coefficient standard normal (a flat spectrum) and a random phase, scaled so
     its largest magnitude is ``max_curvature * sqrt(u)``, ``u`` uniform in ``(0, 1)``. Placed
     as ``random_cord_shape`` places.

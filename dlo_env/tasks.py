@@ -224,8 +224,8 @@ def random_start(
         cord: Settle on this cord (its params and grasp are used; it is left in some
             simulated state, so reset it before use) instead of a new one.
         draw: The shape drawer, called as ``draw(rng, n_points=..., length=...)``
-            (``random_cord_shape``, or :func:`dlo_env.shapes.wide_cord_shape` for more
-            strongly bent starts).
+            (``random_cord_shape``, or :func:`dlo_env.shapes.wide_cord_shape` or
+            :func:`dlo_env.shapes.wavy_cord_shape` for more strongly bent starts).
 
     Returns:
         float32 ``(n, 2)``.

@@ -6,8 +6,8 @@ already there is reused when its settings are the recipe's), then the trainings 
 ``TRAININGS`` in order (``dlo train --stage transition``): the ensemble, the same ensemble
 fine-tuned on one more file, then on two more, then on one more, then its mean network by
 grasp distilled from it. Every step resumes where a killed run stopped, so the same command
-continues it. About 4.7 hours on 2 cores (collection 64 min, the ensemble 95, the fine-tunings
-31, 30 and 31, the mean network 19).
+continues it. About 4.6 hours on 2 cores (collection 64 min, the ensemble 95, the fine-tunings
+31, 31 and 37, the mean network 20).
 Nothing tracked is written; to ship the result:
 
     python examples/make_transition_model.py --out runs/transition-recipe

@@ -17,7 +17,7 @@ import threading
 import time
 from collections.abc import Callable
 from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
@@ -41,6 +41,8 @@ class ChunkJob:
             and saves it to ``path``; a module-level function (workers receive it pickled).
         size_of: ``size_of(path)`` items in a saved chunk; raises ``ValueError`` when the file
             is unreadable (the chunk is then made again).
+        defaults: The settings' defaults: a setting that an interrupted run's manifest lacks
+            (it predates the setting) counts as its default, which is what the code did then.
     """
 
     kind: str
@@ -48,6 +50,7 @@ class ChunkJob:
     settings: dict[str, Any]
     write: Callable[[int, int, Path, Progress | None], None]
     size_of: Callable[[Path], int]
+    defaults: dict[str, Any] = field(default_factory=dict)
 
 
 def chunk_plan(total: int, chunk_size: int) -> list[tuple[int, int]]:
@@ -163,7 +166,7 @@ def _check_resumable(job: ChunkJob, parts: Path) -> None:
     if saved.get("format_version") != job.format_version:
         raise ValueError(f"resume: {parts} was written by another format version "
                          f"({saved.get('format_version')!r}); delete it to start again")
-    old, new = saved.get("collect", {}), job.settings
+    old, new = {**job.defaults, **saved.get("collect", {})}, job.settings
     differ = sorted(k for k in set(old) | set(new) if old.get(k) != new.get(k))
     if differ:
         detail = ", ".join(f"{k}: {old.get(k)!r} -> {new.get(k)!r}" for k in differ)

@@ -280,7 +280,8 @@ def _chunk_size(path: Path) -> int:
 def shape_job(config: CollectConfig) -> ChunkJob:
     """The chunked job that collects shapes with ``config``."""
     return ChunkJob(kind="shapes", format_version=FORMAT_VERSION, settings=config.to_json(),
-                    write=partial(_write_chunk, config), size_of=_chunk_size)
+                    write=partial(_write_chunk, config), size_of=_chunk_size,
+                    defaults=CollectConfig().to_json())
 
 
 # ---------------------------------------------------------------- the collection job

@@ -430,7 +430,7 @@ def transition_job(config: TransitionCollectConfig) -> ChunkJob:
     """The chunked job that collects transitions with ``config``."""
     return ChunkJob(kind="transitions", format_version=FORMAT_VERSION,
                     settings=config.to_json(), write=partial(_write_chunk, config),
-                    size_of=_chunk_size)
+                    size_of=_chunk_size, defaults=TransitionCollectConfig().to_json())
 
 
 def collect_transitions(

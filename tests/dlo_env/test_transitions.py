@@ -2,6 +2,9 @@
 
 from __future__ import annotations
 
+import json
+from dataclasses import replace
+
 import numpy as np
 import pytest
 
@@ -107,6 +110,13 @@ def test_a_killed_run_resumes_without_losing_or_repeating_a_transition(tmp_path,
         collect_transitions(out, 30, SMALL)
     with pytest.raises(ValueError, match="seed: 0 -> 4"):
         collect_transitions(out, 30, TransitionCollectConfig(seed=4, chunk_size=12), resume=True)
+    # A run from before a setting existed (its manifest lacks it) resumes: it had the default.
+    manifest = parts_dir(out) / "manifest.json"
+    saved = json.loads(manifest.read_text())
+    del saved["collect"]["wavy_fraction"]
+    manifest.write_text(json.dumps(saved))
+    with pytest.raises(ValueError, match=r"wavy_fraction: 0.0 -> 0.5"):
+        collect_transitions(out, 30, replace(SMALL, wavy_fraction=0.5), resume=True)
     data = collect_transitions(out, 30, SMALL, resume=True)
     assert data.metadata["chunks_resumed"] == 1 and data.metadata["transitions_resumed"] == 12
     assert _same(data, load_transitions(small))
@@ -271,14 +281,31 @@ def test_wavy_starts_are_drawn_by_wavy_cord_shape_and_leave_wide_files_as_they_w
     assert is_cord_like(first).all() and on_table(wavy.next).all()
     monkeypatch.undo()
     # With wavy_fraction 0 a file with wide starts is what the code made before the option
-    # existed (points of the first start, the second episode's start and the last shape then).
+    # existed (points of the first start, wide, of the second episode's start, random, and of
+    # the last shape then).
     wide = collect_transition_chunk(TransitionCollectConfig(
-        seed=3, chunk_size=12, wide_fraction=0.5, grasp_weights=(0, 0, 1)), 0, 10)
+        seed=0, chunk_size=12, wide_fraction=0.5, grasp_weights=(0, 0, 1)), 0, 10)
     np.testing.assert_allclose(wide.start[0, [0, 7, 19]], [
-        [0.33678100, 0.18271548], [0.69303167, 0.09786665], [0.66874880, 0.47911969]], atol=1e-6)
+        [-0.38346046, 0.80898452], [-0.57982266, 0.55125177], [-0.02628970, 0.58960652]],
+        atol=1e-6)
     np.testing.assert_allclose(wide.start[wide.step == 0][1][[0, 7, 19]], [
-        [0.18375133, -0.22903976], [-0.16510994, -0.11287475], [-0.35961342, 0.41699734]],
+        [0.50239307, -0.34108874], [0.13731155, -0.36989161], [0.04216677, -0.87045270]],
         atol=1e-6)
     np.testing.assert_allclose(wide.next[-1, [0, 7, 19]], [
-        [0.04766999, -0.51415455], [-0.27706546, -0.34169877], [-0.13605124, 0.08348129]],
+        [0.00594791, -0.91015756], [-0.08598527, -0.57222182], [-0.18782043, -0.98000002]],
         atol=1e-6)
+
+
+@pytest.mark.parametrize(("wide", "wavy"), [(0.0, 0.0), (1.0, 0.0), (0.0, 1.0), (0.3, 0.3)])
+def test_the_start_family_takes_one_draw_and_none_without_the_options(wide, wavy):
+    config = TransitionCollectConfig(wide_fraction=wide, wavy_fraction=wavy)
+    rng, twin = np.random.default_rng(3), np.random.default_rng(3)
+    picked = [transitions._start_family(rng, config) for _ in range(3000)]
+    if wide + wavy == 0:  # the random stream is untouched: files from before the options
+        assert rng.bit_generator.state == twin.bit_generator.state
+    else:
+        twin.uniform(size=3000)
+        assert rng.bit_generator.state == twin.bit_generator.state
+    shares = [np.mean([p is f for p in picked]) for f in (
+        transitions.wide_cord_shape, transitions.wavy_cord_shape, transitions.random_cord_shape)]
+    np.testing.assert_allclose(shares, [wide, wavy, 1 - wide - wavy], atol=0.03)
