@@ -321,7 +321,8 @@ def wavy_cord_shape(
     """
     if not -1.0 <= threshold < 1.0:
         raise ValueError(f"threshold must be in [-1, 1), got {threshold!r}")
-    if not (isinstance(max_modes, (int, np.integer)) and max_modes >= 1):
+    if isinstance(max_modes, bool) or not (isinstance(max_modes, (int, np.integer))
+                                           and max_modes >= 1):
         raise ValueError(f"max_modes must be an int >= 1, got {max_modes!r}")
     segment = length / (n_points - 1)
     s = (np.arange(n_points - 2) + 0.5) / (n_points - 2)

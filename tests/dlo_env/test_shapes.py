@@ -177,6 +177,7 @@ def test_wavy_cord_shape_is_seeded_smooth_and_bends_both_ways_more_often():
 
 @pytest.mark.parametrize(("kwargs", "match"), [
     ({"max_modes": 0}, "max_modes must be an int >= 1, got 0"),
+    ({"max_modes": True}, "max_modes must be an int >= 1, got True"),
     ({"threshold": 1.0}, r"threshold must be in \[-1, 1\), got 1.0"),
 ])
 def test_wavy_cord_shape_rejects_bad_arguments_naming_them(kwargs, match):
