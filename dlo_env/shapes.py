@@ -214,6 +214,12 @@ def random_cord_shape(
     return _first_placed(rng, turns, segment, margin, threshold, "a cord shape")
 
 
+def _check_threshold(threshold: float) -> None:
+    """The cord-like filter's least cosine must be in ``[-1, 1)``."""
+    if not -1.0 <= threshold < 1.0:
+        raise ValueError(f"threshold must be in [-1, 1), got {threshold!r}")
+
+
 def _first_placed(rng: np.random.Generator, turns: Callable[[], np.ndarray], segment: float,
                   margin: float, threshold: float | None, what: str) -> np.ndarray:
     # Up to 1000 tries: joint turns from ``turns()``, then the chain at a uniform heading and a
@@ -266,8 +272,7 @@ def wide_cord_shape(
     Returns:
         float32 ``(n_points, 2)``.
     """
-    if not -1.0 <= threshold < 1.0:
-        raise ValueError(f"threshold must be in [-1, 1), got {threshold!r}")
+    _check_threshold(threshold)
     if not kinks >= 0:
         raise ValueError(f"kinks must be a number >= 0, got {kinks!r}")
     segment = length / (n_points - 1)
@@ -319,8 +324,7 @@ def wavy_cord_shape(
     Returns:
         float32 ``(n_points, 2)``.
     """
-    if not -1.0 <= threshold < 1.0:
-        raise ValueError(f"threshold must be in [-1, 1), got {threshold!r}")
+    _check_threshold(threshold)
     if isinstance(max_modes, bool) or not (isinstance(max_modes, (int, np.integer))
                                            and max_modes >= 1):
         raise ValueError(f"max_modes must be an int >= 1, got {max_modes!r}")
