@@ -368,12 +368,16 @@ class TransitionModel(nn.Module):
         start = shapes[:, ends].astype(np.float64)  # (B, k, 2)
         d = displacement.reshape(len(shapes), len(ends), 2).astype(np.float64)
         pos = start + d
-        walk = np.ones(len(shapes), dtype=bool)
+        # Both rules are convex: the box, and (both ends) a gap between two ends moving in
+        # straight lines, which is largest at the path's start or end. So a move whose start
+        # and end obey the rule is never clipped on the way; only the others are walked.
+        walk = (reachable_targets(start, self.cord_params) != start).any(axis=(1, 2))
         if len(ends) == 1:
             # One end: the rule only clips to a box, and clipping after every step of a
             # straight path is clipping its end point, when the start is inside the box.
-            walk = (reachable_targets(start, self.cord_params) != start).any(axis=(1, 2))
             pos = reachable_targets(pos, self.cord_params)
+        else:
+            walk |= (reachable_targets(pos, self.cord_params) != pos).any(axis=(1, 2))
         if walk.any():  # step by step, as the environment's actions go
             longest = np.linalg.norm(d[walk], axis=-1).max(axis=-1, initial=0.0)
             actions = np.maximum(1, np.ceil(longest / self.config.max_step - 1e-9)).astype(int)

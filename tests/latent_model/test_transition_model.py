@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 import torch
 
-from dlo_env.cord import Cord
+from dlo_env.cord import Cord, reachable_targets
 from dlo_env.dataset.transitions import TransitionCollectConfig, collect_transition_chunk
 from dlo_env.shapes import error, random_cord_shape
 from dlo_env.tasks import DEFAULT_MAX_STEP, apply_action, split_move
@@ -174,6 +174,25 @@ def test_the_held_ends_go_exactly_where_the_simulators_grippers_go(model):
             assert np.allclose(p[-1], grips["tail"], atol=1e-5)
             if end == "both":
                 assert np.allclose(p[0], grips["head"], atol=1e-5)
+
+
+@pytest.mark.parametrize("end", ["head", "both"])
+def test_reachable_moves_walk_only_the_moves_the_rule_clips_and_agree_with_every_action(
+        model, end):
+    # Against the rule applied after every split_move action: starts at the rim and inside,
+    # moves from tiny to far beyond the table and the span, in every direction.
+    rng = np.random.default_rng(21)
+    shapes = _shapes(300, seed=21, margin=0.02)
+    width = 4 if end == "both" else 2
+    d = (rng.uniform(-1, 1, size=(300, width)) * rng.choice([0.02, 0.3, 1.5], size=(300, 1)))
+    ends = [0, -1] if end == "both" else [0]
+    reach = model.reachable_moves(shapes, end, d)[:, [0, 1] if end == "both" else [0]]
+    for shape, move, got in zip(shapes, d, reach):
+        pos = shape[ends].astype(np.float64)
+        for action in split_move(move, DEFAULT_MAX_STEP):
+            pos = reachable_targets(pos + action.reshape(-1, 2) * DEFAULT_MAX_STEP)
+        assert np.allclose(got, pos - shape[ends], atol=1e-6)
+    assert (np.abs(reach - d.reshape(300, -1, 2)).max(axis=(1, 2)) > 1e-3).mean() > 0.2
 
 
 def test_a_held_end_starting_beyond_the_grippers_reach_moves_as_the_simulators_does(model):
