@@ -18,7 +18,8 @@ _share = number_in(float, 0.0, 1.0, expected="a number in [0, 1]")
 _weight = number_in(float, 0.0, None, expected="a number >= 0")
 
 #: Flags of ``--kind transitions`` only: fields of ``TransitionCollectConfig`` of the same name.
-TRANSITION_FLAGS = ("wide_fraction", "wavy_fraction", "grasp_weights", "rim_fraction")
+TRANSITION_FLAGS = ("wide_fraction", "wavy_fraction", "grasp_weights", "rim_fraction",
+                    "push_fraction")
 
 
 def _npz_path(text: str) -> str:
@@ -66,7 +67,12 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help="--kind transitions: share of moves aimed at the nearest table edge "
                              f"(default {TransitionCollectConfig.rim_fraction:g}; with the "
                              f"{TransitionCollectConfig.push_fraction:g} aimed at the cord's "
-                             "middle at most 1)")
+                             "middle (--push-fraction) at most 1)")
+    parser.add_argument("--push-fraction", type=_share, default=None,
+                        help="--kind transitions: share of moves aimed at the cord's middle, "
+                             "which push it onto itself and, with both ends held, compress and "
+                             f"buckle it (default {TransitionCollectConfig.push_fraction:g}; with "
+                             "--rim-fraction at most 1)")
     parser.add_argument("--resume", action="store_true",
                         help="continue an interrupted run from OUT.parts/")
     add_backend(parser)

@@ -23,14 +23,18 @@ def run(args: argparse.Namespace) -> int:
         collect_transitions,
     )
 
-    PUSH = TransitionCollectConfig.push_fraction  # noqa: N806
     if args.num_transitions is None:
         raise ValueError("--num-transitions is required with --kind transitions")
     if args.grasp_weights is not None and sum(args.grasp_weights) <= 0:
         raise ValueError(f"--grasp-weights must have a positive sum, got {args.grasp_weights}")
-    if args.rim_fraction is not None and args.rim_fraction + PUSH > 1:
-        raise ValueError(f"--rim-fraction must be at most {1 - PUSH:g} (a share {PUSH:g} of "
-                         f"the moves is aimed at the cord's middle), got {args.rim_fraction:g}")
+    push = TransitionCollectConfig.push_fraction if args.push_fraction is None \
+        else args.push_fraction
+    rim = TransitionCollectConfig.rim_fraction if args.rim_fraction is None else args.rim_fraction
+    if rim + push > 1:
+        raise ValueError("--rim-fraction and --push-fraction (defaults "
+                         f"{TransitionCollectConfig.rim_fraction:g} and "
+                         f"{TransitionCollectConfig.push_fraction:g}) must have a sum <= 1, got "
+                         f"{rim:g} and {push:g}")
     if (args.wide_fraction or 0) + (args.wavy_fraction or 0) > 1:
         raise ValueError("--wide-fraction and --wavy-fraction must have a sum <= 1, got "
                          f"{args.wide_fraction:g} and {args.wavy_fraction:g}")

@@ -74,7 +74,7 @@ def test_each_kind_needs_its_own_count(tmp_path, capsys):
     assert "--grasp-weights applies to --kind transitions" in capsys.readouterr().err
 
 
-def test_grasp_weights_and_rim_fraction_choose_the_grasps_and_the_aims(tmp_path, capsys):
+def test_grasp_weights_rim_and_push_fraction_choose_the_grasps_and_the_aims(tmp_path, capsys):
     out = tmp_path / "both.npz"
     assert main(["collect", "--kind", "transitions", "--num-transitions", "12",
                  "--grasp-weights", "0", "0", "2", "--out", str(out)]) == 0
@@ -83,8 +83,9 @@ def test_grasp_weights_and_rim_fraction_choose_the_grasps_and_the_aims(tmp_path,
     assert data.metadata["collect"]["grasp_weights"] == [0, 0, 2]
     rim = tmp_path / "rim.npz"
     assert main(["collect", "--kind", "transitions", "--num-transitions", "12",
-                 "--rim-fraction", "0.75", "--out", str(rim)]) == 0
-    assert load_transitions(rim).metadata["collect"]["rim_fraction"] == 0.75
+                 "--rim-fraction", "0.5", "--push-fraction", "0.5", "--out", str(rim)]) == 0
+    collect = load_transitions(rim).metadata["collect"]
+    assert (collect["rim_fraction"], collect["push_fraction"]) == (0.5, 0.5)
     bad = ["collect", "--kind", "transitions", "--num-transitions", "12", "--out",
            str(tmp_path / "x.npz"), "--grasp-weights"]
     assert main([*bad, "0", "0", "0"]) == 2
@@ -93,7 +94,10 @@ def test_grasp_weights_and_rim_fraction_choose_the_grasps_and_the_aims(tmp_path,
         main([*bad, "1", "-1", "1"])
     assert "argument --grasp-weights: expected a number >= 0" in capsys.readouterr().err
     assert main([*bad[:-1], "--rim-fraction", "0.8"]) == 2
-    assert "--rim-fraction must be at most 0.75" in capsys.readouterr().err
+    assert "--rim-fraction and --push-fraction (defaults 0.1 and 0.25) must have a sum <= 1, " \
+        "got 0.8 and 0.25" in capsys.readouterr().err
+    assert main([*bad[:-1], "--push-fraction", "0.95"]) == 2
+    assert "got 0.1 and 0.95" in capsys.readouterr().err
     assert main([*bad[:-1], "--wide-fraction", "0.6", "--wavy-fraction", "0.5"]) == 2
     assert "--wide-fraction and --wavy-fraction must have a sum <= 1, got 0.6 and 0.5" \
         in capsys.readouterr().err
