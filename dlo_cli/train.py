@@ -13,7 +13,7 @@ non_negative_int = number_in(int, 0, expected="an integer >= 0")
 STAGE_FLAGS = {
     "transition": ("steps", "members", "rim_reach", "rim_targets", "no_mirror", "init",
                    "teacher", "mean_by_grasp", "teacher_weight", "teacher_moves",
-                   "chain_weight", "lr"),
+                   "chain_weight", "miss_weight", "miss_margin", "lr"),
     "shape": ("minutes", "gan_steps", "encoder_steps", "representation", "output", "paper",
               "d_steps", "report_size"),
 }
@@ -67,6 +67,12 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--chain-weight", type=float, default=None,
                         help="--stage transition: weight of the loss on rolled-out chains of "
                              "2-3 moves (0: one-move loss only; None: TransitionTrainConfig's)")
+    parser.add_argument("--miss-weight", type=float, default=None,
+                        help="--stage transition: extra weight of a move's error beyond "
+                             "--miss-margin, so misses count more (None: 0, none)")
+    parser.add_argument("--miss-margin", type=float, default=None,
+                        help="--stage transition: error (metres, mean over points) above which "
+                             "--miss-weight applies (None: 0.005)")
     parser.add_argument("--lr", type=float, default=None,
                         help="--stage transition: starting learning rate (None: "
                              "TransitionTrainConfig's; lower it when fine-tuning with --init)")

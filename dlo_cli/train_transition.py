@@ -52,7 +52,9 @@ def run(args: argparse.Namespace) -> int:
                                   "teacher": args.teacher,
                                   "teacher_weight": args.teacher_weight,
                                   "teacher_moves": args.teacher_moves,
-                                  "chain_weight": args.chain_weight}.items()
+                                  "chain_weight": args.chain_weight,
+                                  "miss_weight": args.miss_weight,
+                                  "miss_margin": args.miss_margin}.items()
                 if v is not None}
     model_kw = {k: v for k, v in {"width": args.width, "members": args.members,
                                   "rim_reach": args.rim_reach,

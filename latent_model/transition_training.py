@@ -84,6 +84,11 @@ class TransitionTrainConfig:
             teacher's mean alone (no simulation). They take this share of every batch,
             ``teacher_moves / (teacher_moves + 1)`` (the batch size is unchanged). 0: the
             data's moves only.
+        miss_weight: Extra weight of the one-move error beyond ``miss_margin``: the loss adds
+            ``miss_weight * mean(max(0, error - miss_margin))`` over the batch's transitions,
+            so moves predicted worse than the margin count ``1 + miss_weight`` times (0: none).
+        miss_margin: Per-transition error (mean over points, metres) above which a move counts
+            as a miss for ``miss_weight``.
     """
 
     steps: int = 96_000
@@ -100,10 +105,13 @@ class TransitionTrainConfig:
     teacher: str | None = None
     teacher_weight: float = 1.0
     teacher_moves: int = 0
+    miss_weight: float = 0.0
+    miss_margin: float = 0.005
 
     def __post_init__(self) -> None:
         positive_ints(self, "steps", "batch_size", "eval_every", "chain_moves")
-        non_negative(self, "chain_batch", "chain_weight", "teacher_weight")
+        non_negative(self, "chain_batch", "chain_weight", "teacher_weight", "miss_weight",
+                     "miss_margin")
         if not (isinstance(self.teacher_moves, int) and self.teacher_moves >= 0):
             raise ValueError("TransitionTrainConfig.teacher_moves must be an int >= 0, "
                              f"got {self.teacher_moves!r}")
@@ -203,6 +211,15 @@ def rollout(model: TransitionModel, data: TransitionTensors, first: torch.Tensor
 def point_error(pred: torch.Tensor, true: torch.Tensor) -> torch.Tensor:
     """Mean per-point distance over the last two dims: ``(..., n, 2)`` -> ``(...)``."""
     return ((pred - true).square().sum(dim=-1) + 1e-12).sqrt().mean(dim=-1)
+
+
+def one_move_loss(errors: torch.Tensor, tc: TransitionTrainConfig) -> torch.Tensor:
+    """The one-move loss from per-transition errors (metres): their mean, plus ``miss_weight``
+    times the mean of what each error has beyond ``miss_margin``."""
+    loss = errors.mean()
+    if tc.miss_weight:
+        loss = loss + tc.miss_weight * (errors - tc.miss_margin).clamp_min(0.0).mean()
+    return loss
 
 
 def _curve_row(path: Path, row: dict[str, Any]) -> None:
@@ -384,8 +401,9 @@ def train_transition_model(
                 (start, extra.start), (grasp, extra.grasp), (moves, extra.moves),
                 (target, extra_targets)))
         pred = model(start, grasp, moves, net=net)
-        loss_one = point_error(pred[:, :real], tr.next[idx][None]).mean()
-        loss = loss_one
+        errors = point_error(pred[:, :real], tr.next[idx][None])
+        loss_one = errors.mean()
+        loss = one_move_loss(errors, tc)
         loss_teacher = loss_chain = torch.zeros(())
         if target is not None:
             loss_teacher = point_error(pred, target[None]).mean()

@@ -21,6 +21,7 @@ from latent_model.transition_training import (
     as_tensors,
     chain_starts,
     fingerprint,
+    one_move_loss,
     paired_moves,
     train_transition_model,
 )
@@ -359,6 +360,21 @@ def test_training_learns_resumes_and_reports(data, tmp_path):
     write_report(rows, rank, tmp_path)
     assert (tmp_path / "transition-metrics.png").stat().st_size > 1000
     assert (tmp_path / "transition-metrics.csv").read_text().startswith("moves,group,count")
+
+
+def test_the_miss_weight_counts_each_error_beyond_the_margin_more_and_nothing_below_it():
+    errors = torch.tensor([0.001, 0.004, 0.006, 0.02])
+    plain = TransitionTrainConfig()
+    assert float(one_move_loss(errors, plain)) == pytest.approx(float(errors.mean()))
+    weighted = replace(plain, miss_weight=3.0, miss_margin=0.005)
+    beyond = (0.001 + 0.015) / 4  # only the last two errors pass the margin
+    assert float(one_move_loss(errors, weighted)) == pytest.approx(float(errors.mean())
+                                                                   + 3.0 * beyond)
+    below = errors[:2].clone().requires_grad_()
+    one_move_loss(below, weighted).backward()
+    assert torch.allclose(below.grad, torch.full((2,), 0.5))  # as without the weight
+    with pytest.raises(ValueError, match="miss_weight"):
+        TransitionTrainConfig(miss_weight=-1.0)
 
 
 def test_training_can_start_from_a_saved_model(data, tmp_path):
