@@ -18,6 +18,7 @@ import argparse
 import numpy as np
 import torch
 
+from dlo_env.atomic import file_digest
 from dlo_env.dataset.transitions import GRASP_NAMES, TransitionDataset, load_transitions
 from dlo_env.shapes import error
 from latent_model.transition_model import TransitionModel
@@ -55,7 +56,8 @@ def main() -> None:
         raise SystemExit(f"--sample must be >= 1, got {args.sample}")
     torch.set_num_threads(1)
     model = TransitionModel.load_or_pretrained(args.model, device="cpu")
-    trained_on = set(model.info.get("files") or [])
+    # A file is known by its digest, wherever it lies (the model records its sources').
+    trained_on = {source.get("digest") for source in model.info.get("sources") or []}
     predictors = {"mean network": None} if model.mean_net is not None else {}
     predictors[f"ensemble ({model.config.members})"] = model.config.members
     print("file | predictor | head / tail / both: mean (within 1 cm, moves)")
@@ -63,7 +65,7 @@ def main() -> None:
         data = load_transitions(path)
         pick = np.random.default_rng(0).permutation(len(data))[:args.sample]
         data = data.subset(np.sort(pick))
-        seen = "trained on" if path in trained_on else "not trained on"
+        seen = "trained on" if file_digest(path) in trained_on else "not trained on"
         for name, members in predictors.items():
             print(f"{path} ({seen}) | {name} | " + " / ".join(by_grasp(model, data, members)),
                   flush=True)

@@ -65,9 +65,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                                  f"{w:g}" for w in TransitionCollectConfig.grasp_weights) + ")")
     parser.add_argument("--rim-fraction", type=_share, default=None,
                         help="--kind transitions: share of moves aimed at the nearest table edge "
-                             f"(default {TransitionCollectConfig.rim_fraction:g}; with the "
-                             f"{TransitionCollectConfig.push_fraction:g} aimed at the cord's "
-                             "middle (--push-fraction) at most 1)")
+                             f"(default {TransitionCollectConfig.rim_fraction:g}; with "
+                             "--push-fraction at most 1)")
     parser.add_argument("--push-fraction", type=_share, default=None,
                         help="--kind transitions: share of moves aimed at the cord's middle, "
                              "which push it onto itself and, with both ends held, compress and "

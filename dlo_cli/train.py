@@ -7,6 +7,7 @@ import argparse
 from dlo_cli.flags import number_in, positive_int
 
 non_negative_int = number_in(int, 0, expected="an integer >= 0")
+non_negative_float = number_in(float, 0.0, expected="a number >= 0")
 
 #: Flags that only one kind of stage reads: "transition", or "shape" (gan, encoder, all).
 #: Given to the other kind they would be silently ignored, so they are an error there.
@@ -57,20 +58,20 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help="--stage transition with --teacher: the mean network is two, one "
                              "for moves of one end and one for moves of both ends (each "
                              "prediction runs one)")
-    parser.add_argument("--teacher-weight", type=float, default=None,
+    parser.add_argument("--teacher-weight", type=non_negative_float, default=None,
                         help="--stage transition with --teacher: weight of the error to the "
                              "teacher's mean against the error to the data (None: 1)")
     parser.add_argument("--teacher-moves", type=non_negative_int, default=None,
                         help="--stage transition with --teacher: extra inputs per training "
                              "transition, its start with another transition's move, labelled "
                              "by the teacher's mean alone (None: 0, the data's moves only)")
-    parser.add_argument("--chain-weight", type=float, default=None,
+    parser.add_argument("--chain-weight", type=non_negative_float, default=None,
                         help="--stage transition: weight of the loss on rolled-out chains of "
                              "2-3 moves (0: one-move loss only; None: TransitionTrainConfig's)")
-    parser.add_argument("--miss-weight", type=float, default=None,
+    parser.add_argument("--miss-weight", type=non_negative_float, default=None,
                         help="--stage transition: extra weight of a move's error beyond "
                              "--miss-margin, so misses count more (None: 0, none)")
-    parser.add_argument("--miss-margin", type=float, default=None,
+    parser.add_argument("--miss-margin", type=non_negative_float, default=None,
                         help="--stage transition: error (metres, mean over points) above which "
                              "--miss-weight applies (None: 0.005)")
     parser.add_argument("--lr", type=float, default=None,

@@ -140,3 +140,16 @@ def test_a_flag_the_stage_would_ignore_is_one_line_naming_it(stage, flags, named
                                          *flags]))
     assert named in line and f"not to --stage {stage}" in line
     assert not (tmp_path / "r").exists()
+
+
+@pytest.mark.parametrize("flag", ["--miss-weight", "--miss-margin", "--chain-weight",
+                                  "--teacher-weight"])
+@pytest.mark.parametrize("value", ["-1", "inf", "nan"])
+def test_a_loss_weight_that_is_negative_or_not_finite_is_refused_before_any_data_loads(
+        flag, value, tmp_path, capsys):
+    with pytest.raises(SystemExit) as stop:
+        main(["train", "--stage", "transition", "--data", str(tmp_path / "x.npz"), "--out",
+              str(tmp_path / "r"), flag, value])
+    assert stop.value.code == 2
+    assert f"argument {flag}: expected a number >= 0, got '{value}'" in capsys.readouterr().err
+    assert not (tmp_path / "r").exists()

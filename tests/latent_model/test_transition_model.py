@@ -2,7 +2,9 @@
 
 from __future__ import annotations
 
+import importlib.util
 from dataclasses import replace
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -662,3 +664,25 @@ def test_a_model_of_one_network_reports_without_a_spread(data):
     assert np.isnan(spread_rank_correlation(one, data))
     rows, rank = transition_report(one, data, max_moves=1)
     assert np.isnan(rank) and rows[0].count == len(data)
+
+
+def test_a_widened_ensemble_predicts_exactly_as_before_and_fine_tunes_at_its_width(
+        model, data, tmp_path):
+    script = Path(__file__).resolve().parents[2] / "examples" / "widen_transition_model.py"
+    spec = importlib.util.spec_from_file_location("widen_transition_model", script)
+    example = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(example)
+    wide = example.widen(model, 48)
+    assert wide.config.width == 48 and wide.net.weights[0].shape[-1] == 48
+    shapes = _shapes(8, seed=30)
+    move = np.random.default_rng(30).uniform(-0.2, 0.2, size=(8, 4))
+    for end, d in (("head", move[:, :2]), ("both", move)):
+        assert np.array_equal(wide.predict(shapes, end, d), model.predict(shapes, end, d))
+    with pytest.raises(ValueError, match="width must be at least the model's 32"):
+        example.widen(model, 16)
+    wide.save(tmp_path / "wide.pt", half=False)
+    tc = TransitionTrainConfig(steps=2, batch_size=16, eval_every=2,
+                               init=str(tmp_path / "wide.pt"))
+    tuned = train_transition_model(data, tmp_path / "run", tc, replace(TINY, width=48),
+                                   device="cpu")
+    assert tuned.net.weights[0].shape[-1] == 48
