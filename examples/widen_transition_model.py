@@ -55,8 +55,10 @@ def main() -> None:
     args = parser.parse_args()
     model = TransitionModel.load(args.model, device="cpu")
     wide = widen(model, args.width)
-    shapes = torch.cumsum(torch.nn.functional.normalize(torch.randn(64, 19, 2), dim=-1), 1)
-    shapes = torch.cat([torch.zeros(64, 1, 2), shapes / 19.0], 1)
+    # A check on random cords of the model's own points and length.
+    n, segment = model.config.n_points, model.config.cord_length / (model.config.n_points - 1)
+    links = torch.nn.functional.normalize(torch.randn(64, n - 1, 2), dim=-1) * segment
+    shapes = torch.cat([torch.zeros(64, 1, 2), torch.cumsum(links, 1)], 1)
     grasp, moves = torch.randint(0, 3, (64,)), 0.1 * torch.randn(64, 2, 2)
     with torch.no_grad():
         gap = (model(shapes, grasp, moves, net=model.net)
