@@ -14,7 +14,6 @@ the widened networks compute exactly what the old ones did; ``dlo train --stage 
 from __future__ import annotations
 
 import argparse
-import math
 from dataclasses import replace
 
 import torch
@@ -27,23 +26,10 @@ def widen(model: TransitionModel, width: int, seed: int = 0) -> TransitionModel:
     """A copy of ``model``'s ensemble with ``width`` hidden units per layer, same predictions."""
     if width < model.config.width:
         raise ValueError(f"width must be at least the model's {model.config.width}, got {width}")
-    config = replace(model.config, width=width, mean_network=False, mean_by_grasp=False)
+    config = replace(model.config, width=width, mean_network=False, mean_by_grasp=False,
+                     mean_width=None)
     wide = TransitionModel(config, device="cpu", info=dict(model.info))
-    gen = torch.Generator().manual_seed(seed)
-    last = len(model.net.weights) - 1
-    with torch.no_grad():
-        for i, (w_old, b_old, w_new, b_new) in enumerate(zip(
-                model.net.weights, model.net.biases, wide.net.weights, wide.net.biases)):
-            members, rows, cols = w_old.shape
-            w_new.zero_()
-            b_new.zero_()
-            if i < last:  # the new units of this layer: random weights from every input
-                bound = 1.0 / math.sqrt(w_new.shape[1])
-                w_new[:, :, cols:] = torch.empty(
-                    members, w_new.shape[1], w_new.shape[2] - cols).uniform_(
-                    -bound, bound, generator=gen)
-            w_new[:, :rows, :cols] = w_old.cpu()  # the rows of new inputs stay zero: silent
-            b_new[:, :, :cols] = b_old.cpu()
+    wide.net = model.net.widened(width, seed).cpu()
     return wide.eval()
 
 

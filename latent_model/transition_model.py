@@ -85,6 +85,9 @@ class TransitionModelConfig:
         mean_by_grasp: The mean network is two networks of this size, one for moves of one
             end and one for moves of both ends (``GraspRoutedMLP``): twice the weights, each
             prediction still at the cost of one network. Needs ``mean_network``.
+        mean_width: Hidden units per layer of the mean network (None: ``width``). A wider
+            mean network fits more at a higher cost per prediction; the ensemble keeps
+            ``width``. Needs ``mean_network``.
         mirror: Mirror-equivariant by construction: the networks only see cords whose
             centroid lies on the left of the move's line (y >= 0 in the move frame); a cord
             on the right is mirrored across the line, predicted, and the prediction mirrored
@@ -106,6 +109,7 @@ class TransitionModelConfig:
     mean_network: bool = False
     mirror: bool = True
     mean_by_grasp: bool = False
+    mean_width: int | None = None
 
     def __post_init__(self) -> None:
         positive_ints(self, "n_points", "members", "width", "depth")
@@ -116,6 +120,11 @@ class TransitionModelConfig:
         if self.mean_by_grasp and not self.mean_network:
             raise ValueError("TransitionModelConfig.mean_by_grasp needs mean_network=True "
                              "(it splits the mean network by grasp)")
+        if self.mean_width is not None:
+            positive_ints(self, "mean_width")
+            if not self.mean_network:
+                raise ValueError("TransitionModelConfig.mean_width needs mean_network=True "
+                                 "(it sizes the mean network)")
 
     @property
     def inputs(self) -> int:
@@ -161,6 +170,31 @@ class EnsembleMLP(nn.Module):
             if i < last:
                 h = nn.functional.silu(h)
         return h
+
+    def widened(self, width: int, seed: int = 0) -> EnsembleMLP:
+        """A copy with ``width`` hidden units per layer that computes exactly what this one
+        does: every new unit gets random incoming weights and zero outgoing weights (silent
+        until training moves them)."""
+        old = self.weights[0].shape[-1]
+        if not (isinstance(width, Integral) and not isinstance(width, bool) and width >= old):
+            raise ValueError(f"width must be an int >= the networks' {old}, got {width!r}")
+        members, inputs, depth = self.members, self.weights[0].shape[1], len(self.weights) - 1
+        wide = EnsembleMLP(members, inputs, int(width), depth, self.weights[-1].shape[-1])
+        gen = torch.Generator().manual_seed(seed)
+        with torch.no_grad():
+            for i, (w_old, b_old, w_new, b_new) in enumerate(zip(
+                    self.weights, self.biases, wide.weights, wide.biases)):
+                rows, cols = w_old.shape[1:]
+                w_new.zero_()
+                b_new.zero_()
+                if i < depth:  # the new units of this layer: random weights from every input
+                    bound = 1.0 / math.sqrt(w_new.shape[1])
+                    w_new[:, :, cols:] = torch.empty(
+                        members, w_new.shape[1], w_new.shape[2] - cols).uniform_(
+                        -bound, bound, generator=gen)
+                w_new[:, :rows, :cols] = w_old.detach().cpu()  # new inputs' rows stay zero
+                b_new[:, :, :cols] = b_old.detach().cpu()
+        return wide.to(self.weights[0].device)
 
     def member(self, x: torch.Tensor, index: int) -> torch.Tensor:
         """Network ``index`` alone: ``(B, inputs)`` -> ``(B, outputs)``."""
@@ -230,8 +264,9 @@ class TransitionModel(nn.Module):
         self.net = self.networks(c.members)
         self.mean_net: EnsembleMLP | GraspRoutedMLP | None = None
         if c.mean_network:
-            self.mean_net = (GraspRoutedMLP(self.networks(2)) if c.mean_by_grasp
-                             else self.networks(1))
+            width = c.width if c.mean_width is None else c.mean_width
+            self.mean_net = (GraspRoutedMLP(self.networks(2, width)) if c.mean_by_grasp
+                             else self.networks(1, width))
         self.device = resolve_device(device)
         self.info = dict(info or {})
         self.to(self.device)
@@ -243,10 +278,12 @@ class TransitionModel(nn.Module):
         return CordParams(n_points=self.config.n_points, length=self.config.cord_length)
 
     # ------------------------------------------------------------- torch core
-    def networks(self, members: int) -> EnsembleMLP:
-        """``members`` new networks of this design (the ensemble, or one: the mean network)."""
+    def networks(self, members: int, width: int | None = None) -> EnsembleMLP:
+        """``members`` new networks of this design (the ensemble, or one: the mean network),
+        ``width`` hidden units per layer (None: the ensemble's)."""
         c = self.config
-        return EnsembleMLP(members, c.inputs, c.width, c.depth, 2 * c.n_points)
+        return EnsembleMLP(members, c.inputs, c.width if width is None else width, c.depth,
+                           2 * c.n_points)
 
     def features(self, points: torch.Tensor, lead: torch.Tensor, other: torch.Tensor,
                  both: torch.Tensor, rim: torch.Tensor) -> torch.Tensor:
@@ -560,4 +597,5 @@ class TransitionModel(nn.Module):
         c = self.config
         return (f"members={c.members}, width={c.width}, depth={c.depth}, "
                 f"mean_network={c.mean_network}, mean_by_grasp={c.mean_by_grasp}, "
+                f"mean_width={c.mean_width}, "
                 f"n_points={c.n_points}, device={self.device}")

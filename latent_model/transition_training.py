@@ -273,7 +273,8 @@ def _distil_from(teacher_path: str, mc: TransitionModelConfig
         if getattr(tcfg, field) != getattr(mc, field):
             raise ValueError(f"teacher {teacher_path!r} was trained for {field}="
                              f"{getattr(tcfg, field)!r}, the data has {getattr(mc, field)!r}")
-    return teacher, replace(tcfg, mean_network=True, mean_by_grasp=mc.mean_by_grasp)
+    return teacher, replace(tcfg, mean_network=True, mean_by_grasp=mc.mean_by_grasp,
+                            mean_width=mc.mean_width)
 
 
 def train_transition_model(
@@ -329,8 +330,14 @@ def train_transition_model(
         model.net.load_state_dict(teacher.net.state_dict())
         model.net.requires_grad_(False)
         trained = model.mean_net
-        with torch.no_grad():  # start from the ensemble's first member
-            for mine, theirs in zip(trained.parameters(), model.net.parameters()):
+        # Start from the ensemble's first member (widened to a wider student, which then
+        # predicts as it does; a narrower student starts from its own random weights).
+        width = mc.width if mc.mean_width is None else mc.mean_width
+        first = model.net if width == mc.width else (
+            model.net.widened(width, seed=tc.seed) if width > mc.width else None)
+        with torch.no_grad():
+            for mine, theirs in zip(trained.parameters(),
+                                    [] if first is None else first.parameters()):
                 mine.copy_(theirs[:1])
     elif tc.init:
         start = TransitionModel.load(tc.init, device="cpu")

@@ -505,6 +505,45 @@ def test_a_mean_network_by_grasp_runs_one_network_per_move_and_learns_each_grasp
         TransitionModelConfig(mean_by_grasp=True)
 
 
+def test_a_wider_mean_network_starts_as_the_first_member_and_learns_at_its_own_width(
+        data, tmp_path):
+    tc = TransitionTrainConfig(steps=20, batch_size=64, chain_batch=16, eval_every=20,
+                               validation_fraction=0.2)
+    teacher = train_transition_model(data, tmp_path / "teacher", tc, TINY, device="cpu")
+    shapes = _shapes(8, seed=31)
+    move = np.random.default_rng(31).uniform(-0.2, 0.2, size=(8, 4))
+    for width in (48, TINY.width, 16):  # wider, the same, narrower than the ensemble
+        distil = TransitionTrainConfig(**{**tc.__dict__, "steps": 1, "lr": 1e-12,  # no change
+                                          "teacher": str(tmp_path / "teacher" / "transition.pt")})
+        mc = replace(TINY, mean_network=True, mean_by_grasp=True, mean_width=width)
+        start = train_transition_model(data, tmp_path / f"start{width}", distil, mc,
+                                       device="cpu")
+        assert start.mean_net.routes.weights[0].shape[-1] == width
+        assert start.net.weights[0].shape[-1] == TINY.width  # the ensemble keeps its width
+        for end, d in (("head", move[:, :2]), ("both", move)):
+            first = start.predict(shapes, end, d, members=1)
+            same = np.allclose(start.predict(shapes, end, d), first, atol=1e-6)
+            assert same == (width >= TINY.width)  # narrower: its own random start
+    trained = train_transition_model(data, tmp_path / "wide", TransitionTrainConfig(
+        **{**distil.__dict__, "steps": 20, "lr": 3e-3}), replace(mc, mean_width=48),
+        device="cpu")
+    loaded = TransitionModel.load(tmp_path / "wide", device="cpu")
+    assert loaded.config.mean_width == 48 and loaded.mean_net.routes.weights[1].shape[-1] == 48
+    assert np.allclose(loaded.predict(shapes, "both", move),
+                       trained.predict(shapes, "both", move), atol=1e-3)  # float16 on disk
+    assert not np.allclose(trained.predict(shapes, "both", move),
+                           teacher.predict(shapes, "both", move, members=1), atol=1e-4)
+    with pytest.raises(ValueError, match="mean_width needs mean_network"):
+        TransitionModelConfig(mean_width=64)
+    with pytest.raises(ValueError, match="mean_width must be an int >= 1"):
+        TransitionModelConfig(mean_network=True, mean_width=0)
+    wide = teacher.net.widened(40, seed=1)
+    x = torch.randn(5, teacher.config.inputs)
+    assert torch.allclose(wide(x), teacher.net(x), atol=1e-6)
+    with pytest.raises(ValueError, match="width must be an int >= the networks' 32"):
+        teacher.net.widened(16)
+
+
 def test_paired_moves_give_each_start_reachable_moves_of_its_grasp_from_other_transitions(
         data, model):
     paired = paired_moves(model, data, copies=2, seed=0)
