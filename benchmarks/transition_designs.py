@@ -51,10 +51,11 @@ class LatentTransitionModel(TransitionModel):
         self.latent_dim = gan.latent_dim
         super().__init__(config, device, info)
 
-    def networks(self, members: int) -> EnsembleMLP:  # noqa: D102
+    def networks(self, members: int, width: int | None = None) -> EnsembleMLP:  # noqa: D102
         c = self.config
-        inputs = self.latent_dim + 2 * (c.n_points + c.rim_targets) + 4  # latent, rim, move
-        return EnsembleMLP(members, inputs, c.width, c.depth, self.latent_dim)
+        inputs = self.latent_dim + 2 * c.rim_inputs + 4  # latent, rim, move
+        return EnsembleMLP(members, inputs, c.width if width is None else width, c.depth,
+                           self.latent_dim)
 
     def predict_points(self, points, lead, other, both, rim, members_batch,  # noqa: D102
                        members=None, net=None):

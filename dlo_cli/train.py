@@ -12,7 +12,8 @@ non_negative_float = number_in(float, 0.0, expected="a number >= 0")
 #: Flags that only one kind of stage reads: "transition", or "shape" (gan, encoder, all).
 #: Given to the other kind they would be silently ignored, so they are an error there.
 STAGE_FLAGS = {
-    "transition": ("steps", "members", "rim_reach", "rim_targets", "no_mirror", "init",
+    "transition": ("steps", "members", "rim_reach", "rim_targets", "contact_reach",
+                   "no_mirror", "init",
                    "teacher", "mean_by_grasp", "mean_width", "teacher_weight", "teacher_moves",
                    "chain_weight", "miss_weight", "miss_margin", "lr"),
     "shape": ("minutes", "gan_steps", "encoder_steps", "representation", "output", "paper",
@@ -45,6 +46,11 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--rim-targets", type=int, choices=(1, 2), default=None,
                         help="--stage transition: rim vectors of the leading end's target only "
                              "(1) or of both ends' targets (2) (None: TransitionModelConfig's)")
+    parser.add_argument("--contact-reach", type=non_negative_float, default=None,
+                        help="--stage transition: a second, sharp rim vector of this reach "
+                             "(metres) per point and target, for contact with the walls (0: "
+                             "none; None: TransitionModelConfig's); --init from a model without "
+                             "it starts its weights at zero")
     parser.add_argument("--no-mirror", action="store_true",
                         help="--stage transition: networks that see both handednesses (the "
                              "models before TransitionModelConfig.mirror)")

@@ -59,12 +59,13 @@ def run(args: argparse.Namespace) -> int:
     model_kw = {k: v for k, v in {"width": args.width, "members": args.members,
                                   "rim_reach": args.rim_reach,
                                   "rim_targets": args.rim_targets,
+                                  "contact_reach": args.contact_reach,
                                   "mirror": False if args.no_mirror else None}.items()
                 if v is not None}
     if args.teacher and model_kw:
-        raise ValueError("--width, --members, --rim-reach, --rim-targets and --no-mirror shape "
-                         "a new ensemble, not --teacher's mean network (its architecture is the "
-                         "teacher's)")
+        raise ValueError("--width, --members, --rim-reach, --rim-targets, --contact-reach and "
+                         "--no-mirror shape a new ensemble, not --teacher's mean network (its "
+                         "architecture is the teacher's)")
     if args.mean_by_grasp and not args.teacher:
         raise ValueError("--mean-by-grasp shapes the mean network a distillation makes; it "
                          "needs --teacher")

@@ -29,7 +29,7 @@ import numpy as np
 import torch
 from torch import nn
 
-from dlo_env.checks import positive, positive_ints
+from dlo_env.checks import non_negative, positive, positive_ints
 from dlo_env.cord import CordParams, reachable_targets
 from dlo_env.shapes import TABLE_HALF
 from dlo_env.tasks import DEFAULT_MAX_STEP
@@ -58,7 +58,7 @@ MODEL_FILE = "transition.pt"
 PREDICT_CHUNK = 4096
 #: Values of config fields added after the first files were written, for files without them.
 LEGACY_CONFIG = {"rim_targets": 1, "mean_network": False, "mirror": False,
-                 "mean_by_grasp": False}
+                 "mean_by_grasp": False, "contact_reach": 0.0}
 
 
 @dataclass(frozen=True)
@@ -80,6 +80,10 @@ class TransitionModelConfig:
         rim_targets: Targets whose rim vectors the network sees: 1, the leading end's (the
             first models); 2, both ends' (the other end's target is its start when it is not
             held).
+        contact_reach: The points and the targets also get a second rim vector of this
+            reach, metres (0: none): a sharp one that tells a point touching a wall (the
+            cord rests ``LINK_RADIUS`` from the edge) from one a few centimetres away, where
+            the ``rim_reach`` vector barely changes.
         mean_network: The model also holds one network distilled from the ensemble's mean,
             which makes ``predict``'s prediction (the ensemble gives the spread).
         mean_by_grasp: The mean network is two networks of this size, one for moves of one
@@ -106,6 +110,7 @@ class TransitionModelConfig:
     output_scale: float = 0.1
     rim_reach: float = 0.35
     rim_targets: int = 2
+    contact_reach: float = 0.0
     mean_network: bool = False
     mirror: bool = True
     mean_by_grasp: bool = False
@@ -117,6 +122,7 @@ class TransitionModelConfig:
             raise ValueError(f"TransitionModelConfig.rim_targets must be 1 or 2, "
                              f"got {self.rim_targets!r}")
         positive(self, "cord_length", "max_step", "move_scale", "output_scale", "rim_reach")
+        non_negative(self, "contact_reach")
         if self.mean_by_grasp and not self.mean_network:
             raise ValueError("TransitionModelConfig.mean_by_grasp needs mean_network=True "
                              "(it splits the mean network by grasp)")
@@ -127,11 +133,16 @@ class TransitionModelConfig:
                                  "(it sizes the mean network)")
 
     @property
+    def rim_inputs(self) -> int:
+        """Rim vectors the network sees: one per point and target, two with ``contact_reach``."""
+        return (self.n_points + self.rim_targets) * (2 if self.contact_reach else 1)
+
+    @property
     def inputs(self) -> int:
         """Network inputs: the cord's points and segment directions in the frame, the rim near
         each point and near the held ends' targets, the lead length, the other move, both."""
         n = self.n_points
-        return 2 * n + 2 * (n - 1) + 2 * (n + self.rim_targets) + 4
+        return 2 * n + 2 * (n - 1) + 2 * self.rim_inputs + 4
 
 
 class EnsembleMLP(nn.Module):
@@ -195,6 +206,23 @@ class EnsembleMLP(nn.Module):
                 w_new[:, :rows, :cols] = w_old.detach().cpu()  # new inputs' rows stay zero
                 b_new[:, :, :cols] = b_old.detach().cpu()
         return wide.to(self.weights[0].device)
+
+    def with_inputs(self, at: int, count: int) -> EnsembleMLP:
+        """A copy that takes ``count`` more inputs, inserted before input ``at``, and computes
+        what this one does whatever they hold (their first-layer weights are zero)."""
+        inputs = self.weights[0].shape[1]
+        if not (0 <= at <= inputs and count >= 0):
+            raise ValueError(f"at must be in 0..{inputs} and count >= 0, got {at}, {count}")
+        w = self.weights[0].detach()
+        grown = EnsembleMLP(self.members, inputs + count, w.shape[-1], len(self.weights) - 1,
+                            self.weights[-1].shape[-1]).to(w.device)
+        with torch.no_grad():
+            for mine, theirs in zip(grown.parameters(), self.parameters()):
+                if mine.shape == theirs.shape:
+                    mine.copy_(theirs)
+            grown.weights[0].copy_(torch.cat([w[:, :at], w.new_zeros(w.shape[0], count, w.shape[2]),
+                                              w[:, at:]], dim=1))
+        return grown
 
     def member(self, x: torch.Tensor, index: int) -> torch.Tensor:
         """Network ``index`` alone: ``(B, inputs)`` -> ``(B, outputs)``."""
@@ -328,9 +356,11 @@ class TransitionModel(nn.Module):
                                  dim=1)
         else:
             target = target[:, None]
-        rim = torch.cat([into_frame(rim_vectors(shapes, TABLE_HALF, c.rim_reach), frame),
-                         into_frame(rim_vectors(target, TABLE_HALF, c.rim_reach),
-                                    frame, reorder=False)], dim=1)  # (B, n + targets, 2)
+        reaches = (c.rim_reach, c.contact_reach) if c.contact_reach else (c.rim_reach,)
+        rim = torch.cat([v for reach in reaches for v in (
+            into_frame(rim_vectors(shapes, TABLE_HALF, reach), frame),
+            into_frame(rim_vectors(target, TABLE_HALF, reach), frame, reorder=False))],
+            dim=1)  # (B, rim_inputs, 2)
         # One handedness: cords on the right of the move's line are seen mirrored.
         flip = handedness(points) if c.mirror else None
         seen = (points, other, rim) if flip is None else (
@@ -355,7 +385,8 @@ class TransitionModel(nn.Module):
         Args:
             points, lead, other, both: The batch in the move frames (flat over members and
                 batch when ``members_batch`` is given, else shared by the members).
-            rim: ``(B, n + rim_targets, 2)`` rim vectors of the points and the targets.
+            rim: ``(B, config.rim_inputs, 2)`` rim vectors of the points and the targets
+                (then, with ``contact_reach``, their contact vectors).
             members_batch: ``(members, B)`` when every member has its own input.
             members: Run only the first ``members`` networks (inputs shared).
             net: The networks to run (None: the ensemble).
@@ -408,13 +439,14 @@ class TransitionModel(nn.Module):
         # Both rules are convex: the box, and (both ends) a gap between two ends moving in
         # straight lines, which is largest at the path's start or end. So a move whose start
         # and end obey the rule is never clipped on the way; only the others are walked.
-        walk = (reachable_targets(start, self.cord_params) != start).any(axis=(1, 2))
+        params = self.cord_params  # once: a CordParams checks its fields when made
+        walk = (reachable_targets(start, params) != start).any(axis=(1, 2))
         if len(ends) == 1:
             # One end: the rule only clips to a box, and clipping after every step of a
             # straight path is clipping its end point, when the start is inside the box.
-            pos = reachable_targets(pos, self.cord_params)
+            pos = reachable_targets(pos, params)
         else:
-            walk |= (reachable_targets(pos, self.cord_params) != pos).any(axis=(1, 2))
+            walk |= (reachable_targets(pos, params) != pos).any(axis=(1, 2))
         if walk.any():  # step by step, as the environment's actions go
             longest = np.linalg.norm(d[walk], axis=-1).max(axis=-1, initial=0.0)
             actions = np.maximum(1, np.ceil(longest / self.config.max_step - 1e-9)).astype(int)
@@ -422,7 +454,7 @@ class TransitionModel(nn.Module):
             path = start[walk]
             for j in range(int(actions.max(initial=0))):
                 going = j < actions
-                path[going] = reachable_targets(path[going] + step[going], self.cord_params)
+                path[going] = reachable_targets(path[going] + step[going], params)
             pos[walk] = path
         moves = np.zeros((len(shapes), 2, 2), dtype=np.float32)
         if end == "both":

@@ -341,12 +341,17 @@ def train_transition_model(
                 mine.copy_(theirs[:1])
     elif tc.init:
         start = TransitionModel.load(tc.init, device="cpu")
-        # A network that learnt both handednesses is a fine start for one that sees one.
-        if asdict(replace(start.config, mean_network=False, mean_by_grasp=False,
-                          mirror=mc.mirror)) != asdict(mc):
+        # A network that learnt both handednesses is a fine start for one that sees one, and
+        # one without contact vectors for one with them (their weights start at zero).
+        seen = replace(start.config, mean_network=False, mean_by_grasp=False, mean_width=None,
+                       mirror=mc.mirror)
+        grow = not seen.contact_reach and mc.contact_reach
+        if asdict(replace(seen, contact_reach=mc.contact_reach) if grow else seen) != asdict(mc):
             raise ValueError(f"init {tc.init!r} is a model of another architecture or cord "
                              f"({start.config}) than the one trained ({mc})")
-        model.net.load_state_dict(start.net.state_dict())
+        # The contact inputs come right after the rim inputs, before the move's four.
+        model.net.load_state_dict((start.net.with_inputs(seen.inputs - 4, mc.inputs - seen.inputs)
+                                   if grow else start.net).state_dict())
         # What fine-tuning started from: its weights' fingerprint and its own provenance.
         init_record = {"fingerprint": fingerprint(start.net), "info": start.info}
     net = None if teacher is None else trained  # what the losses run

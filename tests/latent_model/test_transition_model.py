@@ -409,6 +409,50 @@ def test_training_can_start_from_a_saved_model(data, tmp_path):
         assert torch.allclose(mine, theirs, atol=1e-3)  # its weights, trained at lr 1e-12
 
 
+def test_contact_vectors_tell_a_point_at_the_wall_and_a_model_without_them_starts_one_with(
+        data, tmp_path):
+    from latent_model.move_frame import rim_vectors
+
+    contact = replace(TINY, contact_reach=0.03, mirror=False)
+    assert contact.rim_inputs == 2 * TINY.rim_inputs
+    assert contact.inputs == TINY.inputs + 2 * TINY.rim_inputs
+    recorder = _RimRecorder(contact, device="cpu").eval()
+    shapes = _shapes(3, seed=12, margin=0.5)
+    shapes[:, :, 0] += 0.985 - shapes[:, :, 0].max(axis=1, keepdims=True)  # 1.5 cm from it
+    recorder.predict(shapes, "head", np.tile(np.float32([-0.05, 0.0]), (3, 1)))
+    n, k = contact.n_points, contact.n_points + contact.rim_targets
+    assert recorder.rim.shape == (3, 2 * k, 2)
+    # Moving left: in the frame the rim on the right (+x in the world) is at -x.
+    near = rim_vectors(torch.from_numpy(shapes), 1.0, 0.03)  # the sharp vectors, world
+    assert near[..., 0].max() == pytest.approx(0.5, abs=1e-5)
+    assert torch.allclose(recorder.rim[:, k:k + n, 0], -near[..., 0], atol=1e-6)
+    assert (recorder.rim[:, k:k + n].abs().sum(-1) > 0).sum() < (
+        recorder.rim[:, :n].abs().sum(-1) > 0).sum()  # sharper: fewer points see it
+    with pytest.raises(ValueError, match="contact_reach must be >= 0"):
+        TransitionModelConfig(contact_reach=-0.01)
+    old = TransitionModel(TINY, device="cpu").state()
+    del old["config"]["contact_reach"]  # a file from before contact vectors
+    assert TransitionModel.from_state(old).config.contact_reach == 0.0
+    # Fine-tuning a model without contact vectors into one with them: same predictions first.
+    tc = TransitionTrainConfig(steps=20, batch_size=64, chain_batch=16, eval_every=20,
+                               validation_fraction=0.2)
+    first = train_transition_model(data, tmp_path / "a", tc, TINY, device="cpu")
+    still = TransitionTrainConfig(**{**tc.__dict__, "steps": 1, "lr": 1e-12,
+                                     "init": str(tmp_path / "a" / "transition.pt")})
+    grown = train_transition_model(data, tmp_path / "b", still, replace(TINY, contact_reach=0.03),
+                                   device="cpu")
+    assert grown.net.weights[0].shape[1] == contact.inputs
+    at_wall = shapes + np.float32(0.01)  # nearer the wall: the contact vectors are not 0
+    d = np.random.default_rng(12).uniform(-0.2, 0.2, size=(3, 4)).astype(np.float32)
+    for end, move in (("head", d[:, :2]), ("both", d)):
+        assert np.allclose(grown.predict(at_wall, end, move), first.predict(at_wall, end, move),
+                           atol=1e-3)  # float16 weights on disk
+    with pytest.raises(ValueError, match="another architecture"):  # not the other way round
+        train_transition_model(data, tmp_path / "c", TransitionTrainConfig(
+            **{**still.__dict__, "init": str(tmp_path / "b" / "transition.pt")}), TINY,
+            device="cpu")
+
+
 def test_distilling_keeps_the_ensemble_and_predicts_with_the_mean_network(data, tmp_path):
     tc = TransitionTrainConfig(steps=40, batch_size=64, chain_batch=16, eval_every=20,
                                validation_fraction=0.2)
