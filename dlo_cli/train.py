@@ -50,13 +50,14 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help="--stage transition: a second, sharp rim vector of this reach "
                              "(metres) per point and target, for contact with the walls (0: "
                              "none; None: TransitionModelConfig's); --init from a model without "
-                             "it starts its weights at zero")
+                             "it starts their weights at zero; not with --teacher")
     parser.add_argument("--no-mirror", action="store_true",
                         help="--stage transition: networks that see both handednesses (the "
                              "models before TransitionModelConfig.mirror)")
     parser.add_argument("--init", default=None,
                         help="--stage transition: start from this transition model file "
-                             "(fine-tuning; same architecture), None: random weights")
+                             "(fine-tuning; the same architecture, or one without the contact "
+                             "vectors of --contact-reach), None: random weights")
     parser.add_argument("--teacher", default=None,
                         help="--stage transition: distil a mean network for this transition "
                              "model file (its ensemble is kept; predict then runs one network)")
@@ -66,9 +67,10 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                              "prediction runs one)")
     parser.add_argument("--mean-width", type=positive_int, default=None,
                         help="--stage transition with --teacher: hidden units per layer of the "
-                             "mean network (default: the teacher's width); a wider one starts "
-                             "from the teacher's first network, widened, and fits more at more "
-                             "cost per prediction")
+                             "mean network (default: the width of the teacher's ensemble); a "
+                             "wider one starts from the ensemble's first network, widened, and "
+                             "fits more at more cost per prediction; a narrower one starts from "
+                             "random weights")
     parser.add_argument("--teacher-weight", type=non_negative_float, default=None,
                         help="--stage transition with --teacher: weight of the error to the "
                              "teacher's mean against the error to the data (None: 1)")

@@ -63,8 +63,9 @@ def run(args: argparse.Namespace) -> int:
                                   "mirror": False if args.no_mirror else None}.items()
                 if v is not None}
     if args.teacher and model_kw:
-        raise ValueError("--width, --members, --rim-reach, --rim-targets, --contact-reach and "
-                         "--no-mirror shape a new ensemble, not --teacher's mean network (its "
+        given = ", ".join("--no-mirror" if k == "mirror" else "--" + k.replace("_", "-")
+                          for k in model_kw)
+        raise ValueError(f"{given} shape a new ensemble, not --teacher's mean network (its "
                          "architecture is the teacher's)")
     if args.mean_by_grasp and not args.teacher:
         raise ValueError("--mean-by-grasp shapes the mean network a distillation makes; it "

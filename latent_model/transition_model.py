@@ -123,6 +123,9 @@ class TransitionModelConfig:
                              f"got {self.rim_targets!r}")
         positive(self, "cord_length", "max_step", "move_scale", "output_scale", "rim_reach")
         non_negative(self, "contact_reach")
+        if not math.isfinite(self.contact_reach):
+            raise ValueError(f"TransitionModelConfig.contact_reach must be finite, got "
+                             f"{self.contact_reach!r}")
         if self.mean_by_grasp and not self.mean_network:
             raise ValueError("TransitionModelConfig.mean_by_grasp needs mean_network=True "
                              "(it splits the mean network by grasp)")
@@ -136,6 +139,13 @@ class TransitionModelConfig:
     def rim_inputs(self) -> int:
         """Rim vectors the network sees: one per point and target, two with ``contact_reach``."""
         return (self.n_points + self.rim_targets) * (2 if self.contact_reach else 1)
+
+    @property
+    def contact_at(self) -> int:
+        """Where the contact vectors' inputs start (or would): after the rim vectors', before
+        the move's four (``TransitionModel.features``)."""
+        n = self.n_points
+        return 2 * n + 2 * (n - 1) + 2 * (self.n_points + self.rim_targets)
 
     @property
     def inputs(self) -> int:
@@ -223,6 +233,16 @@ class EnsembleMLP(nn.Module):
             grown.weights[0].copy_(torch.cat([w[:, :at], w.new_zeros(w.shape[0], count, w.shape[2]),
                                               w[:, at:]], dim=1))
         return grown
+
+    def first(self, members: int) -> EnsembleMLP:
+        """A copy of the first ``members`` networks alone."""
+        w = self.weights[0]
+        out = EnsembleMLP(members, w.shape[1], w.shape[2], len(self.weights) - 1,
+                          self.weights[-1].shape[-1]).to(w.device)
+        with torch.no_grad():
+            for mine, theirs in zip(out.parameters(), self.parameters()):
+                mine.copy_(theirs[:members])
+        return out
 
     def member(self, x: torch.Tensor, index: int) -> torch.Tensor:
         """Network ``index`` alone: ``(B, inputs)`` -> ``(B, outputs)``."""
@@ -629,5 +649,5 @@ class TransitionModel(nn.Module):
         c = self.config
         return (f"members={c.members}, width={c.width}, depth={c.depth}, "
                 f"mean_network={c.mean_network}, mean_by_grasp={c.mean_by_grasp}, "
-                f"mean_width={c.mean_width}, "
+                f"mean_width={c.mean_width}, contact_reach={c.contact_reach}, "
                 f"n_points={c.n_points}, device={self.device}")

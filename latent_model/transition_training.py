@@ -333,12 +333,14 @@ def train_transition_model(
         # Start from the ensemble's first member (widened to a wider student, which then
         # predicts as it does; a narrower student starts from its own random weights).
         width = mc.width if mc.mean_width is None else mc.mean_width
-        first = model.net if width == mc.width else (
-            model.net.widened(width, seed=tc.seed) if width > mc.width else None)
+        first = None
+        if width >= mc.width:
+            first = model.net.first(1)
+            first = first if width == mc.width else first.widened(width, seed=tc.seed)
         with torch.no_grad():
             for mine, theirs in zip(trained.parameters(),
                                     [] if first is None else first.parameters()):
-                mine.copy_(theirs[:1])
+                mine.copy_(theirs)
     elif tc.init:
         start = TransitionModel.load(tc.init, device="cpu")
         # A network that learnt both handednesses is a fine start for one that sees one, and
@@ -346,12 +348,14 @@ def train_transition_model(
         seen = replace(start.config, mean_network=False, mean_by_grasp=False, mean_width=None,
                        mirror=mc.mirror)
         grow = not seen.contact_reach and mc.contact_reach
-        if asdict(replace(seen, contact_reach=mc.contact_reach) if grow else seen) != asdict(mc):
-            raise ValueError(f"init {tc.init!r} is a model of another architecture or cord "
-                             f"({start.config}) than the one trained ({mc})")
-        # The contact inputs come right after the rim inputs, before the move's four.
-        model.net.load_state_dict((start.net.with_inputs(seen.inputs - 4, mc.inputs - seen.inputs)
-                                   if grow else start.net).state_dict())
+        differ = [f"{k}={v!r} (this run {getattr(mc, k)!r})" for k, v in asdict(
+            replace(seen, contact_reach=mc.contact_reach) if grow else seen).items()
+            if getattr(mc, k) != v]
+        if differ:
+            raise ValueError(f"init {tc.init!r} is a model of another architecture or cord: "
+                             f"{', '.join(differ)}")
+        model.net.load_state_dict((start.net.with_inputs(
+            seen.contact_at, mc.inputs - seen.inputs) if grow else start.net).state_dict())
         # What fine-tuning started from: its weights' fingerprint and its own provenance.
         init_record = {"fingerprint": fingerprint(start.net), "info": start.info}
     net = None if teacher is None else trained  # what the losses run

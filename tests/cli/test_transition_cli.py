@@ -46,9 +46,11 @@ def test_collect_then_train_a_transition_model_from_two_files(tmp_path, capsys):
     distil = ["train", "--stage", "transition", "--data", str(first), "--heldout", str(second),
               "--out", str(mean), "--steps", "10", "--batch-size", "32", "--eval-every", "10",
               "--teacher", str(out / "transition.pt"), "--no-progress"]
-    for flag in (["--width", "32"], ["--no-mirror"]):
+    for flag, named in ((["--width", "32"], "--width shape"), (["--no-mirror"], "--no-mirror"),
+                        (["--contact-reach", "0.03"], "--contact-reach shape")):
         assert main(distil + flag) == 2
-        assert "not --teacher's mean network" in capsys.readouterr().err
+        err = capsys.readouterr().err
+        assert "not --teacher's mean network" in err and named in err
     assert main(distil) == 0
     assert f"distilling {out / 'transition.pt'}" in capsys.readouterr().out
     student = TransitionModel.load(mean)
@@ -63,6 +65,9 @@ def test_collect_then_train_a_transition_model_from_two_files(tmp_path, capsys):
     wide = TransitionModel.load(tmp_path / "wide")
     assert wide.config.mean_width == 24 and wide.config.width == 16
     assert wide.mean_net.routes.weights[0].shape[-1] == 24
+    contact = [str(tmp_path / "contact") if a == str(out) else a for a in again]
+    assert main(contact + ["--contact-reach", "0.02"]) == 0
+    assert TransitionModel.load(tmp_path / "contact").config.contact_reach == 0.02
     no_teacher = [str(tmp_path / "x") if a == str(out) else a for a in again]
     assert main(no_teacher + ["--mean-width", "24"]) == 2
     err = capsys.readouterr().err

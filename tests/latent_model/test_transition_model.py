@@ -447,10 +447,21 @@ def test_contact_vectors_tell_a_point_at_the_wall_and_a_model_without_them_start
     for end, move in (("head", d[:, :2]), ("both", d)):
         assert np.allclose(grown.predict(at_wall, end, move), first.predict(at_wall, end, move),
                            atol=1e-3)  # float16 weights on disk
-    with pytest.raises(ValueError, match="another architecture"):  # not the other way round
+    with pytest.raises(ValueError, match=r"another architecture or cord: contact_reach=0.03 "
+                       r"\(this run 0.0\)$"):  # not the other way round
         train_transition_model(data, tmp_path / "c", TransitionTrainConfig(
             **{**still.__dict__, "init": str(tmp_path / "b" / "transition.pt")}), TINY,
             device="cpu")
+    with pytest.raises(ValueError, match="contact_reach must be finite"):
+        TransitionModelConfig(contact_reach=float("inf"))
+    # The new inputs' weights are zero: whatever they hold, the network computes the same.
+    net = first.net
+    grown_net = net.with_inputs(TINY.contact_at, 7)
+    x = torch.randn(4, TINY.inputs)
+    wider_x = torch.cat([x[:, :TINY.contact_at], torch.randn(4, 7), x[:, TINY.contact_at:]], 1)
+    assert torch.allclose(grown_net(wider_x), net(x), atol=1e-6)
+    with pytest.raises(ValueError, match="at must be in 0"):
+        net.with_inputs(TINY.inputs + 1, 2)
 
 
 def test_distilling_keeps_the_ensemble_and_predicts_with_the_mean_network(data, tmp_path):
@@ -584,6 +595,11 @@ def test_a_wider_mean_network_starts_as_the_first_member_and_learns_at_its_own_w
     wide = teacher.net.widened(40, seed=1)
     x = torch.randn(5, teacher.config.inputs)
     assert torch.allclose(wide(x), teacher.net(x), atol=1e-6)
+    assert wide.weights[0][..., TINY.width:].abs().min() > 0  # new units can learn
+    assert not wide.weights[-1][:, TINY.width:].any()  # and are silent until they do
+    alone = TransitionModelConfig(**{**mc.__dict__, "mean_by_grasp": False, "mean_width": 40})
+    plain = train_transition_model(data, tmp_path / "plain", distil, alone, device="cpu")
+    assert plain.mean_net.weights[0].shape[-1] == 40 and plain.mean_net.members == 1
     with pytest.raises(ValueError, match="width must be an int >= the networks' 32"):
         teacher.net.widened(16)
 
