@@ -177,6 +177,8 @@ def test_the_shipped_model_was_trained_with_exactly_the_recipes_settings():
     model = TransitionModel.load_or_pretrained()
     _check_training(recipe, model.info, recipe.SHIPPED)
     assert model.info["teacher_ensemble"] == fingerprint(model.net)
-    split = _stage(recipe, recipe.SHIPPED)[2].get("mean_by_grasp", False)
-    assert asdict(model.config) == asdict(TransitionModelConfig(mean_network=True,
-                                                                mean_by_grasp=split))
+    shipped = _stage(recipe, recipe.SHIPPED)[2]
+    split = shipped.get("mean_by_grasp", False)
+    contact = _stage(recipe, shipped["teacher"])[2].get("contact_reach", 0.0)
+    assert asdict(model.config) == asdict(TransitionModelConfig(
+        mean_network=True, mean_by_grasp=split, contact_reach=contact))
