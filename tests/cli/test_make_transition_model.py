@@ -3,26 +3,21 @@ command (here scaled down to a few transitions and steps)."""
 
 from __future__ import annotations
 
-import importlib.util
 import shutil
 from dataclasses import asdict
 from pathlib import Path
 
 import pytest
+from scripts import load_script
 
 from dlo_env.dataset.transitions import TransitionCollectConfig, load_transitions
 from latent_model import TransitionModel
 from latent_model.transition_model import TransitionModelConfig
 from latent_model.transition_training import TransitionTrainConfig, fingerprint
 
-SCRIPT = Path(__file__).resolve().parents[2] / "examples" / "make_transition_model.py"
-
 
 def _recipe():
-    spec = importlib.util.spec_from_file_location("make_transition_model", SCRIPT)
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    return module
+    return load_script("examples/make_transition_model.py")
 
 
 def _stage(recipe, name):

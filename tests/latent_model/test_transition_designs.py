@@ -2,24 +2,18 @@
 
 from __future__ import annotations
 
-import importlib.util
-from pathlib import Path
-
 import numpy as np
 import pytest
+from scripts import load_script
 
 from dlo_env.shapes import random_cord_shape
 from latent_model import ShapeModel
 from latent_model.transition_model import TransitionModelConfig
 
-SCRIPT = Path(__file__).resolve().parents[2] / "benchmarks" / "transition_designs.py"
-
 
 @pytest.fixture(scope="module")
 def designs():
-    spec = importlib.util.spec_from_file_location("transition_designs", SCRIPT)
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
+    module = load_script("benchmarks/transition_designs.py")
     module.LatentTransitionModel.shape_model = ShapeModel.load_or_pretrained(None, "cpu")
     return module
 

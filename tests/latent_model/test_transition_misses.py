@@ -2,11 +2,10 @@
 
 from __future__ import annotations
 
-import importlib.util
 import sys
-from pathlib import Path
 
 import numpy as np
+from scripts import load_script
 
 from dlo_env.dataset.transitions import (
     TransitionCollectConfig,
@@ -15,14 +14,9 @@ from dlo_env.dataset.transitions import (
 )
 from latent_model.transition_model import TransitionModel, TransitionModelConfig
 
-SCRIPT = Path(__file__).resolve().parents[2] / "benchmarks" / "transition_misses.py"
-
 
 def _script():
-    spec = importlib.util.spec_from_file_location("transition_misses", SCRIPT)
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    return module
+    return load_script("benchmarks/transition_misses.py")
 
 
 def test_the_rim_distance_is_the_nearest_point_of_either_shape():

@@ -2,13 +2,12 @@
 
 from __future__ import annotations
 
-import importlib.util
 from dataclasses import replace
-from pathlib import Path
 
 import numpy as np
 import pytest
 import torch
+from scripts import load_script
 
 from dlo_env.cord import Cord, reachable_targets
 from dlo_env.dataset.transitions import TransitionCollectConfig, collect_transition_chunk
@@ -767,10 +766,7 @@ def test_a_model_of_one_network_reports_without_a_spread(data):
 
 def test_a_widened_ensemble_predicts_exactly_as_before_and_fine_tunes_at_its_width(
         model, data, tmp_path):
-    script = Path(__file__).resolve().parents[2] / "examples" / "widen_transition_model.py"
-    spec = importlib.util.spec_from_file_location("widen_transition_model", script)
-    example = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(example)
+    example = load_script("examples/widen_transition_model.py")
     wide = example.widen(model, 48)
     assert wide.config.width == 48 and wide.net.weights[0].shape[-1] == 48
     shapes = _shapes(8, seed=30)
