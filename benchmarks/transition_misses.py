@@ -20,8 +20,8 @@ from dlo_env.dataset.transitions import GRASP_NAMES, load_transitions
 from dlo_env.shapes import TABLE_HALF, error
 from latent_model.transition_model import TransitionModel
 
-#: Bands of the nearest distance to the rim, metres: [low, high).
-BANDS = ((0.0, 0.01, "under 1 cm"), (0.01, 0.05, "1-5 cm"), (0.05, np.inf, "5 cm or more"))
+#: Bands of the nearest distance to the rim, metres: [low, high) (every distance is in one).
+BANDS = ((-np.inf, 0.01, "under 1 cm"), (0.01, 0.05, "1-5 cm"), (0.05, np.inf, "5 cm or more"))
 MISS = 0.01
 
 
@@ -54,7 +54,7 @@ def main() -> None:
                                  members=args.members)
             e = error(pred, data.next[idx])
             near = rim_distance(data.start[idx], data.next[idx])
-            for low, high, label in BANDS + ((0.0, np.inf, "all"),):
+            for low, high, label in BANDS + ((-np.inf, np.inf, "all"),):
                 band = (near >= low) & (near < high)
                 if band.any():
                     miss = e[band] > MISS

@@ -5,13 +5,16 @@ from __future__ import annotations
 import sys
 
 import numpy as np
+import torch
 from scripts import load_script
 
 from dlo_env.dataset.transitions import (
     TransitionCollectConfig,
+    TransitionDataset,
     collect_transition_chunk,
     save_transitions,
 )
+from dlo_env.shapes import error
 from latent_model.transition_model import TransitionModel, TransitionModelConfig
 
 
@@ -30,21 +33,32 @@ def test_the_rim_distance_is_the_nearest_point_of_either_shape():
 
 def test_every_move_is_counted_once_in_its_band(tmp_path, monkeypatch, capsys):
     misses = _script()
-    data = collect_transition_chunk(TransitionCollectConfig(seed=5, rim_fraction=0.5), 0, 40)
+    data = collect_transition_chunk(TransitionCollectConfig(seed=5), 0, 60)
+    # Each transition shifted so that its nearest point is 0.5, 3 or 20 cm from the right edge.
+    gap = np.resize(np.float32([0.005, 0.03, 0.2]), len(data))
+    reach = np.maximum(data.start[..., 0].max(axis=1), data.next[..., 0].max(axis=1))
+    shift = np.zeros((len(data), 1, 2), dtype=np.float32)
+    shift[:, 0, 0] = 1.0 - gap - reach
+    data = TransitionDataset(**{**data.arrays(), "start": data.start + shift,
+                                "next": data.next + shift}, metadata=data.metadata)
     path = save_transitions(tmp_path / "t.npz", data)
     model = TransitionModel(TransitionModelConfig(width=8, depth=1, members=2), device="cpu")
-    model.save(tmp_path / "m.pt")
+    with torch.no_grad():
+        model.net.weights[-1].mul_(30.0)  # misses of every size
+    model.save(tmp_path / "m.pt", half=False)
     monkeypatch.setattr(sys, "argv", ["transition_misses.py", "--model", str(tmp_path / "m.pt"),
                                       "--file", str(path)])
     misses.main()
-    rows = [line.split() for line in capsys.readouterr().out.splitlines()[2:]]
+    rows = {(r[0], " ".join(r[1:-4])): r[-4:] for r in (
+        line.split() for line in capsys.readouterr().out.splitlines()[2:])}
+    labels = {0.005: "under 1 cm", 0.03: "1-5 cm", 0.2: "5 cm or more"}
     for code, end in enumerate(("head", "tail", "both")):
-        mine = [r for r in rows if r[0] == end]
-        if not (data.grasp == code).any():
-            assert not mine
-            continue
-        total = next(r for r in mine if r[1] == "all")
-        assert int(total[2]) == (data.grasp == code).sum()
-        bands = [r for r in mine if r[1] != "all"]
-        assert sum(int(r[-4]) for r in bands) == int(total[2])  # moves
-        assert sum(int(r[-3]) for r in bands) == int(total[3])  # misses
+        idx = np.flatnonzero(data.grasp == code)
+        assert len(idx), "the chunk holds every grasp"
+        e = error(model.predict(data.start[idx], end, data.end_displacement(idx)),
+                  data.next[idx])
+        for g, label in labels.items():  # counted here without the script's helpers
+            mine = np.isclose(gap[idx], g)
+            assert rows[(end, label)][:2] == [str(mine.sum()), str((e[mine] > 0.01).sum())]
+        assert rows[(end, "all")][:2] == [str(len(idx)), str((e > 0.01).sum())]
+        assert 0 < (e > 0.01).sum() < len(idx)
