@@ -10,9 +10,9 @@ aimed at the rim), and once more on one more (wavy starts, both ends held, moves
 the cord together) with misses beyond 0.5 cm weighted 5 times, once more on the same files,
 the misses weighted the same, with contact vectors added (``--contact-reach 0.03``: a sharp
 rim vector per point and target, their weights starting at zero), then its mean network by
-grasp distilled from it, the misses weighted the same. Every step resumes where a killed run stopped, so the same
-command continues it. About 7.5 hours on 2 cores (collection 92 min, the ensemble 95, the
-fine-tunings 31, 31, 37, 33, 34, 34 and 39, the mean network 21).
+grasp distilled from it, the misses weighted the same. Every step resumes where a killed run
+stopped, so the same command continues it. About 7.5 hours on 2 cores (collection 92 min, the
+ensemble 95, the fine-tunings 31, 31, 37, 33, 34, 34 and 39, the mean network 21).
 Nothing tracked is written; to ship the result:
 
     python examples/make_transition_model.py --out runs/transition-recipe
