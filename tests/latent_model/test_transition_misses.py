@@ -42,6 +42,7 @@ def test_every_move_is_counted_once_in_its_band(tmp_path, monkeypatch, capsys):
     data = TransitionDataset(**{**data.arrays(), "start": data.start + shift,
                                 "next": data.next + shift}, metadata=data.metadata)
     path = save_transitions(tmp_path / "t.npz", data)
+    torch.manual_seed(0)  # the same random model whatever ran before
     model = TransitionModel(TransitionModelConfig(width=8, depth=1, members=2), device="cpu")
     with torch.no_grad():
         model.net.weights[-1].mul_(30.0)  # misses of every size
@@ -52,6 +53,7 @@ def test_every_move_is_counted_once_in_its_band(tmp_path, monkeypatch, capsys):
     rows = {(r[0], " ".join(r[1:-4])): r[-4:] for r in (
         line.split() for line in capsys.readouterr().out.splitlines()[2:])}
     labels = {0.005: "under 1 cm", 0.03: "1-5 cm", 0.2: "5 cm or more"}
+    missed = 0
     for code, end in enumerate(("head", "tail", "both")):
         idx = np.flatnonzero(data.grasp == code)
         assert len(idx), "the chunk holds every grasp"
@@ -61,4 +63,5 @@ def test_every_move_is_counted_once_in_its_band(tmp_path, monkeypatch, capsys):
             mine = np.isclose(gap[idx], g)
             assert rows[(end, label)][:2] == [str(mine.sum()), str((e[mine] > 0.01).sum())]
         assert rows[(end, "all")][:2] == [str(len(idx)), str((e > 0.01).sum())]
-        assert 0 < (e > 0.01).sum() < len(idx)
+        missed += (e > 0.01).sum()
+    assert 0 < missed < len(data)  # both kinds of move are counted
