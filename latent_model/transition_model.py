@@ -142,17 +142,22 @@ class TransitionModelConfig:
 
     @property
     def contact_at(self) -> int:
-        """Where the contact vectors' inputs start (or would): after the rim vectors', before
-        the move's four (``TransitionModel.features``)."""
+        """Where the contact vectors' inputs start (or would): after the points', segments'
+        and rim vectors', before the move's four (``TransitionModel.features``)."""
         n = self.n_points
-        return 2 * n + 2 * (n - 1) + 2 * (self.n_points + self.rim_targets)
+        return 2 * n + 2 * (n - 1) + 2 * (n + self.rim_targets)
 
     @property
     def inputs(self) -> int:
         """Network inputs: the cord's points and segment directions in the frame, the rim near
-        each point and near the held ends' targets, the lead length, the other move, both."""
-        n = self.n_points
-        return 2 * n + 2 * (n - 1) + 2 * self.rim_inputs + 4
+        each point and near the held ends' targets (and their contact vectors), the lead
+        length, the other move, both."""
+        return self.contact_at + 2 * (self.rim_inputs - self.n_points - self.rim_targets) + 4
+
+    @property
+    def mean_units(self) -> int:
+        """Hidden units per layer of the mean network: ``mean_width``, else ``width``."""
+        return self.width if self.mean_width is None else self.mean_width
 
 
 class EnsembleMLP(nn.Module):
@@ -312,9 +317,8 @@ class TransitionModel(nn.Module):
         self.net = self.networks(c.members)
         self.mean_net: EnsembleMLP | GraspRoutedMLP | None = None
         if c.mean_network:
-            width = c.width if c.mean_width is None else c.mean_width
-            self.mean_net = (GraspRoutedMLP(self.networks(2, width)) if c.mean_by_grasp
-                             else self.networks(1, width))
+            self.mean_net = (GraspRoutedMLP(self.networks(2, c.mean_units)) if c.mean_by_grasp
+                             else self.networks(1, c.mean_units))
         self.device = resolve_device(device)
         self.info = dict(info or {})
         self.to(self.device)

@@ -332,11 +332,11 @@ def train_transition_model(
         trained = model.mean_net
         # Start from the ensemble's first member (widened to a wider student, which then
         # predicts as it does; a narrower student starts from its own random weights).
-        width = mc.width if mc.mean_width is None else mc.mean_width
         first = None
-        if width >= mc.width:
+        if mc.mean_units >= mc.width:
             first = model.net.first(1)
-            first = first if width == mc.width else first.widened(width, seed=tc.seed)
+            if mc.mean_units > mc.width:
+                first = first.widened(mc.mean_units, seed=tc.seed)
         with torch.no_grad():
             for mine, theirs in zip(trained.parameters(),
                                     [] if first is None else first.parameters()):
