@@ -526,7 +526,7 @@ class TransitionModel(nn.Module):
                 the spread (None: the model's prediction, below). Their share of the time
                 falls by ``self.config.members / members``, a little less accurate; the spread
                 needs two.
-            inextensible: Move the mean onto the nearest shape whose segments have the
+            inextensible: Move the mean onto a nearby shape whose segments have the
                 cord's rest length, the held ends kept (:mod:`latent_model.inextensible`):
                 more accurate (the simulator's links are rigid), at a small fixed cost per
                 call that planners making many small calls may skip.
