@@ -384,6 +384,12 @@ def main() -> None:
     for name, value, ok in checks:
         shown = f"{value:.4f}" if isinstance(value, float) else str(value)
         print(f"   {name:<48} {shown:>10}  {'PASS' if ok else 'FAIL'}")
+    print("   (95 % intervals over episodes of the held-out file: mean "
+          + ", ".join(f"{g} {one[g].mean_low_cm:.3f}-{one[g].mean_high_cm:.3f} cm"
+                      for g in GRASP_NAMES)
+          + "; within 1 cm "
+          + ", ".join(f"{g} {one[g].within_low:.2%}-{one[g].within_high:.2%}"
+                      for g in GRASP_NAMES) + ")")
     out = Path(args.out)
     write_text_atomic(out / "transition-benchmark.json", json.dumps(json_ready({
         "heldout": [r.__dict__ for r in rows], "spread_rank": rank, "chained_linear3": chain,

@@ -66,7 +66,8 @@ def mean_interval(errors: np.ndarray, groups: np.ndarray | None = None, level: f
 @dataclass(frozen=True)
 class ErrorRow:
     """Error statistics of one group of predictions, centimetres; ``mean_low_cm`` and
-    ``mean_high_cm`` bound the 95 % bootstrap interval of the mean (over episodes)."""
+    ``mean_high_cm`` bound the 95 % bootstrap interval of the mean (over episodes), and
+    ``within_low`` and ``within_high`` that of the share within 1 cm."""
 
     moves: int
     group: str
@@ -77,19 +78,22 @@ class ErrorRow:
     within_1cm: float
     mean_low_cm: float = float("nan")
     mean_high_cm: float = float("nan")
+    within_low: float = float("nan")
+    within_high: float = float("nan")
 
     @classmethod
     def of(cls, moves: int, group: str, errors: np.ndarray,
            episodes: np.ndarray | None = None) -> ErrorRow:
         """Statistics of ``errors`` (metres); ``episodes`` labels correlated predictions for
-        the interval (:func:`mean_interval`)."""
+        the intervals (:func:`mean_interval`)."""
         e = np.asarray(errors, dtype=np.float64)
         if len(e) == 0:
             return cls(moves, group, 0, *(float("nan"),) * 4)
         low, high = mean_interval(e, episodes)
+        within = (e <= WITHIN).astype(np.float64)
         return cls(moves, group, len(e), 100 * e.mean(), 100 * float(np.median(e)),
-                   100 * float(np.percentile(e, 99)), float((e <= WITHIN).mean()),
-                   100 * low, 100 * high)
+                   100 * float(np.percentile(e, 99)), float(within.mean()),
+                   100 * low, 100 * high, *mean_interval(within, episodes))
 
 
 def rollout_errors(model: TransitionModel, data: TransitionDataset, moves: int

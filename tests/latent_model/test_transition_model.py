@@ -746,6 +746,8 @@ def test_mean_interval_covers_the_true_mean_and_narrows_with_more_moves():
     assert mean_interval(few) == mean_interval(few)  # reproducible
     row = ErrorRow.of(1, "head", few / 100)
     assert row.mean_low_cm < row.mean_cm < row.mean_high_cm
+    assert 0.0 < row.within_low < row.within_1cm < row.within_high < 1.0  # some within 1 cm
+    assert (row.within_low, row.within_high) == mean_interval(few / 100 <= 0.01)
     assert np.isnan(mean_interval(np.ones(1))).all()
     # Moves of one episode are correlated: resampling whole episodes widens the interval.
     twice = np.repeat(few, 4)
