@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 
 from dlo_env.shapes import random_cord_shape
-from latent_model.inextensible import make_inextensible
+from latent_model.inextensible import ITERATIONS, MAX_MOVE, make_inextensible
 
 REST = 1.0 / 19
 
@@ -52,6 +52,11 @@ def test_it_turns_and_shifts_with_the_shape_and_reversing_the_cord_reverses_the_
     assert np.abs(turned - (out @ turn + shift)).max() < 1e-5
     reversed_ = make_inextensible(shapes[:, ::-1], REST, pins[1], pins[0])[:, ::-1]
     assert np.abs(reversed_ - out).max() < 1e-6
+    mixed = np.arange(16) % 2 == 0, np.arange(16) % 3 == 0  # some held at both ends
+    mixed[1][np.linalg.norm(shapes[:, 0] - shapes[:, -1], axis=-1) > 0.9] = False
+    out = make_inextensible(shapes, REST, *mixed)
+    reversed_ = make_inextensible(shapes[:, ::-1], REST, mixed[1], mixed[0])[:, ::-1]
+    assert np.abs(reversed_ - out).max() < 1e-5
 
 
 def test_it_moves_a_shape_little_more_than_the_distance_to_a_cord_it_is_near():
@@ -70,3 +75,38 @@ def test_it_moves_a_shape_little_more_than_the_distance_to_a_cord_it_is_near():
     moved = np.linalg.norm(out - jittered, axis=-1).mean(axis=1)
     bound = np.linalg.norm(cords - jittered, axis=-1).mean(axis=1)
     assert (moved <= 1.1 * bound).all() and moved.mean() < 0.8 * bound.mean()
+
+
+def test_a_slack_cord_held_at_both_ends_comes_to_length_in_bounded_steps():
+    # Held at both ends 0.8-0.9 m apart and nearly straight (bows 1 mm to 5 cm high), or the
+    # mean of a bow and its mirror image: the lengths barely change with moves across the
+    # cord, so an unbounded step flies off; each step moves a point half a segment at most.
+    t = np.linspace(0.0, 1.0, 20)
+    bows = [np.stack([span * t, 4 * height * t * (1 - t)], axis=-1)
+            for span in (0.8, 0.9) for height in (0.001, 0.005, 0.02, 0.05)]
+    half = np.stack([np.sin(np.pi * (t - 0.5)), np.cos(np.pi * (t - 0.5))], axis=-1) / np.pi
+    bows.append(0.6 * half + 0.4 * half * [1.0, -1.0])  # a half circle leaning 60/40
+    shapes = np.asarray(bows, dtype=np.float32)
+    held = np.ones(len(shapes), dtype=bool)
+    out = make_inextensible(shapes, REST, held, held)
+    assert (np.abs(_lengths(out) - REST) / REST).max() < 1e-3
+    assert np.array_equal(out[:, [0, -1]], shapes[:, [0, -1]])
+    assert np.linalg.norm(out - shapes, axis=-1).max() <= ITERATIONS * MAX_MOVE * REST + 1e-6
+    # Exactly straight, held: it cannot leave the line but stays finite and in place.
+    for span in (0.8, 1.0, 1.05):
+        line = np.stack([span * t, 0 * t], axis=-1)[None].astype(np.float32)
+        kept = make_inextensible(line, REST, np.ones(1, dtype=bool), np.ones(1, dtype=bool))
+        assert np.isfinite(kept).all() and np.abs(kept - line).max() < 1e-4
+
+
+def test_short_cords_and_an_empty_batch():
+    assert make_inextensible(np.zeros((0, 20, 2)), REST, np.zeros(0, bool),
+                             np.zeros(0, bool)).shape == (0, 20, 2)
+    for n in (2, 3):
+        shapes = np.random.default_rng(n).normal(0, 0.05, (4, n, 2)).astype(np.float32)
+        for pins in ((False, False), (True, False), (False, True)):
+            out = make_inextensible(shapes, REST, np.full(4, pins[0]), np.full(4, pins[1]),
+                                    iterations=40)
+            assert np.abs(_lengths(out) - REST).max() < 1e-4
+        both = make_inextensible(shapes[:, :2], REST, np.ones(4, bool), np.ones(4, bool))
+        assert np.array_equal(both, shapes[:, :2])  # nothing free to move
