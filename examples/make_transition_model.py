@@ -12,7 +12,7 @@ the misses weighted the same, with contact vectors added (``--contact-reach 0.03
 rim vector per point and target, their weights starting at zero), then its mean network by
 grasp distilled from it, the misses weighted the same. Every step resumes where a killed run
 stopped, so the same command continues it. About 8 hours on 2 cores (collection 92 min, the
-ensemble 95, the fine-tunings 31, 31, 37, 33, 34, 34 and 39, the mean network 43).
+ensemble 94, the fine-tunings 31, 31, 37, 33, 34, 34 and 39, the mean network 44).
 Nothing tracked is written; to ship the result:
 
     python examples/make_transition_model.py --out runs/transition-recipe
