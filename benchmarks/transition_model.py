@@ -146,7 +146,7 @@ def _seconds(model: TransitionModel, starts: np.ndarray, end: str, moves: np.nda
     return float(np.median(times)) / len(starts)
 
 
-def throughput(model: TransitionModel, heldout, batch: int = 1024, repeats: int = 5
+def throughput(model: TransitionModel, heldout, batch: int = 1024, repeats: int = 25
                ) -> dict[str, Any]:
     """Seconds per transition for each grasp: the model on a batch of ``batch`` held-out moves
     of that grasp (median of ``repeats`` calls after a warm-up) on 1 thread and on all threads,
