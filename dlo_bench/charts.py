@@ -161,3 +161,37 @@ def plot_learning_curve(logs: dict[str, Any], png: str | os.PathLike, title: str
             title=f"{title} success")
     fig.tight_layout()
     _save(fig, png, dpi=100)
+
+
+def plot_scaling(sizes: np.ndarray, unseen: dict[str, np.ndarray], own: dict[str, np.ndarray],
+                 fits: dict[str, tuple[float, float] | None], floors: dict[str, float],
+                 png: str | os.PathLike, title: str = "") -> None:
+    """Misses (shares of moves off by more than 1 cm) against training transitions, log-log.
+
+    Args:
+        sizes: Training transitions of each run.
+        unseen: Per group, each run's misses on moves it never saw.
+        own: Per group, each run's misses on its own training moves.
+        fits: Per group, ``(a, b)`` of the power law ``exp(a) * size ** b`` (None: no fit),
+            drawn to 30 times the largest size.
+        floors: Per group, the share within 1 cm to reach (drawn as ``1 - floor``).
+        png: Output file.
+        title: The axes' title.
+    """
+    plt = _pyplot()
+    fig, ax = plt.subplots(figsize=(6.4, 4.2))
+    grid = np.geomspace(sizes.min(), sizes.max() * 30, 50)
+    for i, group in enumerate(unseen):
+        color = f"C{i}"
+        ax.loglog(sizes, 100 * unseen[group], "o-", color=color, label=f"{group}: unseen moves")
+        ax.loglog(sizes, 100 * np.maximum(own[group], 1e-4), "x:", color=color, alpha=0.6,
+                  label=f"{group}: its training moves")
+        if fits.get(group) is not None:
+            a, b = fits[group]
+            ax.loglog(grid, 100 * np.exp(a) * grid ** b, "--", color=color, alpha=0.4)
+        ax.axhline(100 * (1 - floors[group]), color=color, lw=0.7, ls="-.")
+    ax.set(xlabel="training transitions", ylabel="moves off by more than 1 cm (%)")
+    ax.set_title(title, fontsize=8)
+    ax.legend(fontsize=7)
+    fig.tight_layout()
+    _save(fig, png, dpi=120)

@@ -1,0 +1,170 @@
+"""How the transition model's misses fall with its training data: a measured learning curve.
+
+For each size N, one network of the shipped architecture (``members=1``, contact vectors) is
+trained on the first episodes of one transition file, about N transitions, with the same steps,
+seed and settings, and scored on a validation file none of them trained on and on up to
+``--fit-sample`` of its own training moves: per grasp, the one-move mean error and the share of
+moves within 1 cm. A power law fitted to the misses (``1 - share``) on unseen moves against N
+(least squares in log-log) says how many transitions one network of this architecture would
+need to reach each within-1 cm floor if the trend went on; the figure shows the curve.
+
+Each size's run is kept under ``--out`` and resumes, so a killed run loses nothing; runs of
+several invocations (say, two at once with different ``--sizes``) are fitted together::
+
+    python benchmarks/transition_scaling.py --data data/transitions-scale-20.npz \\
+        --validation data/transitions-val-4.npz \\
+        [--sizes 12500 25000 50000 100000 200000] [--steps 40000] [--width 256] [--threads 1]
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import time
+from pathlib import Path
+
+import numpy as np
+import torch
+
+from dlo_bench.charts import plot_scaling
+from dlo_env.atomic import write_text_atomic
+from dlo_env.dataset.transitions import GRASP_NAMES, TransitionDataset, load_transitions
+from dlo_env.shapes import error
+from latent_model.transition_model import TransitionModel, TransitionModelConfig
+from latent_model.transition_training import TransitionTrainConfig, train_transition_model
+
+#: The issue's within-1 cm floors by grasp.
+FLOORS = {"head": 0.995, "tail": 0.995, "both": 0.99}
+WITHIN = 0.01
+
+
+def first_episodes(data: TransitionDataset, size: int) -> TransitionDataset:
+    """The transitions of the fewest first episodes (by id) that hold at least ``size``."""
+    ids, counts = np.unique(data.episode, return_counts=True)
+    if size > counts.sum():
+        raise ValueError(f"--sizes: {size} is more than the file's {counts.sum()} transitions")
+    last = ids[np.searchsorted(np.cumsum(counts), size)]
+    return data.subset(data.episode <= last)
+
+
+def scores(model: TransitionModel, data: TransitionDataset) -> dict[str, dict[str, float]]:
+    """Per grasp: moves, mean error (cm) and share within 1 cm of one-move predictions."""
+    out = {}
+    for code, end in enumerate(GRASP_NAMES):
+        idx = np.flatnonzero(data.grasp == code)
+        if not len(idx):
+            out[end] = {"moves": 0, "mean_cm": None, "within": None}
+            continue
+        e = error(model.predict(data.start[idx], end, data.end_displacement(idx)),
+                  data.next[idx])
+        out[end] = {"moves": int(len(idx)), "mean_cm": float(100 * e.mean()),
+                    "within": float((e <= WITHIN).mean())}
+    return out
+
+
+def misses(rows: list[dict], group: str, moves: str = "unseen") -> np.ndarray:
+    """Each row's share of ``group``'s moves off by more than 1 cm (nan where it had none)."""
+    within = [r[moves][group]["within"] for r in rows]
+    return np.array([np.nan if w is None else 1 - w for w in within], dtype=np.float64)
+
+
+def power_law(sizes: np.ndarray, misses: np.ndarray) -> tuple[float, float] | None:
+    """``(a, b)`` with ``misses ~ exp(a) * sizes ** b``, or None without two usable points
+    (a share that is 0 or unknown has no logarithm)."""
+    keep = np.isfinite(misses) & (misses > 0)
+    if keep.sum() < 2:
+        return None
+    b, a = np.polyfit(np.log(sizes[keep]), np.log(misses[keep]), 1)
+    return float(a), float(b)
+
+
+def needed(fit: tuple[float, float] | None, floor: float) -> float:
+    """Transitions at which the fitted misses reach ``1 - floor`` (inf if they do not fall)."""
+    if fit is None or fit[1] >= 0:
+        return float("inf")
+    a, b = fit
+    return float(np.exp((np.log(1 - floor) - a) / b))
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--data", required=True, help="one transition file (dlo collect)")
+    parser.add_argument("--validation", default="data/transitions-val-4.npz",
+                        help="transitions none of the runs trained on (a selection file, not "
+                             "the held-out file of the floors)")
+    parser.add_argument("--sizes", type=int, nargs="+",
+                        default=[12_500, 25_000, 50_000, 100_000, 200_000])
+    parser.add_argument("--steps", type=int, default=40_000)
+    parser.add_argument("--fit-sample", type=int, default=6000,
+                        help="training moves scored per size (the fit, against unseen moves)")
+    parser.add_argument("--width", type=int, default=TransitionModelConfig.width,
+                        help="hidden units per layer (the shipped networks': the default)")
+    parser.add_argument("--threads", type=int, default=1)
+    parser.add_argument("--seed", type=int, default=0)
+    parser.add_argument("--out", default="runs/transition-scaling")
+    args = parser.parse_args()
+    if any(n <= 0 for n in args.sizes):
+        parser.error(f"--sizes must be positive, got {args.sizes}")
+    if min(args.steps, args.fit_sample, args.threads, args.width) <= 0:
+        parser.error("--steps, --fit-sample, --threads and --width must be positive")
+    torch.set_num_threads(args.threads)
+    data = load_transitions(args.data)
+    validation = load_transitions(args.validation)
+    out = Path(args.out)
+    tc = TransitionTrainConfig(steps=args.steps, eval_every=max(1, args.steps // 4),
+                               seed=args.seed)
+    mc = TransitionModelConfig(members=1, contact_reach=0.03, width=args.width)
+    for size in sorted(args.sizes):
+        run = out / f"n{size}-s{args.steps}-w{args.width}-seed{args.seed}"
+        subset = first_episodes(data, size)
+        scored = run / "scores.json"
+        earlier = json.loads(scored.read_text()) if scored.is_file() else {}
+        started = time.perf_counter()
+        model = train_transition_model(subset, run, tc, mc, resume=True, device="cpu")
+        minutes = earlier.get("minutes", round((time.perf_counter() - started) / 60, 2))
+        rng = np.random.default_rng(args.seed)
+        sample = rng.choice(len(subset), min(args.fit_sample, len(subset)), replace=False)
+        row = {"size": int(len(subset)), "steps": args.steps, "width": args.width,
+               "seed": args.seed,
+               "minutes": minutes, "unseen": scores(model, validation),
+               "train": scores(model, subset.subset(np.sort(sample)))}
+        write_text_atomic(scored, json.dumps(row, indent=1))
+        print(f"{row['size']:>8} transitions {minutes:>6} min  " + "  ".join(
+            f"{g} {row['unseen'][g]['mean_cm']:.3f} cm {100 * row['unseen'][g]['within']:.2f} % "
+            f"(train {100 * (1 - misses([row], g, 'train')[0]):.2f} %)"
+            for g in GRASP_NAMES if row["unseen"][g]["moves"]), flush=True)
+
+    # every run of these settings under --out, also those of other invocations
+    found = (json.loads(p.read_text()) for p in out.glob("*/scores.json"))
+    settings = (args.steps, args.width, args.seed)
+    rows = sorted((r for r in found if (r["steps"], r["width"], r["seed"]) == settings),
+                  key=lambda r: r["size"])
+    tag = f"s{args.steps}-w{args.width}-seed{args.seed}"
+    write_text_atomic(out / f"scaling-{tag}.json", json.dumps(rows, indent=1))
+    sizes = np.array([r["size"] for r in rows], dtype=np.float64)
+    print(f"\nmisses on unseen moves ~ N^b, fitted over {len(rows)} sizes "
+          f"({int(sizes.min())}-{int(sizes.max())} transitions, width {args.width}, "
+          f"{args.steps} steps each):")
+    fits = {}
+    for g in GRASP_NAMES:
+        fits[g] = power_law(sizes, misses(rows, g))
+        n = needed(fits[g], FLOORS[g])
+        exponent = "-" if fits[g] is None else f"{fits[g][1]:+.2f}"
+        print(f"  {g:<5} b = {exponent:>6}; within 1 cm >= {100 * FLOORS[g]:.1f} % at about "
+              f"{n:,.0f} transitions of this kind" if np.isfinite(n) else
+              f"  {g:<5} b = {exponent:>6}; the misses do not fall with N")
+    write_text_atomic(out / f"scaling-fit-{tag}.json", json.dumps(
+        {g: {"a": f[0], "b": f[1], "needed": needed(f, FLOORS[g])} if f else None
+         for g, f in fits.items()}, indent=1))
+
+    plot_scaling(
+        sizes, {g: misses(rows, g) for g in GRASP_NAMES},
+        {g: misses(rows, g, "train") for g in GRASP_NAMES},
+        fits, FLOORS, out / f"scaling-{tag}.png",
+        f"one network of width {args.width}, {args.steps} steps each; dashed: the power law; "
+        "dash-dot: the floors")
+    print(f"wrote {out}/scaling-{tag}.json, scaling-fit-{tag}.json and scaling-{tag}.png")
+
+
+if __name__ == "__main__":
+    main()
