@@ -6,7 +6,8 @@ seed and settings, and scored on a validation file none of them trained on and o
 ``--fit-sample`` of its own training moves: per grasp, the one-move mean error and the share of
 moves within 1 cm. A power law fitted to the misses (``1 - share``) on unseen moves against N
 (least squares in log-log) says how many transitions one network of this architecture would
-need to reach each within-1 cm floor if the trend went on; the figure shows the curve.
+need to reach each within-1 cm floor if the trend went on, and where on the curve a reference
+model (the shipped one by default) stands; the figure shows the curve.
 
 Each size's run is kept under ``--out`` and resumes, so a killed run loses nothing; runs of
 several invocations (say, two at once with different ``--sizes``) are fitted together::
@@ -78,12 +79,17 @@ def power_law(sizes: np.ndarray, misses: np.ndarray) -> tuple[float, float] | No
     return float(a), float(b)
 
 
-def needed(fit: tuple[float, float] | None, floor: float) -> float:
-    """Transitions at which the fitted misses reach ``1 - floor`` (inf if they do not fall)."""
-    if fit is None or fit[1] >= 0:
+def size_for(fit: tuple[float, float] | None, share: float) -> float:
+    """Transitions at which the fitted misses fall to ``share`` (inf if they do not fall)."""
+    if fit is None or fit[1] >= 0 or not share > 0:
         return float("inf")
     a, b = fit
-    return float(np.exp((np.log(1 - floor) - a) / b))
+    return float(np.exp((np.log(share) - a) / b))
+
+
+def needed(fit: tuple[float, float] | None, floor: float) -> float:
+    """Transitions at which the fitted misses reach ``1 - floor`` (inf if they do not fall)."""
+    return size_for(fit, 1 - floor)
 
 
 def main() -> None:
@@ -99,6 +105,10 @@ def main() -> None:
                         help="training moves scored per size (the fit, against unseen moves)")
     parser.add_argument("--width", type=int, default=TransitionModelConfig.width,
                         help="hidden units per layer (the shipped networks': the default)")
+    parser.add_argument("--reference", default=None,
+                        help="a transition model file scored beside the curve (default: the "
+                             "shipped model), placed on it as the training size of one network "
+                             "that misses as often")
     parser.add_argument("--threads", type=int, default=1)
     parser.add_argument("--seed", type=int, default=0)
     parser.add_argument("--out", default="runs/transition-scaling")
@@ -153,9 +163,17 @@ def main() -> None:
         print(f"  {g:<5} b = {exponent:>6}; within 1 cm >= {100 * FLOORS[g]:.1f} % at about "
               f"{n:,.0f} transitions of this kind" if np.isfinite(n) else
               f"  {g:<5} b = {exponent:>6}; the misses do not fall with N")
+    reference = scores(TransitionModel.load_or_pretrained(args.reference, device="cpu"),
+                       validation)
+    print(f"the {args.reference or 'shipped model'} on the same moves:")
+    for g in GRASP_NAMES:
+        ref = misses([{"unseen": reference}], g)[0]
+        print(f"  {g:<5} {reference[g]['mean_cm']:.3f} cm, {100 * (1 - ref):.2f} % within 1 cm: "
+              f"as one network on about {size_for(fits[g], ref):,.0f} transitions of this kind")
     write_text_atomic(out / f"scaling-fit-{tag}.json", json.dumps(
-        {g: {"a": f[0], "b": f[1], "needed": needed(f, FLOORS[g])} if f else None
-         for g, f in fits.items()}, indent=1))
+        {"reference": {"model": args.reference or "shipped", **reference},
+         **{g: {"a": f[0], "b": f[1], "needed": needed(f, FLOORS[g])} if f else None
+            for g, f in fits.items()}}, indent=1))
 
     plot_scaling(
         sizes, {g: misses(rows, g) for g in GRASP_NAMES},

@@ -69,9 +69,9 @@ def test_a_tiny_curve_runs_resumes_and_fits_runs_of_two_invocations(data, tmp_pa
     assert all(0 <= r["unseen"][g]["within"] <= 1 for r in rows for g in ("head", "tail", "both"))
     assert (out / "scaling-s3-w256-seed0.png").stat().st_size > 0
     fit = json.loads((out / "scaling-fit-s3-w256-seed0.json").read_text())
-    assert set(fit) == {"head", "tail", "both"}
+    assert set(fit) == {"head", "tail", "both", "reference"}
     printed = capsys.readouterr().out
-    assert "fitted over 3 sizes" in printed
+    assert "fitted over 3 sizes" in printed and "the shipped model on the same moves" in printed
     # a second run of the same size trains nothing more: its time and scores stand
     before = (out / "n20-s3-w256-seed0" / "scores.json").read_text()
     monkeypatch.setattr(sys, "argv", common + ["--sizes", "20"])
