@@ -14,7 +14,8 @@ several invocations (say, two at once with different ``--sizes``) are fitted tog
 
     python benchmarks/transition_scaling.py --data data/transitions-scale-20.npz \\
         --validation data/transitions-val-4.npz \\
-        [--sizes 12500 25000 50000 100000 200000] [--steps 40000] [--width 256] [--threads 1]
+        [--sizes 6250 12500 25000 50000 100000 200000] [--steps 100000] [--width 256] \\
+        [--threads 1] [--reference-size 840000]
 """
 
 from __future__ import annotations
@@ -99,8 +100,8 @@ def main() -> None:
                         help="transitions none of the runs trained on (a selection file, not "
                              "the held-out file of the floors)")
     parser.add_argument("--sizes", type=int, nargs="+",
-                        default=[12_500, 25_000, 50_000, 100_000, 200_000])
-    parser.add_argument("--steps", type=int, default=40_000)
+                        default=[6_250, 12_500, 25_000, 50_000, 100_000, 200_000])
+    parser.add_argument("--steps", type=int, default=100_000)
     parser.add_argument("--fit-sample", type=int, default=6000,
                         help="training moves scored per size (the fit, against unseen moves)")
     parser.add_argument("--width", type=int, default=TransitionModelConfig.width,
@@ -109,14 +110,19 @@ def main() -> None:
                         help="a transition model file scored beside the curve (default: the "
                              "shipped model), placed on it as the training size of one network "
                              "that misses as often")
+    parser.add_argument("--reference-size", type=float, default=None,
+                        help="transitions the reference model was trained on: it is drawn "
+                             "there (the shipped model: 840000, of several kinds)")
     parser.add_argument("--threads", type=int, default=1)
     parser.add_argument("--seed", type=int, default=0)
     parser.add_argument("--out", default="runs/transition-scaling")
     args = parser.parse_args()
     if any(n <= 0 for n in args.sizes):
         parser.error(f"--sizes must be positive, got {args.sizes}")
-    if min(args.steps, args.fit_sample, args.threads, args.width) <= 0:
-        parser.error("--steps, --fit-sample, --threads and --width must be positive")
+    if min(args.steps, args.fit_sample, args.threads, args.width) <= 0 or (
+            args.reference_size is not None and not args.reference_size > 0):
+        parser.error("--steps, --fit-sample, --threads, --width and --reference-size must be "
+                     "positive")
     torch.set_num_threads(args.threads)
     data = load_transitions(args.data)
     validation = load_transitions(args.validation)
@@ -165,7 +171,8 @@ def main() -> None:
               f"  {g:<5} b = {exponent:>6}; the misses do not fall with N")
     reference = scores(TransitionModel.load_or_pretrained(args.reference, device="cpu"),
                        validation)
-    print(f"the {args.reference or 'shipped model'} on the same moves:")
+    name = args.reference or "shipped model"
+    print(f"the {name} on the same moves:")
     for g in GRASP_NAMES:
         ref = misses([{"unseen": reference}], g)[0]
         print(f"  {g:<5} {reference[g]['mean_cm']:.3f} cm, {100 * (1 - ref):.2f} % within 1 cm: "
@@ -180,7 +187,10 @@ def main() -> None:
         {g: misses(rows, g, "train") for g in GRASP_NAMES},
         fits, FLOORS, out / f"scaling-{tag}.png",
         f"one network of width {args.width}, {args.steps} steps each; dashed: the power law; "
-        "dash-dot: the floors")
+        "dash-dot: the floors",
+        None if args.reference_size is None else (
+            args.reference_size, {g: misses([{"unseen": reference}], g)[0] for g in GRASP_NAMES},
+            name))
     print(f"wrote {out}/scaling-{tag}.json, scaling-fit-{tag}.json and scaling-{tag}.png")
 
 

@@ -165,7 +165,8 @@ def plot_learning_curve(logs: dict[str, Any], png: str | os.PathLike, title: str
 
 def plot_scaling(sizes: np.ndarray, unseen: dict[str, np.ndarray], own: dict[str, np.ndarray],
                  fits: dict[str, tuple[float, float] | None], floors: dict[str, float],
-                 png: str | os.PathLike, title: str = "") -> None:
+                 png: str | os.PathLike, title: str = "",
+                 reference: tuple[float, dict[str, float], str] | None = None) -> None:
     """Misses (shares of moves off by more than 1 cm) against training transitions, log-log.
 
     Args:
@@ -177,6 +178,7 @@ def plot_scaling(sizes: np.ndarray, unseen: dict[str, np.ndarray], own: dict[str
         floors: Per group, the share within 1 cm to reach (drawn as ``1 - floor``).
         png: Output file.
         title: The axes' title.
+        reference: ``(size, misses per group, label)`` of another model, drawn as stars.
     """
     plt = _pyplot()
     fig, ax = plt.subplots(figsize=(6.4, 4.2))
@@ -190,6 +192,9 @@ def plot_scaling(sizes: np.ndarray, unseen: dict[str, np.ndarray], own: dict[str
             a, b = fits[group]
             ax.loglog(grid, 100 * np.exp(a) * grid ** b, "--", color=color, alpha=0.4)
         ax.axhline(100 * (1 - floors[group]), color=color, lw=0.7, ls="-.")
+        if reference is not None and group in reference[1]:
+            ax.loglog([reference[0]], [100 * reference[1][group]], "*", color=color, ms=11,
+                      label=f"{group}: {reference[2]}")
     ax.set(xlabel="training transitions", ylabel="moves off by more than 1 cm (%)")
     ax.set_title(title, fontsize=8)
     ax.legend(fontsize=7)

@@ -61,7 +61,7 @@ def test_a_tiny_curve_runs_resumes_and_fits_runs_of_two_invocations(data, tmp_pa
     out = tmp_path / "out"
     common = ["x", "--data", str(path), "--validation", str(path), "--steps", "3",
               "--fit-sample", "20", "--out", str(out)]
-    for sizes in (["10", "20"], ["40"]):
+    for sizes in (["10", "20"], ["40", "--reference-size", "800"]):
         monkeypatch.setattr(sys, "argv", common + ["--sizes", *sizes])
         scaling.main()
     rows = json.loads((out / "scaling-s3-w256-seed0.json").read_text())
