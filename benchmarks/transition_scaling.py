@@ -9,8 +9,10 @@ moves within 1 cm. A power law fitted to the misses (``1 - share``) on unseen mo
 need to reach each within-1 cm floor if the trend went on, and where on the curve a reference
 model (the shipped one by default) stands; the figure shows the curve.
 
-Each size's run is kept under ``--out`` and resumes, so a killed run loses nothing; runs of
-several invocations (say, two at once with different ``--sizes``) are fitted together::
+Each size's training is kept under ``--runs`` and resumes, so a killed run loses nothing; runs
+of several invocations (say, two at once with different ``--sizes``) are fitted together. The
+curve (JSON and PNG) goes to ``--out`` (default ``--runs``); the committed one in
+``benchmarks/transition_scaling/`` is refreshed with ``--out benchmarks/transition_scaling``::
 
     python benchmarks/transition_scaling.py --data data/transitions-scale-20.npz \\
         --validation data/transitions-val-4.npz \\
@@ -115,7 +117,10 @@ def main() -> None:
                              "there (the shipped model: 840000, of several kinds)")
     parser.add_argument("--threads", type=int, default=1)
     parser.add_argument("--seed", type=int, default=0)
-    parser.add_argument("--out", default="runs/transition-scaling")
+    parser.add_argument("--runs", default="runs/transition-scaling",
+                        help="folder of the trainings, one per size (resumed)")
+    parser.add_argument("--out", default=None,
+                        help="folder of the curve's JSON and PNG (default: --runs)")
     args = parser.parse_args()
     if any(n <= 0 for n in args.sizes):
         parser.error(f"--sizes must be positive, got {args.sizes}")
@@ -126,12 +131,13 @@ def main() -> None:
     torch.set_num_threads(args.threads)
     data = load_transitions(args.data)
     validation = load_transitions(args.validation)
-    out = Path(args.out)
+    runs = Path(args.runs)
+    out = Path(args.out) if args.out else runs
     tc = TransitionTrainConfig(steps=args.steps, eval_every=max(1, args.steps // 4),
                                seed=args.seed)
     mc = TransitionModelConfig(members=1, contact_reach=0.03, width=args.width)
     for size in sorted(args.sizes):
-        run = out / f"n{size}-s{args.steps}-w{args.width}-seed{args.seed}"
+        run = runs / f"n{size}-s{args.steps}-w{args.width}-seed{args.seed}"
         subset = first_episodes(data, size)
         scored = run / "scores.json"
         earlier = json.loads(scored.read_text()) if scored.is_file() else {}
@@ -150,8 +156,8 @@ def main() -> None:
             f"(train {100 * (1 - misses([row], g, 'train')[0]):.2f} %)"
             for g in GRASP_NAMES if row["unseen"][g]["moves"]), flush=True)
 
-    # every run of these settings under --out, also those of other invocations
-    found = (json.loads(p.read_text()) for p in out.glob("*/scores.json"))
+    # every run of these settings under --runs, also those of other invocations
+    found = (json.loads(p.read_text()) for p in runs.glob("*/scores.json"))
     settings = (args.steps, args.width, args.seed)
     rows = sorted((r for r in found if (r["steps"], r["width"], r["seed"]) == settings),
                   key=lambda r: r["size"])

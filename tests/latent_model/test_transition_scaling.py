@@ -60,7 +60,7 @@ def test_a_tiny_curve_runs_resumes_and_fits_runs_of_two_invocations(data, tmp_pa
     save_transitions(path, data)
     out = tmp_path / "out"
     common = ["x", "--data", str(path), "--validation", str(path), "--steps", "3",
-              "--fit-sample", "20", "--out", str(out)]
+              "--fit-sample", "20", "--runs", str(tmp_path / "runs"), "--out", str(out)]
     for sizes in (["10", "20"], ["40", "--reference-size", "800"]):
         monkeypatch.setattr(sys, "argv", common + ["--sizes", *sizes])
         scaling.main()
@@ -73,7 +73,7 @@ def test_a_tiny_curve_runs_resumes_and_fits_runs_of_two_invocations(data, tmp_pa
     printed = capsys.readouterr().out
     assert "fitted over 3 sizes" in printed and "the shipped model on the same moves" in printed
     # a second run of the same size trains nothing more: its time and scores stand
-    before = (out / "n20-s3-w256-seed0" / "scores.json").read_text()
+    before = (tmp_path / "runs" / "n20-s3-w256-seed0" / "scores.json").read_text()
     monkeypatch.setattr(sys, "argv", common + ["--sizes", "20"])
     scaling.main()
-    assert (out / "n20-s3-w256-seed0" / "scores.json").read_text() == before
+    assert (tmp_path / "runs" / "n20-s3-w256-seed0" / "scores.json").read_text() == before
