@@ -3,16 +3,18 @@
 For each size N, one network of the shipped architecture (``members=1``, contact vectors) is
 trained on the first episodes of one transition file, about N transitions, with the same steps,
 seed and settings, and scored on a validation file none of them trained on and on up to
-``--fit-sample`` of its own training moves: per grasp, the one-move mean error and the share of
+``--fit-sample`` of its own training moves (not of the 5 % of episodes its training holds
+back): per grasp, the one-move mean error and the share of
 moves within 1 cm. A power law fitted to the misses (``1 - share``) on unseen moves against N
 (least squares in log-log) says how many transitions one network of this architecture would
 need to reach each within-1 cm floor if the trend went on, and where on the curve a reference
 model (the shipped one by default) stands; the figure shows the curve.
 
-Each size's training is kept under ``--runs`` and resumes, so a killed run loses nothing; runs
-of several invocations (say, two at once with different ``--sizes``) are fitted together. The
-curve (JSON and PNG) goes to ``--out`` (default ``--runs``); the committed one in
-``benchmarks/transition_scaling/`` is refreshed with ``--out benchmarks/transition_scaling``::
+Each size's training is kept under ``--runs`` and resumes from its last checkpoint (a quarter
+of its steps) after a kill; runs of several invocations (say, two at once with different
+``--sizes``) are fitted together. The curve (JSON and PNG) goes to ``--out`` (default
+``--runs``); the committed one in ``benchmarks/transition_scaling/`` is refreshed with ``--out
+benchmarks/transition_scaling``::
 
     python benchmarks/transition_scaling.py --data data/transitions-scale-20.npz \\
         --validation data/transitions-val-4.npz \\
@@ -24,6 +26,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import math
 import time
 from pathlib import Path
 
@@ -31,11 +34,20 @@ import numpy as np
 import torch
 
 from dlo_bench.charts import plot_scaling
-from dlo_env.atomic import write_text_atomic
-from dlo_env.dataset.transitions import GRASP_NAMES, TransitionDataset, load_transitions
+from dlo_env.atomic import file_digest, write_text_atomic
+from dlo_env.dataset.transitions import (
+    GRASP_NAMES,
+    TransitionDataset,
+    load_transitions,
+    split_transitions,
+)
 from dlo_env.shapes import error
 from latent_model.transition_model import TransitionModel, TransitionModelConfig
-from latent_model.transition_training import TransitionTrainConfig, train_transition_model
+from latent_model.transition_training import (
+    CHECKPOINT_FILE,
+    TransitionTrainConfig,
+    train_transition_model,
+)
 
 #: The issue's within-1 cm floors by grasp.
 FLOORS = {"head": 0.995, "tail": 0.995, "both": 0.99}
@@ -49,6 +61,16 @@ def first_episodes(data: TransitionDataset, size: int) -> TransitionDataset:
         raise ValueError(f"--sizes: {size} is more than the file's {counts.sum()} transitions")
     last = ids[np.searchsorted(np.cumsum(counts), size)]
     return data.subset(data.episode <= last)
+
+
+def trained_sample(subset: TransitionDataset, tc: TransitionTrainConfig, count: int
+                   ) -> TransitionDataset:
+    """Up to ``count`` transitions the network trained on: the training side of the split
+    ``train_transition_model`` makes, not the episodes it holds back for validation."""
+    train, _ = split_transitions(subset, tc.validation_fraction, seed=tc.seed)
+    pick = np.random.default_rng(tc.seed).choice(len(train), min(count, len(train)),
+                                                 replace=False)
+    return train.subset(np.sort(pick))
 
 
 def scores(model: TransitionModel, data: TransitionDataset) -> dict[str, dict[str, float]]:
@@ -85,14 +107,20 @@ def power_law(sizes: np.ndarray, misses: np.ndarray) -> tuple[float, float] | No
 def size_for(fit: tuple[float, float] | None, share: float) -> float:
     """Transitions at which the fitted misses fall to ``share`` (inf if they do not fall)."""
     if fit is None or fit[1] >= 0 or not share > 0:
-        return float("inf")
+        return math.inf
     a, b = fit
-    return float(np.exp((np.log(share) - a) / b))
+    log_size = (math.log(share) - a) / b
+    return math.exp(log_size) if log_size < 700 else math.inf
 
 
 def needed(fit: tuple[float, float] | None, floor: float) -> float:
     """Transitions at which the fitted misses reach ``1 - floor`` (inf if they do not fall)."""
     return size_for(fit, 1 - floor)
+
+
+def transitions(n: float) -> str:
+    """``n`` transitions as printed: a count, or that the fit never gets there."""
+    return f"about {n:,.0f} transitions of this kind" if math.isfinite(n) else "never (no fall)"
 
 
 def main() -> None:
@@ -122,44 +150,57 @@ def main() -> None:
     parser.add_argument("--out", default=None,
                         help="folder of the curve's JSON and PNG (default: --runs)")
     args = parser.parse_args()
-    if any(n <= 0 for n in args.sizes):
-        parser.error(f"--sizes must be positive, got {args.sizes}")
-    if min(args.steps, args.fit_sample, args.threads, args.width) <= 0 or (
-            args.reference_size is not None and not args.reference_size > 0):
-        parser.error("--steps, --fit-sample, --threads, --width and --reference-size must be "
-                     "positive")
+    for name in ("steps", "fit_sample", "width", "threads"):
+        if getattr(args, name) < 1:
+            parser.error(f"--{name.replace('_', '-')} must be >= 1, got {getattr(args, name)}")
+    if min(args.sizes) < 1:
+        parser.error(f"--sizes must all be >= 1, got {args.sizes}")
+    if args.reference_size is not None and not 0 < args.reference_size < math.inf:
+        parser.error(f"--reference-size must be a positive number, got {args.reference_size}")
+    data_digest, validation_digest = file_digest(args.data), file_digest(args.validation)
+    if data_digest and data_digest == validation_digest:
+        parser.error("--validation must be another file than --data (the runs train on it)")
     torch.set_num_threads(args.threads)
     data = load_transitions(args.data)
+    if max(args.sizes) > len(data):
+        parser.error(f"--sizes: {max(args.sizes)} is more than --data's {len(data)} "
+                     "transitions")
     validation = load_transitions(args.validation)
     runs = Path(args.runs)
     out = Path(args.out) if args.out else runs
     tc = TransitionTrainConfig(steps=args.steps, eval_every=max(1, args.steps // 4),
                                seed=args.seed)
     mc = TransitionModelConfig(members=1, contact_reach=0.03, width=args.width)
+    # a row is fitted with others only if they agree on all of these
+    settings = {"data": data_digest, "validation": validation_digest, "steps": args.steps,
+                "width": args.width, "seed": args.seed, "fit_sample": args.fit_sample}
     for size in sorted(args.sizes):
         run = runs / f"n{size}-s{args.steps}-w{args.width}-seed{args.seed}"
-        subset = first_episodes(data, size)
         scored = run / "scores.json"
         earlier = json.loads(scored.read_text()) if scored.is_file() else {}
+        if earlier.get("data", data_digest) != data_digest:
+            raise SystemExit(f"--runs: {run} was trained on another --data file; choose "
+                             "another --runs folder")
+        subset = first_episodes(data, size)
+        # the training time is known only for a run this invocation did from its start
+        fresh = not (run / CHECKPOINT_FILE).exists() and not (run / "transition.pt").exists()
         started = time.perf_counter()
         model = train_transition_model(subset, run, tc, mc, resume=True, device="cpu")
-        minutes = earlier.get("minutes", round((time.perf_counter() - started) / 60, 2))
-        rng = np.random.default_rng(args.seed)
-        sample = rng.choice(len(subset), min(args.fit_sample, len(subset)), replace=False)
-        row = {"size": int(len(subset)), "steps": args.steps, "width": args.width,
-               "seed": args.seed,
-               "minutes": minutes, "unseen": scores(model, validation),
-               "train": scores(model, subset.subset(np.sort(sample)))}
+        minutes = (round((time.perf_counter() - started) / 60, 2) if fresh
+                   else earlier.get("minutes"))
+        row = {"size": int(len(subset)), **settings, "minutes": minutes,
+               "unseen": scores(model, validation),
+               "train": scores(model, trained_sample(subset, tc, args.fit_sample))}
         write_text_atomic(scored, json.dumps(row, indent=1))
-        print(f"{row['size']:>8} transitions {minutes:>6} min  " + "  ".join(
+        shown = "?" if minutes is None else minutes
+        print(f"{row['size']:>8} transitions {shown:>6} min  " + "  ".join(
             f"{g} {row['unseen'][g]['mean_cm']:.3f} cm {100 * row['unseen'][g]['within']:.2f} % "
             f"(train {100 * (1 - misses([row], g, 'train')[0]):.2f} %)"
             for g in GRASP_NAMES if row["unseen"][g]["moves"]), flush=True)
 
     # every run of these settings under --runs, also those of other invocations
     found = (json.loads(p.read_text()) for p in runs.glob("*/scores.json"))
-    settings = (args.steps, args.width, args.seed)
-    rows = sorted((r for r in found if (r["steps"], r["width"], r["seed"]) == settings),
+    rows = sorted((r for r in found if all(r.get(k) == v for k, v in settings.items())),
                   key=lambda r: r["size"])
     tag = f"s{args.steps}-w{args.width}-seed{args.seed}"
     write_text_atomic(out / f"scaling-{tag}.json", json.dumps(rows, indent=1))
@@ -167,26 +208,31 @@ def main() -> None:
     print(f"\nmisses on unseen moves ~ N^b, fitted over {len(rows)} sizes "
           f"({int(sizes.min())}-{int(sizes.max())} transitions, width {args.width}, "
           f"{args.steps} steps each):")
-    fits = {}
-    for g in GRASP_NAMES:
-        fits[g] = power_law(sizes, misses(rows, g))
-        n = needed(fits[g], FLOORS[g])
-        exponent = "-" if fits[g] is None else f"{fits[g][1]:+.2f}"
-        print(f"  {g:<5} b = {exponent:>6}; within 1 cm >= {100 * FLOORS[g]:.1f} % at about "
-              f"{n:,.0f} transitions of this kind" if np.isfinite(n) else
-              f"  {g:<5} b = {exponent:>6}; the misses do not fall with N")
+    fits = {g: power_law(sizes, misses(rows, g)) for g in GRASP_NAMES}
+    for g, fit in fits.items():
+        exponent = "-" if fit is None else f"{fit[1]:+.2f}"
+        print(f"  {g:<5} b = {exponent:>6}; within 1 cm >= {100 * FLOORS[g]:.1f} %: "
+              f"{transitions(needed(fit, FLOORS[g]))}")
     reference = scores(TransitionModel.load_or_pretrained(args.reference, device="cpu"),
                        validation)
     name = args.reference or "shipped model"
-    print(f"the {name} on the same moves:")
+    reference_misses = {g: misses([{"unseen": reference}], g)[0] for g in GRASP_NAMES}
+    print(f"the {name} on the same moves (misses as one network on ... of this kind):")
     for g in GRASP_NAMES:
-        ref = misses([{"unseen": reference}], g)[0]
-        print(f"  {g:<5} {reference[g]['mean_cm']:.3f} cm, {100 * (1 - ref):.2f} % within 1 cm: "
-              f"as one network on about {size_for(fits[g], ref):,.0f} transitions of this kind")
-    write_text_atomic(out / f"scaling-fit-{tag}.json", json.dumps(
-        {"reference": {"model": args.reference or "shipped", **reference},
-         **{g: {"a": f[0], "b": f[1], "needed": needed(f, FLOORS[g])} if f else None
-            for g, f in fits.items()}}, indent=1))
+        print(f"  {g:<5} {reference[g]['mean_cm']:.3f} cm, "
+              f"{100 * (1 - reference_misses[g]):.2f} % within 1 cm: "
+              f"{transitions(size_for(fits[g], reference_misses[g]))}")
+
+    def finite(n: float) -> float | None:  # JSON has no infinity
+        return n if math.isfinite(n) else None
+
+    write_text_atomic(out / f"scaling-fit-{tag}.json", json.dumps({
+        "settings": settings,
+        "reference": {"model": args.reference or "shipped", **reference},
+        **{g: None if f is None else {
+            "a": f[0], "b": f[1], "needed": finite(needed(f, FLOORS[g])),
+            "reference_as": finite(size_for(f, reference_misses[g]))}
+           for g, f in fits.items()}}, indent=1))
 
     plot_scaling(
         sizes, {g: misses(rows, g) for g in GRASP_NAMES},
@@ -194,9 +240,7 @@ def main() -> None:
         fits, FLOORS, out / f"scaling-{tag}.png",
         f"one network of width {args.width}, {args.steps} steps each; dashed: the power law; "
         "dash-dot: the floors",
-        None if args.reference_size is None else (
-            args.reference_size, {g: misses([{"unseen": reference}], g)[0] for g in GRASP_NAMES},
-            name))
+        None if args.reference_size is None else (args.reference_size, reference_misses, name))
     print(f"wrote {out}/scaling-{tag}.json, scaling-fit-{tag}.json and scaling-{tag}.png")
 
 
