@@ -45,13 +45,11 @@ from dlo_env.tasks import (
     SPAN_MARGIN,
     load_suite,
 )
-from latent_model.transition_metrics import report_lines, transition_report
+from latent_model.transition_metrics import FLOORS, report_lines, transition_report
 from latent_model.transition_model import TransitionModel
 
 #: With both ends held the grippers stay this close (``max_span * length - SPAN_MARGIN``).
 SPAN = CordParams().max_span * CordParams().length - SPAN_MARGIN
-FLOORS = {"single_mean_cm": 0.15, "single_within": 0.995, "both_mean_cm": 0.25,
-          "both_within": 0.99, "chain_cm": 0.5, "curves_cm": 0.3, "speedup": 1000.0}
 
 
 def simulate(start: np.ndarray, end: str, move: np.ndarray) -> np.ndarray:

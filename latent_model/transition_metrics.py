@@ -25,6 +25,11 @@ from latent_model.transition_training import chain_starts
 LENGTH_BINS = ((0, 5), (5, 15), (15, 25), (25, 36))
 #: A prediction within this of the simulator is "within 1 cm", metres.
 WITHIN = 0.01
+#: The transition model's floors (measured by ``benchmarks/transition_model.py``): one-move
+#: mean errors (cm) and shares within 1 cm of single-end and both-ends moves, the chained
+#: linear-3 moves and analytic shapes (cm), and the speed-up over the simulator.
+FLOORS = {"single_mean_cm": 0.15, "single_within": 0.995, "both_mean_cm": 0.25,
+          "both_within": 0.99, "chain_cm": 0.5, "curves_cm": 0.3, "speedup": 1000.0}
 #: Resamples of the bootstrap interval of a mean, and its seed (the interval is reproducible).
 BOOTSTRAP = 2000
 BOOTSTRAP_SEED = 0
