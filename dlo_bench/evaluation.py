@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import math
 import time
+import warnings
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -269,7 +270,7 @@ def _run_episode(
 
 def evaluate(
     policy: Policy,
-    env_id: str = "dlo_env/DLOEndpoint-v0",
+    env: Any = "dlo_env/DLOEndpoint-v0",
     difficulty: int | None = None,
     suite: str | None = None,
     episodes: int = 10,
@@ -280,12 +281,15 @@ def evaluate(
     fidelity: bool = True,
     env_kwargs: dict[str, Any] | None = None,
     progress: bool = False,
+    env_id: str | None = None,
 ) -> Evaluation:
     """Run ``episodes`` episodes of ``policy`` and score them against the real cord.
 
     Args:
         policy: A ``planners.interfaces.Policy`` (SB3's ``predict``).
-        env_id: A ``dlo_env`` goal environment id.
+        env: A ``dlo_env`` goal environment, or its id (as ``build_agent`` takes an
+            environment): an environment given is used as it is and left open; one made from
+            an id (with ``env_kwargs``) is closed at the end.
         difficulty: Straight moves per task (the environment's default if None).
         suite: A named suite (``linear-1``, ...) instead of ``difficulty``: its fixed tasks.
         episodes: Number of episodes.
@@ -295,6 +299,7 @@ def evaluate(
         fidelity: Compute the transition fidelity of plans (one extra simulation per episode).
         env_kwargs: Extra keyword arguments of ``gym.make``.
         progress: Show a tqdm progress bar.
+        env_id: Deprecated name of ``env`` (an id).
 
     Returns:
         The records and their summary.
@@ -309,7 +314,21 @@ def evaluate(
         raise ValueError(f"episodes must be an int >= 1, got {episodes!r}")
     if difficulty is not None and suite is not None:
         raise ValueError("give difficulty or suite, not both")
-    env = gym.make(env_id, **(env_kwargs or {}))
+    if env_id is not None:
+        warnings.warn("evaluate(env_id=...) is deprecated: use env=...", DeprecationWarning,
+                      stacklevel=2)
+        env = env_id
+    owned = isinstance(env, str)
+    if owned:
+        env = gym.make(env, **(env_kwargs or {}))
+    elif not isinstance(env, gym.Env):
+        raise ValueError(f"env must be a dlo_env environment or its id, got "
+                         f"{type(env).__name__}")
+    elif env_kwargs:
+        raise ValueError("env_kwargs apply to an environment made from an id; got an "
+                         "environment and env_kwargs")
+    spec = getattr(env.unwrapped, "spec", None)
+    env_id = spec.id if spec is not None else type(env.unwrapped).__name__
     try:
         if isinstance(policy, PlanningPolicy):
             policy.check_env(env)
@@ -328,7 +347,8 @@ def evaluate(
         if bar is not None:
             bar.close()
     finally:
-        env.close()
+        if owned:
+            env.close()
     summary = summarise(records, agent=agent, env_id=env_id)
     summary["divergence"] = divergence(profiles)
     return Evaluation(records=records, summary=summary, profiles=profiles)

@@ -63,7 +63,7 @@ def transition_fidelity(
     around it), so the comparison is at matching end positions along the path.
 
     Args:
-        plan: A plan for the manipulated end (``plan.end``).
+        plan: A plan for the manipulated end (``plan.grasp``).
         start: ``(n, 2)`` the real start shape the plan was made from.
         params: The cord's parameters (the default cord if None).
         max_step: Displacement of an action of 1.0, metres.
@@ -77,20 +77,20 @@ def transition_fidelity(
     if plan.shapes.shape[1] != params.n_points:
         raise ValueError(f"plan must be for a cord of n_points={params.n_points}, got shapes of "
                          f"{plan.shapes.shape[1]} points")
-    cord = Cord(params, grasp=plan.end)
+    cord = Cord(params, grasp=plan.grasp)
     cord.reset(start)
     corners = plan.corners
     real = np.empty_like(plan.shapes)
     real[0] = start
     for e in range(len(plan.nodes) - 1):
         a, b = int(plan.nodes[e]), int(plan.nodes[e + 1])
-        origin = cord.gripper_positions()[plan.end]
+        origin = cord.gripper_positions()[plan.grasp]
         recorded = [cord.shape]
         progress = [0.0]
         for action in actions_through(origin, corners[e + 1 : e + 2], max_step):
             apply_action(cord, action, max_step)
             recorded.append(cord.shape)
-            progress.append(float(np.linalg.norm(cord.gripper_positions()[plan.end] - origin)))
+            progress.append(float(np.linalg.norm(cord.gripper_positions()[plan.grasp] - origin)))
         chord = corners[e + 1] - corners[e]
         length = float(np.linalg.norm(chord))
         idx = np.arange(a + 1, b + 1)

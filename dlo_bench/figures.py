@@ -24,6 +24,9 @@ _TEXT = (20, 20, 20)
 #: The legend: one entry per mark drawn.
 LEGEND = ("cord (blue), head (red dot) held by the gripper (orange ring),",
           "goal (green), current plan's shapes (pale blue)")
+#: The legend of an episode without plan shapes (an agent that plans moves, not shapes).
+LEGEND_NO_PLAN = ("cord (blue), head (red dot) held by the gripper (orange ring),",
+                  "goal (green)")
 
 
 @dataclass(frozen=True)
@@ -74,6 +77,7 @@ def save_episode_gif(frames: list[Frame], path: str | os.PathLike, size: int = 4
     path = Path(path)
     to_pixels = _view(frames, size)
     width = max(2, size // 120)
+    legend = LEGEND if any(len(frame.ghosts) for frame in frames) else LEGEND_NO_PLAN
     images = []
     for frame in frames:
         image = Image.new("RGB", (size, size), PALETTE["table"])
@@ -90,8 +94,8 @@ def save_episode_gif(frames: list[Frame], path: str | os.PathLike, size: int = 4
         draw.ellipse([hx - r, hy - r, hx + r, hy + r], outline=PALETTE["gripper"], width=width)
         if frame.caption:
             draw.text((6, 4), frame.caption, fill=_TEXT)
-        for k, line in enumerate(LEGEND):
-            draw.text((6, size - 14 * (len(LEGEND) - k) - 2), line, fill=_TEXT)
+        for k, line in enumerate(legend):
+            draw.text((6, size - 14 * (len(legend) - k) - 2), line, fill=_TEXT)
         images.append(image.convert("P", palette=Image.Palette.ADAPTIVE, colors=64))
     with atomic_path(path) as tmp:
         images[0].save(tmp, format="GIF", save_all=True, append_images=images[1:],

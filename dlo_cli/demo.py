@@ -1,11 +1,11 @@
-"""``dlo demo``: the main job. Plan and execute a few tasks with the shipped model.
+"""``dlo demo``: the main job. Plan and execute a few tasks with the shipped models.
 
-Runs the latent-tree planner (open and closed loop) and the straight-line reference on a
-handful of random tasks (5 of each difficulty 1-3), prints the results table, and writes into
-the output folder: the table as JSON and CSV, ``episode.gif`` (a solved closed-loop episode of
-the hardest difficulty: the real cord, the gripper, the goal in green and the current plan's
-shapes as pale ghosts) and ``interpolation.png`` (the paper's Fig. 2: a latent interpolation,
-next to a plan against the real cord).
+Runs latent-mpc (CEM on the learned transition model, the best agent), the paper's latent-tree
+planner (open and closed loop) and the straight-line reference on a handful of random tasks
+(5 of each difficulty 1-3), prints the results table, and writes into the output folder: the
+table as JSON and CSV, ``episode.gif`` (latent-mpc on a test task of the hardest named suite,
+linear-5: the real cord, the gripper and the goal in green) and ``interpolation.png`` (the
+paper's Fig. 2: a latent interpolation, next to a plan against the real cord).
 """
 
 from __future__ import annotations
@@ -14,13 +14,19 @@ import argparse
 
 from dlo_cli.flags import add_difficulty, add_model, add_out, add_seed, add_threads, positive_int
 
-AGENTS = ("straight-line", "latent-tree", "latent-tree-closed")
+AGENTS = ("straight-line", "latent-tree", "latent-tree-closed", "latent-mpc")
+#: The agent the GIF shows, and how many test tasks of a suite it tries for a solved one.
+GIF_AGENT = "latent-mpc"
+GIF_TRIES = 5
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     """Flags of ``dlo demo``."""
     add_out(parser, "demo", "the tables, episode.gif and interpolation.png")
     add_model(parser)
+    parser.add_argument("--transition-model", default=None,
+                        help="transition model file or folder for latent-mpc (None: the shipped "
+                             "latent_model/pretrained/transition.pt)")
     parser.add_argument("--episodes", type=positive_int, default=5,
                         help="tasks per difficulty and agent")
     add_difficulty(parser, [1, 2, 3], "random tasks; the GIF shows the hardest")
@@ -39,48 +45,46 @@ def run(args: argparse.Namespace) -> int:
     from tqdm import tqdm
 
     import dlo_env  # noqa: F401  (registers the environments)
-    from dlo_bench.agents import build_agent, load_shape_model
+    from dlo_bench.agents import build_agent, load_shape_model, load_transition_model
     from dlo_bench.charts import save_interpolation_png
     from dlo_bench.evaluation import evaluate
     from dlo_bench.fidelity import transition_fidelity
-    from dlo_bench.figures import record_episode, save_episode_gif
+    from dlo_bench.figures import save_episode_gif
     from dlo_bench.report import format_table, write_evaluation, write_summaries
     from planners.interpolation import interpolate
     from planners.latent_tree import LatentTreePlanner
 
     torch.set_num_threads(args.threads)
     model = load_shape_model(args.model)
+    transition_model = load_transition_model(args.transition_model)
     env_id = "dlo_env/DLOEndpoint-v0"
     out = Path(args.out)
     print(f"dlo demo: {model!r}\n{len(args.difficulty) * len(AGENTS)} runs of "
           f"{args.episodes} episodes -> {out}")
 
-    summaries, solved = [], {}
+    summaries = []
     rows = [(d, a) for d in args.difficulty for a in AGENTS]
     for difficulty, agent in tqdm(rows, desc="demo", unit="run"):
         with gym.make(env_id) as env:
-            policy = build_agent(agent, env, model=model, seed=args.seed)
+            policy = build_agent(agent, env, model=model, transition_model=transition_model,
+                                 seed=args.seed)
         result = evaluate(policy, env_id, difficulty=difficulty, episodes=args.episodes,
                           seed=args.seed + 1000 * difficulty, agent=agent)
         write_evaluation(result, out, f"{agent}-d{difficulty}")
         summaries.append(result.summary)
-        if agent == "latent-tree-closed":  # the GIF replays a solved episode (else the first)
-            seeds = [r.seed for r in result.records if r.success] or [result.records[0].seed]
-            solved[difficulty] = seeds[0]
     print(format_table(summaries))
     write_summaries(summaries, out / "summary.json")
 
-    # A solved closed-loop episode as a GIF: the real cord, the goal, the current plan as
-    # ghosts. The hardest difficulty asked for: its plans have several moves and it replans.
-    gif_difficulty = max(args.difficulty)
+    # The best agent on the hardest suite it solves: the first solved of a few test tasks of
+    # linear-5 (else linear-4, ...), recorded as a GIF of the real cord and the goal.
     env = gym.make(env_id)
-    policy = build_agent("latent-tree-closed", env, model=model, seed=args.seed)
-    frames, info = record_episode(policy, env, seed=solved[gif_difficulty],
-                                  options={"difficulty": gif_difficulty})
+    policy = build_agent(GIF_AGENT, env, model=model, transition_model=transition_model,
+                         seed=args.seed)
+    suite, index, frames, info = _hardest_solved(policy, env)
     gif = save_episode_gif(frames, out / "episode.gif", fps=round(1.0 / env.unwrapped.params.dt))
-    print(f"episode.gif: difficulty {gif_difficulty}, {len(frames) - 1} steps, "
+    print(f"episode.gif: {GIF_AGENT} on {suite} test task {index + 1}, {len(frames) - 1} steps, "
           f"{'solved' if info['is_success'] else 'not solved'}, final error "
-          f"{100 * info['error']:.1f} cm, {policy.episode_stats().plans} plans")
+          f"{100 * info['error']:.1f} cm, {info['plans']} plans")
 
     # The paper's Fig. 2 on a difficulty-1 task, next to a plan against the real cord.
     obs, _ = env.reset(seed=args.seed + 1000, options={"difficulty": 1})
@@ -100,3 +104,23 @@ def run(args: argparse.Namespace) -> int:
     print(f"wrote {gif} and {png}; results in {out}/summary.json "
           f"({time.perf_counter() - t0:.0f} s)")
     return 0
+
+
+def _hardest_solved(policy: object, env: object) -> tuple[str, int, list, dict]:
+    """Of the first ``GIF_TRIES`` test tasks of linear-5 (else linear-4, ...), the solved one
+    whose start was farthest from its goal: its suite, index, frames and last ``info`` with
+    the episode's ``plans`` (the last episode tried if none is solved)."""
+    from dlo_bench.figures import record_episode
+    from dlo_env.shapes import error
+    from dlo_env.tasks import MAX_DIFFICULTY, load_suite
+
+    for difficulty in range(MAX_DIFFICULTY, 0, -1):
+        suite, best = f"linear-{difficulty}", None
+        for index, task in enumerate(load_suite(suite, "test", limit=GIF_TRIES)):
+            frames, info = record_episode(policy, env, options={"task": task})
+            far = float(error(task.start, task.goal))
+            if info["is_success"] and (best is None or far > best[0]):
+                best = (far, index, frames, {**info, "plans": policy.episode_stats().plans})
+        if best is not None:
+            return suite, *best[1:]
+    return suite, index, frames, {**info, "plans": policy.episode_stats().plans}

@@ -351,9 +351,14 @@ class ShapeModel:
 
     @classmethod
     def load_or_pretrained(
-        cls, path: str | os.PathLike | None, device: str | torch.device = "auto"
+        cls, path: str | os.PathLike | None = None, device: str | torch.device = "auto"
     ) -> ShapeModel:
-        """``load(path)`` when a path is given (not ``None`` or ""), else ``load_pretrained``."""
+        """``load(path)`` when a path is given (not ``None`` or ""), else ``load_pretrained()``.
+
+        The one call for code whose model argument defaults to the shipped model (a CLI flag,
+        an agent option): ``load_pretrained()`` always loads the shipped file, ``load(path)``
+        always the given one.
+        """
         return cls.load(path, device) if path else cls.load_pretrained(device)
 
     def __repr__(self) -> str:

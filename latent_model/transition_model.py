@@ -19,6 +19,7 @@ from __future__ import annotations
 
 import math
 import os
+import warnings
 from dataclasses import asdict, dataclass
 from importlib import resources
 from numbers import Integral
@@ -59,6 +60,20 @@ PREDICT_CHUNK = 4096
 #: Values of config fields added after the first files were written, for files without them.
 LEGACY_CONFIG = {"rim_targets": 1, "mean_network": False, "mirror": False,
                  "mean_by_grasp": False, "contact_reach": 0.0}
+
+
+def _grasp_argument(grasp: str | None, end: str | None) -> str:
+    """``grasp``, or the deprecated ``end`` with a warning; exactly one of them."""
+    if end is not None:
+        if grasp is not None:
+            raise ValueError(f"give grasp (end is its deprecated name), not both: got "
+                             f"grasp={grasp!r} and end={end!r}")
+        warnings.warn("TransitionModel.predict(end=...) is deprecated: use grasp=...",
+                      DeprecationWarning, stacklevel=3)
+        grasp = end
+    if grasp is None:
+        raise ValueError(f"grasp is required: one of {tuple(GRASP_CODES)}")
+    return grasp
 
 
 @dataclass(frozen=True)
@@ -451,12 +466,12 @@ class TransitionModel(nn.Module):
         return torch.cat([first[:, :, None], moved[:, :, 1:-1], last[:, :, None]], dim=2)
 
     # ------------------------------------------------------------- numpy API
-    def reachable_moves(self, shapes: np.ndarray, end: str, displacement: np.ndarray
+    def reachable_moves(self, shapes: np.ndarray, grasp: str, displacement: np.ndarray
                         ) -> np.ndarray:
         """``(B, 2, 2)`` displacement of [head, tail] the grippers really make, zero for an end
         not held: the move carried out as ``split_move`` actions, each clipped by the rule of
         ``Cord.move`` (targets on the table, both ends within the span)."""
-        ends = {"head": [0], "tail": [-1], "both": [0, -1]}[end]
+        ends = {"head": [0], "tail": [-1], "both": [0, -1]}[grasp]
         start = shapes[:, ends].astype(np.float64)  # (B, k, 2)
         d = displacement.reshape(len(shapes), len(ends), 2).astype(np.float64)
         pos = start + d
@@ -481,43 +496,46 @@ class TransitionModel(nn.Module):
                 path[going] = reachable_targets(path[going] + step[going], params)
             pos[walk] = path
         moves = np.zeros((len(shapes), 2, 2), dtype=np.float32)
-        if end == "both":
+        if grasp == "both":
             moves[:] = pos - start
         else:
-            moves[:, 0 if end == "head" else 1] = (pos - start)[:, 0]
+            moves[:, 0 if grasp == "head" else 1] = (pos - start)[:, 0]
         return moves
 
-    def _inputs(self, shapes: Any, end: Any, displacement: Any
+    def _inputs(self, shapes: Any, grasp: Any, displacement: Any
                 ) -> tuple[np.ndarray, np.ndarray, bool]:
-        if end not in GRASP_CODES:
-            raise ValueError(f"end must be one of {tuple(GRASP_CODES)}, got {end!r}")
+        if grasp not in GRASP_CODES:
+            raise ValueError(f"grasp must be one of {tuple(GRASP_CODES)}, got {grasp!r}")
         n = self.config.n_points
         arr = np.ascontiguousarray(shapes, dtype=np.float32)
+        if arr.ndim >= 1 and arr.shape[-1] == 2 * n and arr.ndim in (1, 2):
+            arr = arr.reshape(arr.shape[:-1] + (n, 2))  # flat shapes, as observations hold
         single = arr.ndim == 2
         arr = arr[None] if single else arr
         if arr.ndim != 3 or arr.shape[1:] != (n, 2):
-            raise ValueError(f"shapes must have shape ({n}, 2) or (B, {n}, 2), "
-                             f"got {np.shape(shapes)}")
-        width = 4 if end == "both" else 2
+            raise ValueError(f"shapes must have shape ({n}, 2), ({2 * n},), (B, {n}, 2) or "
+                             f"(B, {2 * n}), got {np.shape(shapes)}")
+        width = 4 if grasp == "both" else 2
         d = np.ascontiguousarray(displacement, dtype=np.float32)
         d = d[None] if d.ndim == 1 else d
         if d.shape != (len(arr), width):
             want = f"({width},) or ({len(arr)}, {width})" if not single else f"({width},)"
-            raise ValueError(f"displacement must have shape {want} for end={end!r} "
+            raise ValueError(f"displacement must have shape {want} for grasp={grasp!r} "
                              f"and {len(arr)} shape(s), got {np.shape(displacement)}")
         if not (np.isfinite(arr).all() and np.isfinite(d).all()):
             raise ValueError("shapes and displacement must be finite, got NaN or infinite values")
         return arr, d, single
 
     @torch.no_grad()
-    def predict(self, shapes: Any, end: str, displacement: Any, return_std: bool = False,
-                members: int | None = None, inextensible: bool = True
-                ) -> np.ndarray | tuple[np.ndarray, np.ndarray]:
+    def predict(self, shapes: Any, grasp: str | None = None, displacement: Any = None,
+                return_std: bool = False, members: int | None = None, inextensible: bool = True,
+                *, end: str | None = None) -> np.ndarray | tuple[np.ndarray, np.ndarray]:
         """The shape at rest after one straight move of the held end(s).
 
         Args:
-            shapes: ``(n, 2)`` or ``(B, n, 2)`` world shapes at rest, metres.
-            end: ``"head"``, ``"tail"`` or ``"both"``.
+            shapes: ``(n, 2)`` or ``(B, n, 2)`` world shapes at rest, metres; flat ``(2n,)``
+                or ``(B, 2n)`` (as observations hold them) too.
+            grasp: The held end(s) that move: ``"head"``, ``"tail"`` or ``"both"``.
             displacement: ``(2,)``/``(B, 2)`` for one end; ``(4,)``/``(B, 4)`` (head dx, dy,
                 then tail dx, dy) for both. Targets off the table are clipped as the
                 simulator clips them.
@@ -537,8 +555,13 @@ class TransitionModel(nn.Module):
             None, else the mean of the ensemble's (first ``members``) networks; with
             ``return_std`` also ``(B,)`` (``()``) the members' spread: the mean over points of
             each point's standard deviation (metres).
+            end: Deprecated name of ``grasp``.
         """
-        arr, d, single = self._inputs(shapes, end, displacement)
+        grasp = _grasp_argument(grasp, end)
+        if displacement is None:
+            raise ValueError("displacement is required: (2,)/(B, 2) for one end, (4,)/(B, 4) "
+                             "for both")
+        arr, d, single = self._inputs(shapes, grasp, displacement)
         total = self.config.members
         if members is not None and not (isinstance(members, Integral) and not isinstance(
                 members, bool) and 1 <= members <= total):
@@ -549,8 +572,8 @@ class TransitionModel(nn.Module):
             raise ValueError("return_std needs members >= 2 (one network has no spread), "
                              f"got members={members or total}")
         use_mean_net = members is None and self.mean_net is not None
-        moves = self.reachable_moves(arr, end, d)
-        grasp = torch.full((len(arr),), GRASP_CODES[end], dtype=torch.int64)
+        moves = self.reachable_moves(arr, grasp, d)
+        grasp = torch.full((len(arr),), GRASP_CODES[grasp], dtype=torch.int64)
         means, spreads = [], []
         for lo in range(0, len(arr), PREDICT_CHUNK):
             part = slice(lo, lo + PREDICT_CHUNK)
@@ -572,8 +595,8 @@ class TransitionModel(nn.Module):
         spread = torch.cat(spreads).cpu().numpy() if spreads else np.zeros(0)
         if inextensible and len(mean):
             rest = self.config.cord_length / (self.config.n_points - 1)
-            mean = make_inextensible(mean, rest, np.full(len(mean), end != "tail"),
-                                     np.full(len(mean), end != "head"))  # the held ends
+            mean = make_inextensible(mean, rest, np.full(len(mean), grasp != "tail"),
+                                     np.full(len(mean), grasp != "head"))  # the held ends
         still = np.abs(moves).sum(axis=(1, 2)) == 0  # nothing moves: the cord stays at rest
         mean[still] = arr[still]
         spread[still] = 0.0
@@ -646,7 +669,12 @@ class TransitionModel(nn.Module):
     @classmethod
     def load_or_pretrained(cls, path: str | os.PathLike | None = None,
                            device: str | torch.device = "auto") -> TransitionModel:
-        """``load(path)`` when a path is given (not ``None`` or ""), else ``load_pretrained``."""
+        """``load(path)`` when a path is given (not ``None`` or ""), else ``load_pretrained()``.
+
+        The one call for code whose model argument defaults to the shipped model (a CLI flag,
+        an agent option): ``load_pretrained()`` always loads the shipped file, ``load(path)``
+        always the given one.
+        """
         return cls.load(path, device) if path else cls.load_pretrained(device)
 
     def extra_repr(self) -> str:

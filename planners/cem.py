@@ -20,7 +20,9 @@ from dlo_env.checks import non_negative, positive, positive_ints
 from dlo_env.cord import CordParams
 from dlo_env.shapes import error
 from dlo_env.tasks import GRASP_ENDS, split_move
-from planners.interfaces import EpisodeStats, Observation
+from planners.episodes import EpisodicPolicy
+from planners.interfaces import EpisodeStats
+from planners.observation import CordObservation
 
 
 @dataclass(frozen=True)
@@ -68,11 +70,13 @@ class CEMStats:
     predicted_errors: list[float] = field(default_factory=list)
 
 
-class CEMPolicy:
+class CEMPolicy(EpisodicPolicy):
     """CEM model-predictive control over straight moves; subclasses give the model.
 
     Same interface as Stable-Baselines3 models and ``planners.PlannerPolicy``: ``predict`` maps a
-    Dict observation of a ``dlo_env`` environment to an action in ``[-1, 1]^d``.
+    Dict observation of a ``dlo_env`` environment (or a vector env's batch) to an action in
+    ``[-1, 1]^d``; a new episode is noticed without ``episode_start``
+    (``planners.episodes.EpisodicPolicy``).
 
     Args:
         params: The cord's parameters (those of the environment it acts in).
@@ -95,6 +99,7 @@ class CEMPolicy:
         self.max_step = float(max_step)
         self.success_threshold = float(success_threshold)
         self.config = config
+        self.n_points = self.params.n_points
         self.reset()
 
     def episode_stats(self) -> EpisodeStats:
@@ -167,29 +172,15 @@ class CEMPolicy:
         return [action for move in plan for action in split_move(move, self.max_step)]
 
     # ------------------------------------------------------------------ policy
-    def predict(
-        self,
-        observation: Observation,
-        state: object = None,
-        episode_start: np.ndarray | None = None,
-        deterministic: bool = True,
-    ) -> tuple[np.ndarray, object]:
-        """Next action for one observation (SB3 signature; unbatched or batch of one)."""
-        if episode_start is not None and bool(np.asarray(episode_start).reshape(-1)[0]):
-            self.reset()
-        n = self.params.n_points
-        achieved = np.asarray(observation["achieved_goal"], dtype=np.float64)
-        desired = np.asarray(observation["desired_goal"], dtype=np.float64)
-        batched = achieved.ndim == 2
-        shape = achieved.reshape(-1, n, 2)[0]
-        goal = desired.reshape(-1, n, 2)[0]
+    def _act(self, obs: CordObservation) -> np.ndarray:
+        """Hold still within ``success_threshold`` of the goal; else the queued plan's next
+        action, planning again from the observed cord when the queue is empty."""
+        shape = obs.shape.astype(np.float64)
+        goal = obs.goal.astype(np.float64)
         action_dim = 2 * len(self.ends)
         if error(shape, goal) <= self.success_threshold:
-            action = np.zeros(action_dim, dtype=np.float32)
-        else:
-            if not self._queue:
-                plan, _ = self.plan(shape, goal)
-                self._queue = self._execute(plan)
-            action = self._queue.pop(0) if self._queue else np.zeros(action_dim, np.float32)
-        action = np.clip(action, -1.0, 1.0)
-        return (action[None] if batched else action), state
+            return np.zeros(action_dim, dtype=np.float32)
+        if not self._queue:
+            plan, _ = self.plan(shape, goal)
+            self._queue = self._execute(plan)
+        return self._queue.pop(0) if self._queue else np.zeros(action_dim, np.float32)

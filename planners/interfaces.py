@@ -36,7 +36,7 @@ class Plan:
         success: Whether the path reaches the goal (within ``goal_threshold``).
         stats: What the search did: ``nodes``, ``decoder_calls``, ``seconds``, ``iterations``,
             inversion errors, rejection counts per check, ``direct`` (one straight move).
-        end: The manipulated end, ``"head"`` or ``"tail"``.
+        grasp: The manipulated end, ``"head"`` or ``"tail"``.
     """
 
     shapes: np.ndarray
@@ -45,7 +45,12 @@ class Plan:
     nodes: np.ndarray
     success: bool
     stats: dict[str, Any] = field(default_factory=dict)
-    end: str = "head"
+    grasp: str = "head"
+
+    @property
+    def end(self) -> str:
+        """Deprecated name of ``grasp``."""
+        return self.grasp
 
     @property
     def corners(self) -> np.ndarray:

@@ -19,7 +19,8 @@ from __future__ import annotations
 
 import math
 import time
-from dataclasses import dataclass, fields, replace
+import warnings
+from dataclasses import InitVar, dataclass, fields, replace
 from typing import Any
 
 import numpy as np
@@ -77,7 +78,7 @@ class TreeConfig:
             by ``max(sample_margin, |z_goal - z_start|)`` (latent units) on every axis.
         max_edge_points: Cap on the shapes decoded along one long edge.
         shortcut: Shorten the path found with straight connections that pass the checks.
-        end: The manipulated end: ``"head"`` (point 0) or ``"tail"`` (point n-1).
+        grasp: The manipulated end: ``"head"`` (point 0) or ``"tail"`` (point n-1).
         invert_steps: Refinement steps of the start (and goal) inversion, passed to
             ``model.invert(steps=...)``; ``None`` keeps the model's default. Inversion is most
             of a plan's time: 60 steps cost a quarter of the default 150 for ~0.3 mm more error.
@@ -111,15 +112,21 @@ class TreeConfig:
     sample_margin: float = 0.3
     max_edge_points: int = 64
     shortcut: bool = True
-    end: str = "head"
+    grasp: str = "head"
     invert_steps: int | None = 60
     invert_restarts: int | None = 2
     edges: str = "latent"
     move_samples: int = 32
     move_noise: float = 0.05
     max_move: float = 0.3
+    #: Deprecated name of ``grasp`` (``TreeConfig(end="tail")`` still works, with a warning).
+    end: InitVar[str | None] = None
 
-    def __post_init__(self) -> None:
+    def __post_init__(self, end: str | None) -> None:
+        if end is not None:
+            warnings.warn("TreeConfig(end=...) is deprecated: use grasp=...", DeprecationWarning,
+                          stacklevel=3)
+            object.__setattr__(self, "grasp", end)
         positive = ("step_length", "similarity", "straightness", "goal_threshold", "max_seconds",
                     "sample_margin", "move_noise", "max_move")
         for name in positive:
@@ -156,8 +163,9 @@ class TreeConfig:
             value = getattr(self, name)
             if value is not None and not (isinstance(value, int) and value >= 0):
                 raise ValueError(f"TreeConfig.{name} must be None or an int >= 0, got {value!r}")
-        if self.end not in ENDS:
-            raise ValueError(f"TreeConfig.end must be one of {tuple(ENDS)}, got {self.end!r}")
+        if self.grasp not in ENDS:
+            raise ValueError(f"TreeConfig.grasp must be one of {tuple(ENDS)}, got "
+                             f"{self.grasp!r}")
         if self.edges not in EDGES:
             raise ValueError(f"TreeConfig.edges must be one of {EDGES}, got {self.edges!r}")
 
@@ -251,7 +259,7 @@ class LatentTreePlanner:
         self.surrogate = Surrogate(model)
         self.model = model
         self.seed = int(seed)
-        self._end = ENDS[self.config.end]
+        self._end = ENDS[self.config.grasp]
         self.transition_model = transition_model
         if self.config.edges == "moves":
             if transition_model is None:
@@ -527,7 +535,7 @@ class LatentTreePlanner:
         # Raw predictions (inextensible=False): the setting the tree was tuned and benchmarked
         # with; the projection's fixed cost per call adds up over the tree's many small calls.
         predicted = self.transition_model.predict(
-            np.repeat(shapes, m, axis=0), self.config.end, flat, inextensible=False,
+            np.repeat(shapes, m, axis=0), self.config.grasp, flat, inextensible=False,
         ).reshape(b, m, self.n_points, 2)
         errs = np.asarray(error(predicted, targets[:, None])).reshape(b, m)
         pick = errs.argmin(axis=1)
@@ -620,7 +628,7 @@ class LatentTreePlanner:
         }
         return Plan(shapes=shapes, latents=self._encode(shapes), waypoints=corners.astype(
             np.float32), nodes=np.arange(len(shapes), dtype=np.int64), success=success,
-            stats=stats, end=cfg.end)
+            stats=stats, grasp=cfg.grasp)
 
     def _shortcut(
         self, latents: np.ndarray, points: list[int], limits: _CordLimits, counts: dict[str, int]
@@ -688,5 +696,5 @@ class LatentTreePlanner:
             nodes=np.array(nodes, dtype=np.int64),
             success=bool(success),
             stats=stats,
-            end=self.config.end,
+            grasp=self.config.grasp,
         )

@@ -2,7 +2,8 @@
 
 A ``dlo_env`` goal environment observes a Dict: ``observation`` (the flat shape followed by the
 held grippers' positions), ``achieved_goal`` (the flat shape) and ``desired_goal`` (the flat
-goal). Stable-Baselines3 passes the same Dict with a leading batch axis of one.
+goal). Stable-Baselines3 and ``gym.make_vec`` pass the same Dict with a leading batch axis, one
+row per environment.
 """
 
 from __future__ import annotations
@@ -32,23 +33,19 @@ class CordObservation:
     Attributes:
         shape: ``(n, 2)`` the cord now.
         goal: ``(n, 2)`` the goal shape.
-        head: ``(2,)`` the head gripper's position (the head point if the gripper is not given).
-        batched: Whether the observation came with a leading batch axis (SB3 style).
+        head: ``(2,)`` the first held gripper's position (the head point if the observation
+            does not give the grippers).
+        grippers: ``(k, 2)`` the held grippers' positions, head first; ``(0, 2)`` when the
+            observation gives only ``achieved_goal`` and ``desired_goal``.
     """
 
     shape: np.ndarray
     goal: np.ndarray
     head: np.ndarray
-    batched: bool
+    grippers: np.ndarray
 
 
-def read_observation(observation: Any, n_points: int) -> CordObservation:
-    """Unpack a Dict observation (optionally with a batch axis of one) for ``n_points`` cords.
-
-    Raises:
-        ValueError: When keys are missing, the batch holds more than one observation, or the
-            sizes do not match ``n_points`` (e.g. a model made for another cord).
-    """
+def _check_dict(observation: Any) -> None:
     if not isinstance(observation, dict) or not {"achieved_goal", "desired_goal"} <= set(
         observation
     ):
@@ -57,13 +54,48 @@ def read_observation(observation: Any, n_points: int) -> CordObservation:
             "observation must be a dict with 'achieved_goal' and 'desired_goal' (a dlo_env goal "
             f"environment's observation), got {got}"
         )
+
+
+def split_batch(observation: Any) -> tuple[list[dict[str, np.ndarray]], bool]:
+    """The observations of each environment in ``observation``, and whether it was batched.
+
+    An unbatched observation (flat arrays, as ``env.reset`` returns) is one environment; a
+    batched one (a leading axis, as SB3 and ``gym.make_vec`` pass) holds one row per
+    environment.
+
+    Raises:
+        ValueError: When ``observation`` is not a goal observation or its arrays disagree on
+            the batch size.
+    """
+    _check_dict(observation)
+    arrays = {key: np.asarray(value) for key, value in observation.items()}
+    if arrays["achieved_goal"].ndim < 2:
+        return [arrays], False
+    size = arrays["achieved_goal"].shape[0]
+    for key, value in arrays.items():
+        if value.ndim < 2 or value.shape[0] != size:
+            raise ValueError(
+                f"observation[{key!r}] must have the batch's leading axis of {size} (as "
+                f"observation['achieved_goal']), got shape {value.shape}"
+            )
+    return [{key: value[i] for key, value in arrays.items()} for i in range(size)], True
+
+
+def read_observation(observation: Any, n_points: int) -> CordObservation:
+    """Unpack one environment's Dict observation (optionally with a batch axis of one).
+
+    Raises:
+        ValueError: When keys are missing, the batch holds more than one observation (split
+            it with :func:`split_batch`), or the sizes do not match ``n_points`` (e.g. a model
+            made for another cord).
+    """
+    _check_dict(observation)
     achieved = np.asarray(observation["achieved_goal"], dtype=np.float32)
     desired = np.asarray(observation["desired_goal"], dtype=np.float32)
-    batched = achieved.ndim == 2
-    if batched and achieved.shape[0] != 1:
+    if achieved.ndim == 2 and achieved.shape[0] != 1:
         raise ValueError(
             f"observation must hold one environment (batch of 1), got a batch of "
-            f"{achieved.shape[0]}"
+            f"{achieved.shape[0]}: split it with planners.observation.split_batch"
         )
     flat = achieved.reshape(-1)
     if flat.size != 2 * n_points:
@@ -74,10 +106,12 @@ def read_observation(observation: Any, n_points: int) -> CordObservation:
         )
     shape = as_shape(flat, n_points, "observation['achieved_goal']")
     goal = as_shape(desired.reshape(-1), n_points, "observation['desired_goal']")
-    head = shape[0].copy()
+    grippers = np.zeros((0, 2), dtype=np.float32)
     extra = observation.get("observation")
     if extra is not None:
         extra = np.asarray(extra, dtype=np.float32).reshape(-1)
-        if extra.size >= 2 * n_points + 2:
-            head = extra[2 * n_points : 2 * n_points + 2].copy()
-    return CordObservation(shape=shape, goal=goal, head=head, batched=batched)
+        held = (extra.size - 2 * n_points) // 2
+        if held >= 1:
+            grippers = extra[2 * n_points : 2 * n_points + 2 * held].reshape(held, 2).copy()
+    head = grippers[0].copy() if len(grippers) else shape[0].copy()
+    return CordObservation(shape=shape, goal=goal, head=head, grippers=grippers)

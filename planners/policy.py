@@ -31,10 +31,11 @@ from typing import Any
 import numpy as np
 
 from dlo_env.shapes import error
-from planners.interfaces import EpisodeStats, Observation, Plan, ShapeSurrogate
+from planners.episodes import EpisodicPolicy
+from planners.interfaces import EpisodeStats, Plan, ShapeSurrogate
 from planners.latent_tree import LatentTreePlanner
 from planners.moves import actions_by_move
-from planners.observation import read_observation
+from planners.observation import CordObservation
 from planners.surrogate import model_n_points
 
 #: The cord counts as at rest when no point moved farther than this in one step, metres.
@@ -72,8 +73,11 @@ class PolicyStats:
     kept: int = 0
 
 
-class PlannerPolicy:
+class PlannerPolicy(EpisodicPolicy):
     """Plan with a latent-tree planner and act on the environment (SB3 interface).
+
+    A new episode is noticed without ``episode_start``, and a vector env's batch gets one
+    plan per environment (``planners.episodes.EpisodicPolicy``).
 
     Args:
         model: The shape model (``latent_model.ShapeModel`` or the same interface); its
@@ -185,9 +189,9 @@ class PlannerPolicy:
                 f"the transition model was trained with max_step={transition.config.max_step} "
                 f"m, but the environment has max_step={step} m")
         grasp = getattr(getattr(base, "cord", None), "grasp", "head")
-        if grasp != self.planner.config.end:
+        if grasp != self.planner.config.grasp:
             raise ValueError(
-                f"the planner moves the {self.planner.config.end!r} end but the environment "
+                f"the planner moves the {self.planner.config.grasp!r} end but the environment "
                 f"holds {grasp!r}"
             )
 
@@ -260,7 +264,7 @@ class PlannerPolicy:
         if follow:
             corners = plan.corners[1:]
         else:  # the fallback: straight to the goal's end position
-            corners = goal[0 if self.planner.config.end == "head" else -1][None]
+            corners = goal[0 if self.planner.config.grasp == "head" else -1][None]
         moves = actions_by_move(head, corners, self.max_step)
         if self.moves_per_plan is not None:
             self._expect_progress = not plan.success or len(moves) <= self.moves_per_plan
@@ -280,29 +284,9 @@ class PlannerPolicy:
         self.stats.seconds += seconds
         self.stats.plan_seconds.append(seconds)
 
-    def predict(
-        self,
-        observation: Observation,
-        state: Any = None,
-        episode_start: np.ndarray | None = None,
-        deterministic: bool = True,
-    ) -> tuple[np.ndarray, Any]:
-        """The next action for one observation (unbatched, or a batch of one).
-
-        Args:
-            observation: A ``dlo_env`` goal observation (Dict of flat arrays).
-            state: Passed through (the policy keeps its own episode state).
-            episode_start: When true, the policy resets first (as SB3 does at episode ends).
-                Calling ``reset()`` does the same.
-            deterministic: Ignored (the plan is a function of the observation and the seed).
-
-        Returns:
-            ``(action, state)``; the action is float32 ``(2,)`` (or ``(1, 2)`` for a batched
-            observation) with Euclidean norm at most 1.
-        """
-        if episode_start is not None and bool(np.asarray(episode_start).reshape(-1)[0]):
-            self.reset()
-        obs = read_observation(observation, self.n_points)
+    def _act(self, obs: CordObservation) -> np.ndarray:
+        """The next action: plan at the episode's first step; closed loop, check the plan
+        (and replan) when due, after letting the cord come to rest."""
         closed = self.replan_every is not None or self.moves_per_plan is not None
         moving = self._previous is not None and float(
             np.abs(obs.shape - self._previous).max()) > REST_MOTION
@@ -310,8 +294,7 @@ class PlannerPolicy:
         if closed and self.plans and not self._queue and moving and (
                 self._waited < self.settle_steps):
             self._waited += 1  # let the cord come to rest before judging the plan's outcome
-            action = np.zeros(2, dtype=np.float32)
-            return (action[None] if obs.batched else action), state
+            return np.zeros(2, dtype=np.float32)
         due = not self.plans or (closed and (not self._queue or (
             self.moves_per_plan is None and self._since_plan >= self.replan_every
             and (self._done in self._corners or not self.wait_for_corner)
@@ -327,7 +310,7 @@ class PlannerPolicy:
         action = self._queue.pop(0) if self._queue else np.zeros(2, dtype=np.float32)
         self._since_plan += 1
         self._done += 1
-        return (action[None] if obs.batched else action), state
+        return action
 
 
 def expected_shapes(plan: Plan, actions: list[np.ndarray], max_step: float) -> list[np.ndarray]:

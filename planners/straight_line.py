@@ -2,23 +2,23 @@
 
 from __future__ import annotations
 
-from typing import Any
-
 import numpy as np
 
 from dlo_env.tasks import GRASP_ENDS, split_move
-from planners.interfaces import Observation
+from planners.episodes import EpisodicPolicy
 from planners.moves import actions_through
-from planners.observation import read_observation
+from planners.observation import CordObservation
 
 
-class StraightLinePolicy:
+class StraightLinePolicy(EpisodicPolicy):
     """Move the held end(s) in one straight line to where the goal has them, then hold still.
 
     This solves every difficulty-1 task up to the discretisation of the move (the goal was
     made by one straight head move) and is the reference every planner has to beat at higher
     difficulties, where friction makes the result depend on the path. Same interface as
-    Stable-Baselines3 models: ``predict(obs, state, episode_start, deterministic)``.
+    Stable-Baselines3 models: ``predict(obs, state, episode_start, deterministic)``; a new
+    episode is noticed without ``episode_start`` and a vector env's batch gets one line per
+    environment (``planners.episodes.EpisodicPolicy``).
 
     With both ends held (``DLODualEndpoint-v0``) both move at once, each on its own straight
     line, as one move of ``split_move``.
@@ -41,18 +41,8 @@ class StraightLinePolicy:
         """Forget the current episode."""
         self._queue: list[np.ndarray] | None = None
 
-    def predict(
-        self,
-        observation: Observation,
-        state: Any = None,
-        episode_start: np.ndarray | None = None,
-        deterministic: bool = True,
-    ) -> tuple[np.ndarray, Any]:
-        """The next action for one observation (unbatched, or a batch of one)."""
-        if episode_start is not None and bool(np.asarray(episode_start).reshape(-1)[0]):
-            self.reset()
-        n = np.asarray(observation["achieved_goal"]).reshape(-1).size // 2
-        obs = read_observation(observation, n)
+    def _act(self, obs: CordObservation) -> np.ndarray:
+        """The next action of the straight move(s) planned at the episode's first step."""
         if self._queue is None:
             if self.grasp == "head":
                 self._queue = actions_through(obs.head, obs.goal[:1], self.max_step)
@@ -61,5 +51,4 @@ class StraightLinePolicy:
                 move = (obs.goal[index] - obs.shape[index]).reshape(-1)
                 self._queue = list(split_move(move, self.max_step))
         width = 2 * len(GRASP_ENDS[self.grasp])
-        action = self._queue.pop(0) if self._queue else np.zeros(width, dtype=np.float32)
-        return (action[None] if obs.batched else action), state
+        return self._queue.pop(0) if self._queue else np.zeros(width, dtype=np.float32)

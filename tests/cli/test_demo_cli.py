@@ -16,7 +16,7 @@ def _check_outputs(out: Path, rows: int) -> None:
     summary = json.loads((out / "summary.json").read_text())
     assert len(summary) == rows
     assert {row["agent"] for row in summary} == {"straight-line", "latent-tree",
-                                                 "latent-tree-closed"}
+                                                 "latent-tree-closed", "latent-mpc"}
 
 
 @pytest.mark.slow
@@ -31,8 +31,10 @@ def test_demo_writes_the_table_the_episode_gif_and_the_interpolation_png(tmp_pat
     code = main(["demo", "--model", str(model), "--episodes", "1", "--difficulty", "1",
                  "--out", str(out)])
     assert code == 0
-    assert "latent-tree-closed" in capsys.readouterr().out
-    _check_outputs(out, rows=3)
+    printed = capsys.readouterr().out
+    assert "latent-tree-closed" in printed and "latent-mpc" in printed
+    assert "episode.gif: latent-mpc on linear-5 test task" in printed
+    _check_outputs(out, rows=4)
 
 
 @pytest.mark.slow
@@ -42,4 +44,13 @@ def test_demo_runs_on_the_shipped_model(tmp_path):
     out = tmp_path / "demo"
     code = main(["demo", "--episodes", "1", "--difficulty", "1", "2", "--out", str(out)])
     assert code == 0
-    _check_outputs(out, rows=6)
+    _check_outputs(out, rows=8)
+
+
+@pytest.mark.slow
+def test_the_demo_gif_shows_latent_mpc_solving_a_linear_5_task(tmp_path, capsys):
+    out = tmp_path / "demo"
+    assert main(["demo", "--episodes", "1", "--difficulty", "1", "--out", str(out)]) == 0
+    line = next(row for row in capsys.readouterr().out.splitlines()
+                if row.startswith("episode.gif:"))
+    assert "latent-mpc on linear-5" in line and ", solved," in line

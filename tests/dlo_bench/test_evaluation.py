@@ -195,3 +195,14 @@ def test_evaluate_records_what_a_planning_policy_reports_through_episode_stats()
     assert (record.plans, record.planning_failures) == (3, 1)
     assert record.planning_seconds == 0.25 and record.goal_inversion_error == 0.004
     assert math.isnan(record.fidelity)  # no first plan reported: nothing to simulate
+
+
+def test_evaluate_takes_an_environment_as_build_agent_does_and_leaves_it_open():
+    env = gym.make(ENV_ID)
+    by_env = evaluate(StraightLinePolicy(), env, suite="linear-1", episodes=2, fidelity=False)
+    by_id = evaluate(StraightLinePolicy(), ENV_ID, suite="linear-1", episodes=2, fidelity=False)
+    assert [r.final_error for r in by_env.records] == [r.final_error for r in by_id.records]
+    assert by_env.summary["env_id"] == ENV_ID
+    env.reset(seed=0)  # still open: the caller owns it
+    with pytest.raises(ValueError, match="env must be a dlo_env environment or its id"):
+        evaluate(StraightLinePolicy(), 3)

@@ -233,6 +233,28 @@ def test_predictions_never_leave_the_table():
     assert np.abs(pred).max() <= 1.0
 
 
+def test_flat_shapes_as_observations_hold_them_are_accepted(model):
+    shapes = _shapes(4, seed=8)
+    d = np.full((4, 2), 0.05, dtype=np.float32)
+    expected = model.predict(shapes, "head", d)
+    np.testing.assert_array_equal(model.predict(shapes.reshape(4, -1), "head", d), expected)
+    np.testing.assert_array_equal(model.predict(shapes[1].reshape(-1), "head", d[1]), expected[1])
+    with pytest.raises(ValueError, match=r"shapes must have shape \(20, 2\), \(40,\)"):
+        model.predict(shapes.reshape(4, -1)[:, :38], "head", d)
+
+
+def test_grasp_names_the_moving_ends_and_end_is_its_deprecated_alias(model):
+    shapes = _shapes(3, seed=9)
+    d = np.full((3, 2), 0.05, dtype=np.float32)
+    expected = model.predict(shapes, grasp="tail", displacement=d)
+    with pytest.warns(DeprecationWarning, match="use grasp="):
+        np.testing.assert_array_equal(model.predict(shapes, end="tail", displacement=d), expected)
+    with pytest.raises(ValueError, match="not both"):
+        model.predict(shapes, "tail", d, end="tail")
+    with pytest.raises(ValueError, match="grasp must be one of"):
+        model.predict(shapes, "middle", d)
+
+
 def test_single_shapes_batches_and_the_ensemble_spread(model):
     shapes = _shapes(5, seed=6)
     d = np.full((5, 2), 0.05, dtype=np.float32)
@@ -288,7 +310,7 @@ def test_the_first_members_alone_are_the_first_members_of_the_ensemble(model):
 
 @pytest.mark.parametrize(("args", "message"), [
     ((np.zeros((3, 19, 2)), "head", np.zeros((3, 2))), "shapes must have shape"),
-    ((np.zeros((3, 20, 2)), "middle", np.zeros((3, 2))), "end must be one of"),
+    ((np.zeros((3, 20, 2)), "middle", np.zeros((3, 2))), "grasp must be one of"),
     ((np.zeros((3, 20, 2)), "both", np.zeros((3, 2))), "displacement must have shape"),
     ((np.zeros((3, 20, 2)), "head", np.full((3, 2), np.nan)), "must be finite"),
 ])

@@ -104,8 +104,10 @@ def test_unknown_or_invalid_parameters_are_rejected(toy_model):
         LatentTreePlanner(toy_model, step=0.1)
     with pytest.raises(ValueError, match="TreeConfig.step_length must be a number > 0"):
         TreeConfig(step_length=0.0)
-    with pytest.raises(ValueError, match="TreeConfig.end must be one of"):
-        TreeConfig(end="middle")
+    with pytest.raises(ValueError, match="TreeConfig.grasp must be one of"):
+        TreeConfig(grasp="middle")
+    with pytest.warns(DeprecationWarning, match="use grasp="):
+        assert TreeConfig(end="tail").grasp == "tail"  # the deprecated name still works
     with pytest.raises(ValueError, match="TreeConfig.straightness_ratio must be >= 0"):
         TreeConfig(straightness_ratio=-0.1)
 

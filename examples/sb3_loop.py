@@ -1,0 +1,111 @@
+"""Every agent in the plain Stable-Baselines3 loop, with and without ``episode_start``.
+
+    python examples/sb3_loop.py --suite linear-2 --episodes 10
+
+A plain loop (``obs, info = env.reset()`` then ``policy.predict(obs)`` until the episode
+ends) does not tell a policy where an episode starts; SB3's ``evaluate_policy`` passes
+``episode_start``. The planners notice a new episode either way, so both columns agree. The
+last column runs the same tasks in a Gymnasium vector env of 2 environments with one policy
+(``predict`` on the batch: one plan per environment).
+"""
+
+from __future__ import annotations
+
+import argparse
+import time
+from dataclasses import dataclass
+
+import gymnasium as gym
+import numpy as np
+import torch
+
+import dlo_env  # noqa: F401  (registers the environments)
+from dlo_bench import AGENTS, build_agent
+from dlo_env.tasks import load_suite
+
+
+@dataclass
+class Args:
+    suite: str = "linear-2"
+    """named suite whose test tasks are run"""
+    episodes: int = 10
+    """tasks of the suite (the first ones of its test split)"""
+    env: str = "dlo_env/DLOEndpoint-v0"
+    """environment id"""
+    agents: str = ""
+    """comma-separated agent names (default: every agent that acts in --env)"""
+
+
+def parse_args() -> Args:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    for name, default in vars(Args()).items():
+        parser.add_argument(f"--{name}", dest=name, type=type(default), default=default)
+    return Args(**vars(parser.parse_args()))
+
+
+def plain_loop(policy, env: gym.Env, tasks, tell_starts: bool) -> list[bool]:
+    """Success of each task, one environment, the loop a user writes by hand."""
+    solved = []
+    for task in tasks:
+        obs, info = env.reset(options={"task": task})
+        first = True
+        while True:
+            start = np.array([first]) if tell_starts else None
+            action, _ = policy.predict(obs, episode_start=start, deterministic=True)
+            first = False
+            obs, _, terminated, truncated, info = env.step(action)
+            if terminated or truncated:
+                break
+        solved.append(bool(info["is_success"]))
+    return solved
+
+
+class TaskSequence(gym.Wrapper):
+    """An environment whose resets run ``tasks`` in order (then the last one again)."""
+
+    def __init__(self, env: gym.Env, tasks) -> None:
+        super().__init__(env)
+        self.tasks, self.started = list(tasks), 0
+
+    def reset(self, *, seed=None, options=None):
+        task = self.tasks[min(self.started, len(self.tasks) - 1)]
+        self.started += 1
+        return self.env.reset(seed=seed, options={"task": task})
+
+
+def vector_loop(policy, env_id: str, tasks, num_envs: int = 2) -> list[bool]:
+    """Success of each task, ``num_envs`` environments at a time in a Gymnasium vector env
+    (one batched ``predict`` per step, no ``episode_start``; finished episodes reset
+    themselves, as vector envs do)."""
+    shares = [tasks[i::num_envs] for i in range(num_envs)]
+    envs = gym.vector.SyncVectorEnv(
+        [lambda share=share: TaskSequence(gym.make(env_id), share) for share in shares])
+    results: list[list[bool]] = [[] for _ in shares]
+    obs, _ = envs.reset()
+    while any(len(r) < len(share) for r, share in zip(results, shares)):
+        actions, _ = policy.predict(obs, deterministic=True)
+        obs, _, terminated, truncated, infos = envs.step(actions)
+        for i in np.flatnonzero(terminated | truncated):
+            if len(results[i]) < len(shares[i]):
+                results[i].append(bool(infos["is_success"][i]))
+    envs.close()
+    return [ok for r in results for ok in r]
+
+
+if __name__ == "__main__":
+    args = parse_args()
+    torch.set_num_threads(1)
+    names = [a for a in args.agents.split(",") if a] or [
+        name for name, spec in AGENTS.items() if args.env in spec.environments]
+    env = gym.make(args.env)
+    tasks = load_suite(args.suite, "test", grasp=env.unwrapped.cord.grasp, limit=args.episodes)
+    print(f"{args.suite} test tasks 1-{len(tasks)}, {args.env}: tasks solved")
+    print(f"{'agent':<20} {'with episode_start':>19} {'without':>8} {'vector env x2':>14} "
+          f"{'seconds':>8}")
+    for name in names:
+        t0 = time.perf_counter()
+        told = plain_loop(build_agent(name, env), env, tasks, tell_starts=True)
+        plain = plain_loop(build_agent(name, env), env, tasks, tell_starts=False)
+        vector = vector_loop(build_agent(name, env), args.env, tasks)
+        print(f"{name:<20} {sum(told):>19} {sum(plain):>8} {sum(vector):>14} "
+              f"{time.perf_counter() - t0:>8.0f}", flush=True)

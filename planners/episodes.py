@@ -1,0 +1,159 @@
+"""Episodes and batches for every planner policy: one mechanism, in one base class.
+
+A planner keeps state across steps (a plan being executed, a warm start, a goal's latent).
+Stable-Baselines3's loop tells a policy where an episode starts (``episode_start``), but a plain
+loop does not::
+
+    obs, info = env.reset()
+    while True:
+        action, _ = policy.predict(obs, deterministic=True)
+        obs, reward, terminated, truncated, info = env.step(action)
+        ...
+
+so a planner must notice a new episode itself. :class:`EpisodicPolicy` resets the policy
+before acting when
+
+- ``episode_start`` is true for its environment (SB3's signal), or
+- the goal changed (every ``reset`` of a task draws a new goal), or
+- a held gripper moved farther than one action can move it (``sqrt(2) * max_step``, as each
+  action component is clipped to ``[-1, 1]``): the cord was reset, even to the same goal.
+
+Only an episode that starts exactly where the last one stopped, with the same goal, looks like
+a continuation; pass ``episode_start`` (or call ``reset()``) there. An observation without the
+grippers (only ``achieved_goal`` and ``desired_goal``) is checked by the goal and by the cord
+jumping farther than :data:`JUMP_ERROR` (mean point distance) in one step.
+
+A vector env (``gym.make_vec``, SB3's ``VecEnv``) passes a batch with one row per environment.
+The policy then keeps one copy of its episode state per environment (:attr:`env_policies`; the
+models and planners are shared, not copied) and plans for each environment in turn, one at a
+time: the actions come back as a ``(B, action_dim)`` batch.
+"""
+
+from __future__ import annotations
+
+import copy
+import math
+from typing import Any
+
+import numpy as np
+
+from dlo_env.shapes import error
+from planners.interfaces import Observation
+from planners.observation import CordObservation, read_observation, split_batch
+
+#: Goals whose coordinates differ by at most this are one goal, metres (float32 rounding).
+GOAL_TOLERANCE = 1e-6
+#: Slack on the farthest one action moves a gripper, metres (float32 rounding).
+GRIPPER_SLACK = 1e-5
+#: Without gripper positions: a cord whose mean point distance to the last observation exceeds
+#: this was reset, metres. One full-speed step moves it at most about 9 cm (measured with
+#: random full-speed actions, both ends held); resets to another shape move it 15 cm or more.
+JUMP_ERROR = 0.12
+
+
+def _starts(episode_start: Any, size: int) -> np.ndarray:
+    """``episode_start`` as ``size`` booleans (None: all false; one value: for every row)."""
+    if episode_start is None:
+        return np.zeros(size, dtype=bool)
+    starts = np.asarray(episode_start, dtype=bool).reshape(-1)
+    if starts.size == 1:
+        return np.repeat(starts, size)
+    if starts.size != size:
+        raise ValueError(f"episode_start must hold one flag per environment ({size}), got "
+                         f"{starts.size}")
+    return starts
+
+
+class EpisodicPolicy:
+    """Base of the planner policies: SB3's ``predict`` with episodes noticed and batches split.
+
+    A subclass sets ``max_step`` (metres per unit action), implements ``reset()`` (forget the
+    episode) and ``_act(obs) -> action`` for one environment's :class:`CordObservation`, and
+    may set ``n_points`` (the cord its model was made for; otherwise the observation's).
+
+    Attributes:
+        env_policies: With a batch of B > 1 environments, the B copies that hold each
+            environment's episode (their ``episode_stats()`` report it); empty otherwise.
+    """
+
+    max_step: float
+    n_points: int | None = None
+
+    # ------------------------------------------------------------------ to override
+    def reset(self) -> None:
+        """Forget the episode under way."""
+        raise NotImplementedError
+
+    def _act(self, obs: CordObservation) -> np.ndarray:
+        """The next action for one environment's observation, ``(action_dim,)`` float32."""
+        raise NotImplementedError
+
+    # ------------------------------------------------------------------ episodes
+    def _new_episode(self, obs: CordObservation) -> bool:
+        """Whether ``obs`` cannot follow the last observation seen in the same episode."""
+        last: CordObservation | None = getattr(self, "_last_seen", None)
+        if last is None or last.shape.shape != obs.shape.shape:
+            return last is not None
+        if float(np.abs(obs.goal - last.goal).max()) > GOAL_TOLERANCE:
+            return True
+        if len(obs.grippers) and obs.grippers.shape == last.grippers.shape:
+            reach = math.sqrt(2.0) * self.max_step + GRIPPER_SLACK
+            return bool((np.linalg.norm(obs.grippers - last.grippers, axis=1) > reach).any())
+        return float(error(obs.shape, last.shape)) > JUMP_ERROR
+
+    def _step(self, observation: Observation, start: bool) -> np.ndarray:
+        """One environment's action: reset first when its episode is new."""
+        n = self.n_points
+        if n is None:
+            n = np.asarray(observation["achieved_goal"]).reshape(-1).size // 2
+        obs = read_observation(observation, n)
+        if start or self._new_episode(obs):
+            self.reset()
+        self._last_seen = obs
+        return np.clip(np.asarray(self._act(obs), dtype=np.float32), -1.0, 1.0)
+
+    def _copies(self, size: int) -> list[EpisodicPolicy]:
+        """``size`` policies sharing this one's models, each with its own episode state."""
+        copies: list[EpisodicPolicy] = getattr(self, "env_policies", [])
+        if len(copies) != size:
+            copies = []
+            for _ in range(size):
+                twin = copy.copy(self)  # shallow: models, planners and configs are shared
+                twin.env_policies = []
+                twin._last_seen = None
+                twin.reset()
+                copies.append(twin)
+            self.env_policies = copies
+        return copies
+
+    # ------------------------------------------------------------------ SB3 interface
+    def predict(
+        self,
+        observation: Observation,
+        state: Any = None,
+        episode_start: np.ndarray | None = None,
+        deterministic: bool = True,
+    ) -> tuple[np.ndarray, Any]:
+        """The next action(s), SB3's signature.
+
+        Args:
+            observation: A ``dlo_env`` goal observation (Dict of flat arrays), or a batch of
+                them with a leading axis (SB3, ``gym.make_vec``).
+            state: Passed through (the policy keeps its own episode state).
+            episode_start: Optional, one flag per environment: true resets that environment's
+                episode first (as SB3 passes). Without it a new episode is noticed by its goal
+                or by the cord jumping (see the module's docstring).
+            deterministic: Ignored (a plan is a function of the observation and the seed).
+
+        Returns:
+            ``(action, state)``: float32 ``(action_dim,)`` for an unbatched observation,
+            ``(B, action_dim)`` for a batch of B.
+        """
+        rows, batched = split_batch(observation)
+        starts = _starts(episode_start, len(rows))
+        if len(rows) == 1:
+            action = self._step(rows[0], bool(starts[0]))
+            return (action[None] if batched else action), state
+        actions = [twin._step(row, bool(start))
+                   for twin, row, start in zip(self._copies(len(rows)), rows, starts)]
+        return np.stack(actions), state
