@@ -31,7 +31,7 @@ from latent_model.transition_metrics import report_lines, transition_report
 from latent_model.transition_model import EnsembleMLP, TransitionModel, TransitionModelConfig
 from latent_model.transition_training import TransitionTrainConfig, train_transition_model
 
-#: The settings both designs train with: those of the comparison in docs/transition_model.md
+#: The settings both designs train with: those of the comparison in docs/history.md
 #: (the defaults when it was run; later defaults are the shape-space model's own tuning).
 DESIGN_MODEL = TransitionModelConfig(rim_reach=0.15, rim_targets=1, mirror=False)
 DESIGN_CHAIN_WEIGHT = 0.5

@@ -5,7 +5,7 @@ Every configuration of a small grid runs on the first ``--episodes`` train tasks
 shipped transition model. For each it prints and writes (``runs/tune-latent-mpc/sweep.csv``,
 resumable: finished rows are kept) the success rate, median final error and mean planning
 seconds per episode. The chosen values become ``LatentMPCConfig``'s defaults by hand, with the
-sweep quoted in ``docs/planners.md``.
+sweep quoted in ``docs/history.md``.
 
     python benchmarks/tune_latent_mpc.py --episodes 40
     python benchmarks/tune_latent_mpc.py --grid '{"inextensible": [false, true]}' \

@@ -3,7 +3,7 @@
 Every hidden layer gets new units with random incoming weights and zero outgoing weights, so
 the widened networks compute exactly what the old ones did; ``dlo train --stage transition
 --init OUT --width WIDTH`` then fine-tunes all units. A mean network the file holds is not kept
-(distil again). The widening probe of docs/transition_model.md:
+(distil again). The widening probe of docs/history.md:
 
     python examples/widen_transition_model.py --model runs/s/finetune5/transition.pt \\
         --width 384 --out runs/widened.pt

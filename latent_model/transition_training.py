@@ -65,7 +65,7 @@ class TransitionTrainConfig:
         chain_moves: Longest chain rolled out.
         chain_weight: Weight of the chain loss against the one-move loss (0: none). A step
             with chains costs about twice one without; in as much time, the one-move loss
-            alone was more accurate, on chained moves too (docs/transition_model.md).
+            alone was more accurate, on chained moves too (docs/history.md).
         lr: Adam learning rate at the start.
         lr_schedule: ``"cosine"`` (decays to 0 over ``steps``) or ``"constant"``.
         validation_fraction: Share of the training episodes kept out to watch progress.

@@ -172,7 +172,7 @@ class TreeConfig:
 
 #: The kinodynamic tree of the ``latent-tree-kino`` agent: straight-move edges predicted by the
 #: transition model. A plan predicted within 1.5 cm of the goal is accepted (chosen on the train
-#: splits, 30 tasks each: 100 / 97 / 100 % against 100 / 90 / 90 % with 1 cm; docs/planners.md).
+#: splits, 30 tasks each: 100 / 97 / 100 % against 100 / 90 / 90 % with 1 cm; docs/history.md).
 KINO_CONFIG = TreeConfig(edges="moves", goal_threshold=0.015)
 
 
