@@ -9,6 +9,10 @@ sample cost: the data its model or policy was trained on. Every finished (agent,
 difficulty) cell is written at once, so an interrupted run resumes;
 :func:`dlo_bench.benchmark_report.write_results` then writes the table (Markdown), the rows
 (JSON) and a bar chart (PNG), all atomically.
+
+Every cell records what made it: the git commit of the code (:func:`code_version`, ``+dirty``
+with uncommitted changes to tracked files) and the run (one invocation, :func:`new_run_id`) that
+timed it, so the report compares planning times only between cells of one run.
 """
 
 from __future__ import annotations
@@ -16,6 +20,7 @@ from __future__ import annotations
 import json
 import math
 import os
+import subprocess
 import time
 from dataclasses import asdict, dataclass
 from pathlib import Path
@@ -193,7 +198,7 @@ def load_agent(name: str, config: BenchmarkConfig, env: Any,
         except FileNotFoundError:
             return LoadedAgent(name, None, missing=(
                 f"no trained model for {env_id} in {baseline_folder_name(name, env_id)}/ (train "
-                f"one with `dlo baseline --algo {name} --env-id {env_id}`)"))
+                f"one with `dlo baseline --algo {name} --env {env_id}`)"))
         except ValueError as exc:
             return LoadedAgent(name, None, missing=f"no usable model for {env_id}: "
                                                    f"{exc}".splitlines()[0])
@@ -284,6 +289,7 @@ def row_of(agent: LoadedAgent, env_id: str, difficulty: int, evaluation: Evaluat
         "models": list(agent.models),
         "wall_seconds": None,
         "commit": "",
+        "run": "",
     }
     if evaluation is not None:
         records, s = evaluation.records, evaluation.summary
@@ -321,25 +327,77 @@ def _load_cell(path: Path, key: dict[str, Any]) -> tuple[Evaluation, dict[str, A
                    for r in data["records"]]
     except TypeError:  # written by another version of EpisodeRecord: run the cell again
         return None
-    facts = {"wall_seconds": data.get("wall_seconds"), "commit": data.get("commit", "")}
+    facts = {"wall_seconds": data.get("wall_seconds"), "commit": data.get("commit", ""),
+             "run": data.get("run", "")}
     return Evaluation(records, summarise(records, agent=key["agent"], env_id=key["env_id"])), facts
 
 
-def code_version() -> str:
-    """``git`` commit of the code (``+dirty`` with uncommitted changes to Python files), "" outside
-    a checkout."""
-    import subprocess
+#: The folder holding the code's packages: a git checkout's root when run from a clone.
+CODE_ROOT = Path(__file__).resolve().parent.parent
 
-    root = Path(__file__).resolve().parent.parent
+
+@dataclass(frozen=True)
+class CodeState:
+    """The git checkout the code runs from.
+
+    Attributes:
+        root: The checkout's root.
+        commit: The short commit of ``HEAD``.
+        changed: Tracked files with uncommitted changes (staged or not), relative to ``root``;
+            untracked files (``runs/``, ``data/``) do not count.
+    """
+
+    root: Path
+    commit: str
+    changed: tuple[str, ...]
+
+    @property
+    def version(self) -> str:
+        """The commit, ``+dirty`` with uncommitted changes to tracked files."""
+        return self.commit + ("+dirty" if self.changed else "")
+
+
+def code_state(root: str | os.PathLike | None = None) -> CodeState | None:
+    """The git checkout whose root is ``root`` (None: :data:`CODE_ROOT`), or None when it is not
+    the root of one (an installed package; a package inside some other repository's tree)."""
+    folder = Path(root).resolve() if root is not None else CODE_ROOT
+
+    def git(*args: str) -> str:
+        return subprocess.run(["git", *args], cwd=folder, check=True, capture_output=True,
+                              text=True, timeout=30).stdout
+
     try:
-        commit = subprocess.run(["git", "rev-parse", "--short", "HEAD"], cwd=root, check=True,
-                                capture_output=True, text=True, timeout=10).stdout.strip()
-        dirty = subprocess.run(["git", "status", "--porcelain", "--untracked-files=no", "--",
-                                "*.py"], cwd=root, check=True, capture_output=True, text=True,
-                               timeout=10).stdout.strip()
-    except (OSError, subprocess.SubprocessError):
-        return ""
-    return commit + ("+dirty" if dirty else "")
+        if Path(git("rev-parse", "--show-toplevel").strip()).resolve() != folder:
+            return None
+        commit = git("rev-parse", "--short", "HEAD").strip()
+        status = git("status", "--porcelain", "--untracked-files=no", "-z")
+    except (OSError, subprocess.SubprocessError):  # no git, not a checkout, no commit yet
+        return None
+    # -z: "XY PATH\0", a rename adds "ORIGINAL\0"; paths are not quoted.
+    entries = status.split("\0")
+    changed, k = [], 0
+    while k < len(entries):
+        entry = entries[k]
+        if entry:
+            changed.append(entry[3:])
+            if entry[0] in "RC":
+                k += 1
+        k += 1
+    return CodeState(folder, commit, tuple(changed))
+
+
+def code_version() -> str:
+    """``git`` commit of the code (``+dirty`` with uncommitted changes to tracked files), ""
+    outside a checkout of its own."""
+    state = code_state()
+    return state.version if state is not None else ""
+
+
+def new_run_id() -> str:
+    """A new run's id: its UTC start time and a random suffix (``20261125T055614Z-3f2a``)."""
+    import secrets
+
+    return time.strftime("%Y%m%dT%H%M%SZ", time.gmtime()) + "-" + secrets.token_hex(2)
 
 
 def _warm_up(policy: Policy, env: Any) -> None:
@@ -394,7 +452,7 @@ def run_cell(name: str, env_id: str, difficulty: int, config: BenchmarkConfig, *
 
 def run_benchmark(config: BenchmarkConfig, out_dir: str | os.PathLike, *,
                   resume: bool = False, progress: bool = True,
-                  backend: Any = None) -> list[dict[str, Any]]:
+                  backend: Any = None, run_id: str | None = None) -> list[dict[str, Any]]:
     """Evaluate every agent on every cell (environment, difficulty); write each as it finishes.
 
     Args:
@@ -406,6 +464,8 @@ def run_benchmark(config: BenchmarkConfig, out_dir: str | os.PathLike, *,
         backend: None runs the cells one after the other in this process; a
             ``dlo_env.dataset.ray_backend.RayBackend`` runs them as Ray tasks (same results:
             a cell is self-contained, see :func:`run_cell`).
+        run_id: The id recorded with every cell this call evaluates (None: a
+            :func:`new_run_id`); reused cells keep the id of the run that timed them.
 
     Returns:
         The rows: agents in ``config.agents`` order, then the cells in ``config.cells()`` order.
@@ -415,6 +475,7 @@ def run_benchmark(config: BenchmarkConfig, out_dir: str | os.PathLike, *,
     import dlo_env  # noqa: F401  (registers the environments)
 
     folder = Path(out_dir) / CELLS_DIR
+    run_id = run_id or new_run_id()
     shape_model, why = (None, "")
     if any(AGENTS[a].shape_model for a in config.agents):
         shape_model, why = load_shape_model(config.model)
@@ -452,7 +513,7 @@ def run_benchmark(config: BenchmarkConfig, out_dir: str | os.PathLike, *,
     def finish(k: int, result: Evaluation, seconds: float) -> None:
         slot, name, env_id, difficulty, agent, key = todo[k]
         cell = f"{name}-{env_label(env_id)}-d{difficulty}"
-        facts = {"wall_seconds": seconds, "commit": code_version()}
+        facts = {"wall_seconds": seconds, "commit": code_version(), "run": run_id}
         write_evaluation(result, folder, cell, extra={"benchmark_key": key, **facts})
         rows[slot] = {**row_of(agent, env_id, difficulty, result, config.episodes), **facts}
 

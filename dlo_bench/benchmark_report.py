@@ -1,5 +1,8 @@
 """The benchmark's report: the Markdown table, the speed ratios, the machine, the chart.
 
+A planning-time ratio compares cells timed in one run (one invocation of ``dlo benchmark``:
+the same machine and load); cells of several runs make it "not comparable", never a number.
+
 ``write_results`` writes ``results.json``, ``results.md`` and ``results.png`` atomically.
 """
 
@@ -9,6 +12,7 @@ import json
 import math
 import os
 import platform
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
@@ -16,15 +20,40 @@ from dlo_bench.report import cell_label, json_ready
 from dlo_env.atomic import file_digest, write_text_atomic
 
 
+@dataclass(frozen=True)
+class TimeRatio:
+    """Total planning seconds of one agent over another's on the same episodes.
+
+    Attributes:
+        slow, fast: The two agents.
+        cells: Cell label (``endpoint d1``...) -> the ratio in that cell, for the cells both ran.
+        overall: The ratio of the totals over those cells.
+        runs: The runs (``run`` of the rows, "" when not recorded) that timed those cells.
+    """
+
+    slow: str
+    fast: str
+    cells: dict[str, float]
+    overall: float
+    runs: tuple[str, ...]
+
+    @property
+    def comparable(self) -> bool:
+        """Whether every cell of both agents was timed in one recorded run: the same machine
+        and load, so the ratio measures the agents rather than the day they ran."""
+        return len(self.runs) == 1 and bool(self.runs[0])
+
+
 def planning_time_ratios(rows: list[dict[str, Any]], slow: str = "physics-mpc",
-                         fast: str = "latent-tree") -> dict[str, float]:
-    """Total planning seconds of ``slow`` over ``fast`` on the same episodes, per cell.
+                         fast: str = "latent-tree") -> TimeRatio | None:
+    """Total planning seconds of ``slow`` over ``fast`` on the same episodes.
 
     Returns:
-        ``{"endpoint d1": ratio, ..., "all": ratio}`` for the cells both agents ran.
+        The ratio in every cell both agents ran with the same episodes and overall, with the
+        runs that timed them; None when they share no cell.
     """
     by = {(r["agent"], cell_label(r)): r for r in rows if r["status"] == "ok"}
-    ratios, slow_total, fast_total = {}, 0.0, 0.0
+    cells, runs, slow_total, fast_total = {}, set(), 0.0, 0.0
     for r in rows:
         if r["agent"] != slow or r["status"] != "ok":
             continue
@@ -32,12 +61,13 @@ def planning_time_ratios(rows: list[dict[str, Any]], slow: str = "physics-mpc",
         if other is None or other["episodes"] != r["episodes"]:
             continue
         if other["total_seconds"] > 0:
-            ratios[cell_label(r)] = r["total_seconds"] / other["total_seconds"]
+            cells[cell_label(r)] = r["total_seconds"] / other["total_seconds"]
         slow_total += r["total_seconds"]
         fast_total += other["total_seconds"]
-    if ratios and fast_total > 0:
-        ratios["all"] = slow_total / fast_total
-    return ratios
+        runs |= {r.get("run") or "", other.get("run") or ""}
+    if not cells or fast_total <= 0:
+        return None
+    return TimeRatio(slow, fast, cells, slow_total / fast_total, tuple(sorted(runs)))
 
 
 #: The planning-time ratios the report states: physics-mpc over each cheaper planner.
@@ -46,19 +76,41 @@ RATIO_PAIRS = (("physics-mpc", "latent-mpc"), ("physics-mpc", "latent-tree-kino"
 
 
 def ratio_lines(rows: list[dict[str, Any]]) -> list[str]:
-    """One sentence per pair of ``RATIO_PAIRS`` that both ran."""
+    """One sentence per pair of ``RATIO_PAIRS`` that both ran: the ratio and the run that timed
+    its cells, or, when the cells were timed in several runs (or runs not recorded), that it
+    is not comparable."""
     lines = []
     for slow, fast in RATIO_PAIRS:
-        ratios = planning_time_ratios(rows, slow, fast)
-        if ratios:
-            parts = ", ".join(f"{k} {_ratio(v)}" for k, v in ratios.items() if k != "all")
-            lines.append(f"Planning time {slow} / {fast} on the same episodes: "
-                         f"{_ratio(ratios['all'])} overall ({parts}).")
+        ratio = planning_time_ratios(rows, slow, fast)
+        if ratio is None:
+            continue
+        head = f"Planning time {slow} / {fast} on the same episodes"
+        if ratio.comparable:
+            parts = ", ".join(f"{k} {_ratio(v)}" for k, v in ratio.cells.items())
+            lines.append(f"{head}, timed in one run ({ratio.runs[0]}): "
+                         f"{_ratio(ratio.overall)} overall ({parts}).")
+            continue
+        commits = sorted({r.get("commit") or "unknown" for r in rows
+                          if r["agent"] in (slow, fast) and r["status"] == "ok"})
+        runs = [run or "not recorded" for run in ratio.runs]
+        lines.append(f"{head}: not comparable, its cells were timed in different runs "
+                     f"({', '.join(runs)}; commits {', '.join(commits)}); run both agents in "
+                     "one invocation to measure it.")
     return lines
 
 
 def _ratio(value: float) -> str:
     return f"{value:.0f}x" if value >= 10 else f"{value:.2g}x"
+
+
+def run_summary(rows: list[dict[str, Any]]) -> str:
+    """The runs that timed the cells and how many cells each: ``R1 (40 cells), R2 (8 cells)``."""
+    counts: dict[str, int] = {}
+    for r in rows:
+        if r["status"] == "ok":
+            run = r.get("run") or "not recorded"
+            counts[run] = counts.get(run, 0) + 1
+    return ", ".join(f"{run} ({n} cell{'s' * (n != 1)})" for run, n in sorted(counts.items()))
 
 
 def success_table(rows: list[dict[str, Any]]) -> list[str]:
@@ -167,7 +219,8 @@ def results_markdown(rows: list[dict[str, Any]], machine: dict[str, Any], comman
         f"({machine['torch_threads']} thread(s)). Wall time of the evaluations "
         f"{evaluated / 60:.1f} min (this invocation {seconds / 60:.1f} min).",
         "",
-        f"Code: {', '.join(commits) if commits else 'unknown'} (git commit of each cell's run).",
+        f"Code: {', '.join(commits) if commits else 'unknown'} (git commit of each cell's run). "
+        f"Runs (one invocation each): {run_summary(rows) or 'none'}.",
         "",
         f"Command: `{command}`",
         "",

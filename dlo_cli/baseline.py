@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import argparse
 
-from dlo_cli.flags import add_difficulty, add_seed, add_threads, positive_int
+from dlo_cli.flags import add_difficulty, add_env, add_seed, add_threads, positive_int
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
@@ -23,7 +23,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                    "training draws one per episode")
     parser.add_argument("--reward-type", choices=("dense", "sparse"),
                         default=BaselineConfig.reward_type, help="the environment's reward")
-    parser.add_argument("--env-id", default=BaselineConfig.env_id, help="environment")
+    add_env(parser, BaselineConfig.env_id, "the environment it trains in", dest="env_id",
+            alias=True)
     parser.add_argument("--set", nargs="+", default=[], metavar="FIELD=VALUE",
                         help="other BaselineConfig fields, values in JSON "
                              "(e.g. ppo_n_steps=512 net_arch=[64,64])")
@@ -35,14 +36,30 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     add_threads(parser)
 
 
+#: ``BaselineConfig`` fields with a flag of their own: ``--set`` leaves them to it, so the flag's
+#: checks always apply.
+FLAG_FIELDS = {"algo": "--algo", "env_id": "--env", "difficulties": "--difficulty",
+               "reward_type": "--reward-type", "timesteps": "--timesteps", "n_envs": "--n-envs",
+               "subprocess": "--subprocess", "seed": "--seed"}
+
+
 def _overrides(items: list[str]) -> dict:
     import json
+    from dataclasses import fields
 
+    from dlo_bench.baselines import BaselineConfig
+
+    others = [f.name for f in fields(BaselineConfig) if f.name not in FLAG_FIELDS]
     values = {}
     for item in items:
         key, sep, text = item.partition("=")
         if not sep:
             raise ValueError(f"--set takes FIELD=VALUE, got {item!r}")
+        if key in FLAG_FIELDS:
+            raise ValueError(f"--set {key}: give it with {FLAG_FIELDS[key]}")
+        if key not in others:
+            raise ValueError(f"--set {key}: unknown key; the fields --set takes are "
+                             f"{', '.join(others)}")
         try:
             values[key] = json.loads(text)
         except json.JSONDecodeError:

@@ -8,31 +8,36 @@ from dlo_cli.flags import (
     add_agent,
     add_backend,
     add_difficulty,
+    add_env,
     add_model,
     add_out,
     add_planner_flags,
+    add_seed,
+    add_transition_model,
     backend_of,
+    number_in,
 )
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     """Flags of ``dlo benchmark``; defaults are ``BenchmarkConfig``'s (the published table)."""
-    from dlo_bench.benchmark import QUICK_EPISODES, BenchmarkConfig
+    from dlo_bench.benchmark import DEFAULT_DIFFICULTIES, QUICK_EPISODES, BenchmarkConfig
+    from dlo_env.tasks import SPLIT_SIZES
 
+    size = SPLIT_SIZES["test"]
     parser.add_argument("--quick", action="store_true",
                         help=f"{QUICK_EPISODES} episodes of each cell: a smoke test of every "
                              "agent (about 2 minutes on two cores)")
-    parser.add_argument("--episodes", type=int, default=None,
+    parser.add_argument("--episodes", default=None, type=number_in(
+                            int, 1, size, expected=f"an integer from 1 to {size} (the tasks of "
+                                                   "a test split)"),
                         help="episodes per agent and difficulty, the first tasks of each test "
-                             f"split (None: {BenchmarkConfig.episodes}, the whole split; "
-                             f"{QUICK_EPISODES} with --quick)")
-    from dlo_bench.benchmark import DEFAULT_DIFFICULTIES
-    from dlo_env.envs import ENVIRONMENTS
-
-    add_agent(parser, default=list(BenchmarkConfig.agents))
-    parser.add_argument("--env", nargs="+", default=list(BenchmarkConfig.envs),
-                        choices=list(ENVIRONMENTS), metavar="ENV_ID",
-                        help="environments, one or several: " + ", ".join(ENVIRONMENTS))
+                             f"split (None: {BenchmarkConfig.episodes}, the whole split, so "
+                             "every cell compares with the published table's 50 tasks per "
+                             f"cell, unlike the quick looks of dlo evaluate; {QUICK_EPISODES} "
+                             "with --quick)")
+    add_agent(parser, default=list(BenchmarkConfig.agents), sb3=False)
+    add_env(parser, list(BenchmarkConfig.envs), "environments, one or several", several=True)
     defaults = "; ".join(f"{e.split('/')[-1]}: {' '.join(map(str, d))}"
                          for e, d in DEFAULT_DIFFICULTIES.items())
     add_difficulty(parser, None, "each runs the test split of suite linear-K in every "
@@ -43,18 +48,36 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                              "BASELINES/ppo-dual-endpoint... for DLODualEndpoint-v0; None: the "
                              "shipped ones)")
     add_model(parser)
-    parser.add_argument("--transition-model", default=None,
-                        help="transition model file, or folder holding transition.pt, for "
-                             "latent-mpc and latent-tree-kino (None: the shipped "
-                             "latent_model/pretrained/transition.pt)")
+    add_transition_model(parser)
     add_planner_flags(parser)
-    parser.add_argument("--seed", type=int, default=BenchmarkConfig.seed,
-                        help="seed of the planners' sampling (the tasks are the suites')")
+    add_seed(parser, "the planners' sampling (the tasks are the suites')",
+             default=BenchmarkConfig.seed)
     add_backend(parser, "this process, one cell after the other")
     parser.add_argument("--resume", action="store_true",
                         help="reuse the cells an interrupted run with the same settings wrote")
+    parser.add_argument("--allow-dirty", action="store_true",
+                        help="run even though tracked files of the code's git checkout have "
+                             "uncommitted changes (its cells are then marked COMMIT+dirty); "
+                             "without it the benchmark refuses, so that committed results come "
+                             "from a commit")
     add_out(parser, "benchmark", "results.md/.json/.png and results_episodes/; "
                                  "`--out benchmarks` refreshes the committed results")
+
+
+def check_committed(allow_dirty: bool) -> None:
+    """Refuse (``ValueError``, one line naming ``--allow-dirty``) to run code with uncommitted
+    changes to tracked files, unless ``allow_dirty``; code outside a git checkout of its own
+    (an installed package) runs."""
+    from dlo_bench.benchmark import code_state
+
+    state = code_state()
+    if allow_dirty or state is None or not state.changed:
+        return
+    shown = ", ".join(state.changed[:3]) + (", ..." if len(state.changed) > 3 else "")
+    raise ValueError(f"{len(state.changed)} tracked file(s) of {state.root} have uncommitted "
+                     f"changes ({shown}): results record the commit they ran ({state.commit}), "
+                     "so commit first, or pass --allow-dirty to run anyway (marked "
+                     f"{state.commit}+dirty)")
 
 
 def _command(args: argparse.Namespace, parser_defaults: dict) -> str:
@@ -77,9 +100,11 @@ def run(args: argparse.Namespace) -> int:
     """Run the benchmark, print the table and the speed ratio, write the results."""
     import time
 
+    check_committed(args.allow_dirty)  # before anything is built or written
+
     import torch
 
-    from dlo_bench.benchmark import QUICK_EPISODES, BenchmarkConfig, run_benchmark
+    from dlo_bench.benchmark import QUICK_EPISODES, BenchmarkConfig, new_run_id, run_benchmark
     from dlo_bench.benchmark_report import ratio_lines, write_results
 
     torch.set_num_threads(args.threads)
@@ -93,12 +118,14 @@ def run(args: argparse.Namespace) -> int:
         replan_every=args.replan_every, max_seconds=args.max_seconds,
         fidelity=not args.no_fidelity,
     )
+    backend = backend_of(args)
+    run_id = new_run_id()
     cells = ", ".join(f"{e.split('/')[-1]} d{d}" for e, d in config.cells())
-    print(f"benchmark: {len(config.agents)} agents x ({cells}) x {config.episodes} episodes "
-          f"-> {args.out}", flush=True)
+    print(f"benchmark run {run_id}: {len(config.agents)} agents x ({cells}) x "
+          f"{config.episodes} episodes -> {args.out}", flush=True)
     t0 = time.perf_counter()
     rows = run_benchmark(config, args.out, resume=args.resume, progress=True,
-                         backend=backend_of(args))
+                         backend=backend, run_id=run_id)
     seconds = time.perf_counter() - t0
     parser = argparse.ArgumentParser()
     add_arguments(parser)

@@ -10,9 +10,15 @@ from __future__ import annotations
 import argparse
 
 from dlo_cli.chunked_run import run_chunked
-from dlo_cli.flags import add_backend, backend_of, engine_text, number_in, positive_int
+from dlo_cli.flags import (
+    add_backend,
+    add_seed,
+    backend_of,
+    engine_text,
+    number_in,
+    positive_int,
+)
 
-_seed = number_in(int, 0, expected="an integer >= 0")
 _cosine = number_in(float, -1.0, 1.0, expected="a number in [-1, 1]")
 _share = number_in(float, 0.0, 1.0, expected="a number in [0, 1]")
 _weight = number_in(float, 0.0, None, expected="a number >= 0")
@@ -41,7 +47,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--num-transitions", type=positive_int, default=None,
                         help="transitions to collect (--kind transitions)")
     parser.add_argument("--out", type=_npz_path, required=True, help="dataset file (.npz)")
-    parser.add_argument("--seed", type=_seed, default=0, help="root seed")
+    add_seed(parser, "the collection (root seed)")
     parser.add_argument("--workers", type=positive_int, default=1,
                         help="worker processes; the arrays do not depend on it")
     parser.add_argument("--cosine-threshold", type=_cosine, default=CollectConfig.cosine_threshold,

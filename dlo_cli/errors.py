@@ -1,8 +1,9 @@
 """Errors a user can act on: one line on stderr and exit status 2, no traceback.
 
-The ``dlo`` command's one handler (in :mod:`dlo_cli.main`) turns bad input, missing or corrupt
-files, and a missing optional dependency into a line that says what to do; anything else is a
-bug and keeps its traceback. ``dlo --debug ...`` shows the traceback of every error.
+The ``dlo`` command's one handler (in :mod:`dlo_cli.main`) turns a bad command line, bad input,
+missing or corrupt files, and a missing optional dependency into a line that says what to do;
+anything else is a bug and keeps its traceback. ``dlo --debug ...`` shows the traceback of every
+error but a bad command line's (argparse's message is all there is).
 """
 
 from __future__ import annotations
@@ -11,6 +12,12 @@ from __future__ import annotations
 EXIT_USER_ERROR = 2
 #: Exit status after Ctrl-C.
 EXIT_INTERRUPTED = 130
+
+
+class UsageError(Exception):
+    """A bad command line (unknown flag, bad value, missing flag): argparse's message, which
+    :func:`dlo_cli.main.main` prints as one line instead of argparse's usage and exit."""
+
 
 #: Optional dependency (its top-level module) -> the extra of ``pyproject.toml`` installing it.
 #: A new extra is one entry here.

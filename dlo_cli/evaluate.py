@@ -6,37 +6,40 @@ import argparse
 from typing import Any
 
 from dlo_cli.flags import (
+    DEFAULT_EPISODES,
     add_agent,
     add_backend,
     add_difficulty,
+    add_env,
+    add_episodes,
     add_model,
     add_out,
     add_planner_flags,
     add_seed,
+    add_transition_model,
     backend_of,
-    positive_int,
 )
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     """Flags of ``dlo evaluate``."""
-    from dlo_env.tasks import SUITES
+    from dlo_env.tasks import SPLIT_SIZES, SUITES
 
     add_agent(parser, default=None)
     which = parser.add_mutually_exclusive_group()
     add_difficulty(which, [1], "random tasks (reset seeds SEED, SEED+1, ...); several give "
                                "several rows")
-    which.add_argument("--suite", nargs="+", metavar="NAME",
+    which.add_argument("--suite", nargs="+", metavar="NAME", choices=list(SUITES),
                        help=f"named task suites instead of random tasks: {', '.join(SUITES)}")
-    parser.add_argument("--split", default="test", choices=("test", "train"),
+    parser.add_argument("--split", default="test", choices=tuple(SPLIT_SIZES),
                         help="split of the suites")
-    parser.add_argument("--episodes", type=positive_int, default=20, help="episodes per row")
+    add_episodes(parser, f"episodes per row (default {DEFAULT_EPISODES}: a quick look; a "
+                         "suite's split has " + ", ".join(
+                             f"{n} {split}" for split, n in SPLIT_SIZES.items()) + " tasks)")
     add_seed(parser, "the tasks (episode i of random tasks resets with SEED+i) and planners")
-    parser.add_argument("--env-id", default="dlo_env/DLOEndpoint-v0", help="environment")
+    add_env(parser, "dlo_env/DLOEndpoint-v0", "the environment", dest="env_id", alias=True)
     add_model(parser)
-    parser.add_argument("--transition-model", default=None,
-                        help="transition model file, or folder holding transition.pt, for "
-                             "latent-mpc and latent-tree-kino (None: the shipped one)")
+    add_transition_model(parser)
     add_planner_flags(parser)
     add_backend(parser, "this process, one row after the other")
     add_out(parser, "evaluate", "<agent>-<difficulty>.csv/.json and summary.json")
@@ -86,11 +89,16 @@ def run(args: argparse.Namespace) -> int:
 
     from dlo_bench.agents import agent_spec, load_shape_model
     from dlo_bench.report import format_divergence, format_table, write_evaluation, write_summaries
-    from dlo_env.tasks import suite_seeds
+    from dlo_env.tasks import SPLIT_SIZES
 
-    specs = [agent_spec(agent) for agent in args.agent]  # unknown names fail before any work
-    for suite in args.suite or []:
-        suite_seeds(suite, args.split)
+    specs = [agent_spec(agent) for agent in args.agent]
+    for spec in specs:  # every row's agent must act in --env before the first row runs
+        if args.env_id not in spec.environments:
+            raise ValueError(f"--agent {spec.name} acts in {', '.join(spec.environments)}, "
+                             f"not in --env {args.env_id}")
+    if args.suite and args.episodes > SPLIT_SIZES[args.split]:
+        raise ValueError(f"--episodes must be at most the {SPLIT_SIZES[args.split]} tasks of "
+                         f"a suite's {args.split} split, got {args.episodes}")
     backend = backend_of(args)
     settings = {k: v for k, v in vars(args).items() if not k.startswith("_")}
     model = None

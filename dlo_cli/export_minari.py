@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import argparse
 
-from dlo_cli.flags import positive_int
+from dlo_cli.flags import add_env, positive_int
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
@@ -25,8 +25,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                              "minari.load_dataset finds them)")
     parser.add_argument("--suite", nargs="+", default=list(SUITES), choices=list(SUITES),
                         help="suites whose train-split demonstrations are exported")
-    parser.add_argument("--env", nargs="+", default=list(ENVIRONMENTS),
-                        choices=list(ENVIRONMENTS), help="environments of the demonstrations")
+    add_env(parser, list(ENVIRONMENTS), "environments of the demonstrations",
+            accepted=ENVIRONMENTS, several=True)
     parser.add_argument("--limit", type=positive_int, default=None,
                         help="only the first LIMIT train tasks of each suite (None: all 200)")
     parser.add_argument("--no-demonstrations", action="store_true",

@@ -4,10 +4,12 @@ from __future__ import annotations
 
 import argparse
 
+from dlo_cli.flags import add_seed, existing_path, positive_int
+
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     """Flags of ``dlo finetune``."""
-    parser.add_argument("--model", required=True,
+    parser.add_argument("--model", required=True, type=existing_path("shape model"),
                         help="model folder (holding model.pt) or model.pt file to improve")
     parser.add_argument("--shapes", required=True,
                         help=".npz with a 'shapes' array (N, n, 2) in metres the model should "
@@ -20,12 +22,12 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                              "file recorded in the model, when it exists)")
     parser.add_argument("--out", default=None,
                         help="output folder for the new model.pt (None: runs/finetune)")
-    parser.add_argument("--gan-steps", type=int, default=None,
+    parser.add_argument("--gan-steps", type=positive_int, default=None,
                         help="GAN steps of the additional training (None: FinetuneConfig's)")
-    parser.add_argument("--encoder-steps", type=int, default=None,
+    parser.add_argument("--encoder-steps", type=positive_int, default=None,
                         help="Encoder steps of the additional training (None: FinetuneConfig's)")
-    parser.add_argument("--seed", type=int, default=0, help="seed of the training")
-    parser.add_argument("--report-size", type=int, default=1000,
+    add_seed(parser, "the training")
+    parser.add_argument("--report-size", type=positive_int, default=1000,
                         help="held-out reference and inversion shapes per report")
     parser.add_argument("--device", default="auto",
                         help="torch device: auto (cuda if available), cpu or cuda")

@@ -1,27 +1,37 @@
 """The flags several commands share, defined once so they read the same everywhere.
 
 Defaults come from the config dataclasses and the agent registry; ``docs/cli.md`` lists them.
+Every value a flag takes is checked while the command line is parsed (the argparse ``type`` of
+the flag), so a bad one is a one-line error before any work starts.
 """
 
 from __future__ import annotations
 
 import argparse
 import math
-from collections.abc import Callable
+from collections.abc import Callable, Iterable
 from typing import Any
+
+#: Episodes per row of the quick commands (``dlo evaluate``, ``dlo demo``): a look at an agent
+#: in a minute, not a measurement. ``dlo benchmark`` runs whole test splits instead (50 tasks
+#: per cell, ``dlo_bench.benchmark.BenchmarkConfig.episodes``).
+DEFAULT_EPISODES = 10
+#: Largest seed: ``numpy.random.seed``, which Stable-Baselines3 calls, takes 32-bit seeds.
+MAX_SEED = 2**32 - 1
 
 
 def number_in(kind: type, low: float | None = None, high: float | None = None,
-              expected: str = "") -> Callable[[str], Any]:
-    """An argparse type: a finite ``kind`` (int or float) in ``[low, high]``, else a message
-    saying what was ``expected``."""
+              expected: str = "", *, low_open: bool = False) -> Callable[[str], Any]:
+    """An argparse type: a finite ``kind`` (int or float) in ``[low, high]`` (``(low, high]``
+    with ``low_open``), else a message saying what was ``expected``."""
 
     def parse(text: str) -> Any:
         try:
             value = kind(text)
         except ValueError:
             value = None
-        if value is None or not math.isfinite(value) or (low is not None and value < low) or (
+        if value is None or not math.isfinite(value) or (low is not None and (
+                value <= low if low_open else value < low)) or (
                 high is not None and value > high):
             raise argparse.ArgumentTypeError(f"expected {expected}, got {text!r}")
         return value
@@ -31,6 +41,85 @@ def number_in(kind: type, low: float | None = None, high: float | None = None,
 
 #: An argparse type: an integer >= 1.
 positive_int = number_in(int, 1, expected="a positive integer")
+#: An argparse type: a number > 0.
+positive_float = number_in(float, 0.0, expected="a number > 0", low_open=True)
+#: An argparse type: a seed, an integer from 0 to ``MAX_SEED``.
+seed_int = number_in(int, 0, MAX_SEED, expected=f"an integer from 0 to {MAX_SEED}")
+
+
+def env_id_type(accepted: Iterable[str]) -> Callable[[str], str]:
+    """An argparse type: one of the environment ids ``accepted``, given in full
+    (``dlo_env/DLOEndpoint-v0``), bare (``DLOEndpoint-v0``) or module-qualified as
+    ``gymnasium.make`` takes it (``dlo_env:dlo_env/DLOEndpoint-v0``); returns the full id."""
+    ids = tuple(accepted)
+    names = {i.split("/")[-1]: i for i in ids}
+
+    def parse(text: str) -> str:
+        module, sep, rest = text.partition(":")
+        full = rest if sep and module == "dlo_env" else text
+        if full in ids:
+            return full
+        if full in names:
+            return names[full]
+        raise argparse.ArgumentTypeError(
+            f"expected one of {', '.join(ids)} (or {', '.join(names)}, or dlo_env:ID), "
+            f"got {text!r}")
+
+    return parse
+
+
+def add_env(parser: argparse.ArgumentParser, default: str | list[str], what: str,
+            accepted: Iterable[str] | None = None, dest: str = "env",
+            several: bool = False, alias: bool = False) -> None:
+    """``--env``: the environment (``several``: one or more), by id or bare name.
+
+    Args:
+        parser: The command's parser.
+        default: The default id (a list with ``several``).
+        what: What the environment is used for, for the help.
+        accepted: The ids the command accepts (None: every id of ``dlo_env.envs``).
+        dest: Attribute of the parsed flags.
+        several: Take one or several ids.
+        alias: Also take ``--env-id``, the deprecated name of the flag (hidden from the help).
+    """
+    if accepted is None:
+        from dlo_env.envs import ENVIRONMENTS
+
+        accepted = ENVIRONMENTS
+    ids = tuple(accepted)
+    kind = env_id_type(ids)
+    nargs = "+" if several else None
+    parser.add_argument("--env", type=kind, nargs=nargs, default=default, dest=dest,
+                        metavar="ENV_ID",
+                        help=f"{what}: {' or '.join(ids)} (a bare name such as "
+                             f"{ids[0].split('/')[-1]} works too)")
+    if alias:
+        parser.add_argument("--env-id", type=kind, nargs=nargs, dest=dest,
+                            default=argparse.SUPPRESS, help=argparse.SUPPRESS)
+
+
+def add_episodes(parser: argparse.ArgumentParser, what: str,
+                 default: int = DEFAULT_EPISODES) -> None:
+    """``--episodes``: episodes of every row of a quick command (``DEFAULT_EPISODES``)."""
+    parser.add_argument("--episodes", type=positive_int, default=default, help=what)
+
+
+class HelpFormatter(argparse.ArgumentDefaultsHelpFormatter):
+    """Help with each flag's default stated once: ``(default: X)`` is added only to a help
+    that does not already say its default (``default``, or what ``None:`` means), never to an
+    on/off flag, a required one or a default of None (the help says what leaving the flag out
+    does), and lists read as on the command line (``1 2 3``)."""
+
+    def _get_help_string(self, action: argparse.Action) -> str | None:
+        text = action.help or ""
+        default = action.default
+        if (default is argparse.SUPPRESS or default is None or action.nargs == 0 or action.required
+                or not action.option_strings or "default" in text.lower() or "None:" in text
+                or "%(default)" in text):
+            return text
+        if isinstance(default, (list, tuple)):
+            default = " ".join(map(str, default))
+        return f"{text} (default: {str(default).replace('%', '%%')})"
 
 
 def add_out(parser: argparse.ArgumentParser, command: str, what: str) -> None:
@@ -40,35 +129,83 @@ def add_out(parser: argparse.ArgumentParser, command: str, what: str) -> None:
     parser.add_argument("--out", default=str(default_out(command)), help=f"folder for {what}")
 
 
+def existing_path(what: str) -> Callable[[str], str]:
+    """An argparse type: a file or folder that exists, else a message naming ``what``."""
+
+    def parse(text: str) -> str:
+        from pathlib import Path
+
+        if not Path(text).exists():
+            raise argparse.ArgumentTypeError(f"no {what} file or folder at {text!r}")
+        return text
+
+    return parse
+
+
 def add_model(parser: argparse.ArgumentParser) -> None:
     """``--model``: the shape model of the latent-tree agents."""
-    parser.add_argument("--model", default=None,
+    parser.add_argument("--model", type=existing_path("shape model"), default=None,
                         help="shape model file, or folder holding model.pt, for the latent-tree "
                              "agents (None: the shipped latent_model/pretrained/model.pt)")
 
 
-def add_agent(parser: argparse.ArgumentParser, default: list[str] | None) -> None:
-    """``--agent``: one or several registered agent names."""
+def add_transition_model(parser: argparse.ArgumentParser) -> None:
+    """``--transition-model``: the transition model of latent-mpc and latent-tree-kino."""
+    parser.add_argument("--transition-model", type=existing_path("transition model"),
+                        default=None,
+                        help="transition model file, or folder holding transition.pt, for "
+                             "latent-mpc and latent-tree-kino (None: the shipped "
+                             "latent_model/pretrained/transition.pt)")
+
+
+def agent_type(sb3: bool = True) -> Callable[[str], str]:
+    """An argparse type: a registered agent name, or (``sb3``) ``sb3:PATH``."""
+
+    def parse(text: str) -> str:
+        from dlo_bench.agents import AGENTS, agent_spec
+
+        if not sb3 and text not in AGENTS:
+            raise argparse.ArgumentTypeError(
+                f"agent name must be one of {', '.join(AGENTS)}, got {text!r}")
+        try:
+            agent_spec(text)
+        except ValueError as exc:
+            raise argparse.ArgumentTypeError(str(exc)) from None
+        return text
+
+    return parse
+
+
+def add_agent(parser: argparse.ArgumentParser, default: list[str] | None,
+              sb3: bool = True) -> None:
+    """``--agent``: one or several registered agent names (``sb3``: or ``sb3:PATH``)."""
     from dlo_bench.agents import AGENTS, SB3_PREFIX
 
     names = "; ".join(f"{name}: {spec.summary}" for name, spec in AGENTS.items())
-    parser.add_argument("--agent", nargs="+", default=default, required=default is None,
-                        metavar="AGENT",
-                        help=f"one or several agents. {names}; {SB3_PREFIX}PATH: a folder written "
-                             "by `dlo baseline`")
+    folder = f"; {SB3_PREFIX}PATH: a folder written by `dlo baseline`" if sb3 else ""
+    parser.add_argument("--agent", type=agent_type(sb3), nargs="+", default=default,
+                        required=default is None, metavar="AGENT",
+                        help=f"one or several agents. {names}{folder}")
+
+
+def difficulty_type() -> Callable[[str], int]:
+    """An argparse type: a task difficulty, 1 to ``dlo_env.tasks.MAX_DIFFICULTY``."""
+    from dlo_env.tasks import MAX_DIFFICULTY
+
+    return number_in(int, 1, MAX_DIFFICULTY, expected=f"an integer from 1 to {MAX_DIFFICULTY}")
 
 
 def add_difficulty(parser: argparse.ArgumentParser | argparse._MutuallyExclusiveGroup,
                    default: list[int] | None, what: str) -> None:
     """``--difficulty``: one or several task difficulties (straight moves from start to goal)."""
-    parser.add_argument("--difficulty", type=positive_int, nargs="+", default=default,
+    parser.add_argument("--difficulty", type=difficulty_type(), nargs="+", default=default,
                         metavar="K", help=f"difficulty, one or several: K straight moves from "
                                           f"start to goal; {what}")
 
 
-def add_seed(parser: argparse.ArgumentParser, what: str) -> None:
-    """``--seed``."""
-    parser.add_argument("--seed", type=int, default=0, help=f"seed of {what}")
+def add_seed(parser: argparse.ArgumentParser, what: str, default: int = 0) -> None:
+    """``--seed``: an integer from 0 to ``MAX_SEED``."""
+    parser.add_argument("--seed", type=seed_int, default=default, help=f"seed of {what}")
 
 
 def add_planner_flags(parser: argparse.ArgumentParser) -> None:
@@ -77,8 +214,8 @@ def add_planner_flags(parser: argparse.ArgumentParser) -> None:
 
     parser.add_argument("--replan-every", type=positive_int, default=AgentOptions.replan_every,
                         help="steps between the plan checks of latent-tree-closed")
-    parser.add_argument("--max-seconds", type=float, default=AgentOptions.max_seconds,
-                        help="time budget of one latent-tree plan, seconds (None: the "
+    parser.add_argument("--max-seconds", type=positive_float, default=AgentOptions.max_seconds,
+                        help="time budget of one latent-tree plan, seconds > 0 (None: the "
                              "planner's TreeConfig.max_seconds)")
     add_threads(parser)
     parser.add_argument("--no-fidelity", action="store_true",

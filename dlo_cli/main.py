@@ -3,7 +3,9 @@
 Each subcommand lives in its own module of this package, which provides
 ``add_arguments(parser)`` and ``run(args) -> int``; a module imports what its job needs inside
 ``run``, so ``dlo collect`` works on the core install. Errors a user can act on are turned into
-one line by :func:`main` (see :mod:`dlo_cli.errors`).
+one line by :func:`main` (see :mod:`dlo_cli.errors`): a bad flag value while the command line
+is parsed (the flag types of :mod:`dlo_cli.flags`), anything else before the command's work
+starts.
 """
 
 from __future__ import annotations
@@ -13,8 +15,10 @@ import importlib
 import os
 import sys
 from importlib import metadata
+from typing import NoReturn
 
-from dlo_cli.errors import EXIT_INTERRUPTED, EXIT_USER_ERROR, user_error_message
+from dlo_cli.errors import EXIT_INTERRUPTED, EXIT_USER_ERROR, UsageError, user_error_message
+from dlo_cli.flags import HelpFormatter
 
 DESCRIPTION = ("dlo: a cord on a table as goal-conditioned Gymnasium environments, a GAN shape "
                "model, latent-space planners and a benchmark. Every command writes under "
@@ -24,8 +28,10 @@ EPILOG = "Run `dlo COMMAND --help` for a command's flags; docs/cli.md explains t
 #: subcommand -> (module, one-line help)
 COMMANDS: dict[str, tuple[str, str]] = {
     "demo": ("dlo_cli.demo", "plan and execute a few tasks with the shipped model (start here)"),
-    "collect": ("dlo_cli.collect", "collect a dataset of cord shapes from the simulator"),
-    "train": ("dlo_cli.train", "train the GAN and the encoder on a shape dataset"),
+    "collect": ("dlo_cli.collect", "collect cord shapes or, with --kind transitions, one-move "
+                                   "transitions from the simulator"),
+    "train": ("dlo_cli.train", "train the shape model (GAN + encoder) on shapes or, with --stage "
+                               "transition, the transition model on transitions"),
     "finetune": ("dlo_cli.finetune", "additional training on shapes the model cannot represent"),
     "evaluate": ("dlo_cli.evaluate", "score agents on random tasks or named suites"),
     "baseline": ("dlo_cli.baseline", "train a Stable-Baselines3 baseline"),
@@ -42,9 +48,17 @@ def _version() -> str:
         return "unknown (not installed)"
 
 
+class CommandParser(argparse.ArgumentParser):
+    """An argument parser whose errors are one line (:class:`UsageError`), not usage + exit."""
+
+    def error(self, message: str) -> NoReturn:
+        """Raise the error as one line naming the command, as :func:`main` prints it."""
+        raise UsageError(f"{self.prog}: error: {message}")
+
+
 def build_parser() -> argparse.ArgumentParser:
     """The argument parser with one subparser per subcommand."""
-    parser = argparse.ArgumentParser(prog="dlo", description=DESCRIPTION, epilog=EPILOG)
+    parser = CommandParser(prog="dlo", description=DESCRIPTION, epilog=EPILOG)
     parser.add_argument("--version", action="version", version=f"dlo {_version()}")
     parser.add_argument("--debug", action="store_true",
                         help="show the full traceback of an error instead of one line")
@@ -52,7 +66,7 @@ def build_parser() -> argparse.ArgumentParser:
     for name, (module_name, help_text) in COMMANDS.items():
         module = importlib.import_module(module_name)
         p = sub.add_parser(name, help=help_text, description=help_text,
-                           formatter_class=argparse.ArgumentDefaultsHelpFormatter)
+                           formatter_class=HelpFormatter)
         p.add_argument("--debug", action="store_true", default=argparse.SUPPRESS,
                        help="show the full traceback of an error instead of one line")
         module.add_arguments(p)
@@ -63,11 +77,19 @@ def build_parser() -> argparse.ArgumentParser:
 def main(argv: list[str] | None = None) -> int:
     """Run the ``dlo`` command line; returns the exit code.
 
-    An error the user can act on (bad input, a missing or corrupt file, a missing optional
-    dependency) prints one line on stderr and returns 2; ``--debug`` raises it instead.
+    An error the user can act on (a bad flag, bad input, a missing or corrupt file, a missing
+    optional dependency) prints one line on stderr and returns 2; ``--debug`` raises it instead
+    (a bad flag has no traceback worth showing: it is always one line).
     """
     parser = build_parser()
-    args = parser.parse_args(argv)
+    try:
+        args, unknown = parser.parse_known_args(argv)
+        if unknown:  # named with the command (argparse's own message names only `dlo`)
+            where = f"dlo {args.command}" if args.command else "dlo"
+            raise UsageError(f"{where}: error: unrecognized arguments: {' '.join(unknown)}")
+    except UsageError as exc:  # a bad command line: one line, before any work
+        print(exc, file=sys.stderr)
+        return EXIT_USER_ERROR
     if not hasattr(args, "_run"):
         parser.print_help()
         return EXIT_USER_ERROR

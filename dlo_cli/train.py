@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import argparse
 
-from dlo_cli.flags import number_in, positive_int
+from dlo_cli.flags import add_seed, number_in, positive_float, positive_int
 
 non_negative_int = number_in(int, 0, expected="an integer >= 0")
 non_negative_float = number_in(float, 0.0, expected="a number >= 0")
@@ -87,10 +87,10 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--miss-margin", type=non_negative_float, default=None,
                         help="--stage transition: error (metres, mean over points) above which "
                              "--miss-weight applies (None: 0.005)")
-    parser.add_argument("--lr", type=float, default=None,
+    parser.add_argument("--lr", type=positive_float, default=None,
                         help="--stage transition: starting learning rate (None: "
                              "TransitionTrainConfig's; lower it when fine-tuning with --init)")
-    parser.add_argument("--minutes", type=float, default=None,
+    parser.add_argument("--minutes", type=non_negative_float, default=None,
                         help="training wall time of the GAN and Encoder, evaluations excluded "
                              f"(None: {SHAPE_DEFAULTS['minutes']:g})")
     parser.add_argument("--gan-steps", type=positive_int, default=None,
@@ -98,7 +98,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--encoder-steps", type=positive_int, default=None,
                         help="train the Encoder for this many steps instead of minutes")
     parser.add_argument("--device", default="auto", help="auto (cuda if available), cpu, cuda")
-    parser.add_argument("--seed", type=int, default=0, help="seed of the training")
+    add_seed(parser, "the training")
     parser.add_argument("--representation", choices=("canonical", "world"), default=None,
                         help="canonical (default) or world (the paper's)")
     parser.add_argument("--output", choices=("angles", "points"), default=None,

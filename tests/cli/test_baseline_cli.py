@@ -40,7 +40,7 @@ def test_baseline_rejects_an_unknown_setting(tmp_path, capsys):
     code = main(["baseline", "--algo", "ppo", "--set", "learning_rte=0.1", "--out",
                  str(tmp_path)])
     assert code == 2
-    assert "unknown keys" in capsys.readouterr().err
+    assert "--set learning_rte: unknown key" in capsys.readouterr().err
 
 
 def test_evaluate_reports_a_folder_without_a_baseline(tmp_path, capsys):

@@ -45,17 +45,20 @@ def test_quick_benchmark_writes_every_agent_and_difficulty(models, tmp_path, cap
     code = main(["benchmark", "--quick", "--episodes", "1", "--difficulty", "1",
                  "--env", "dlo_env/DLOEndpoint-v0", "--baselines", str(models),
                  "--model", str(models / "shape.pt"), "--max-seconds", "0.05",
-                 "--replan-every", "50", "--out", str(out)])
+                 "--replan-every", "50", "--allow-dirty", "--out", str(out)])
     assert code == 0
     printed = capsys.readouterr().out
-    assert "Planning time physics-mpc / latent-tree on the same episodes" in printed
-    assert "Planning time physics-mpc / latent-mpc on the same episodes" in printed
+    run = printed.splitlines()[0].split()[2].rstrip(":")  # "benchmark run RUN: ..."
+    for fast in ("latent-tree", "latent-mpc"):  # all cells of one invocation: comparable
+        assert f"Planning time physics-mpc / {fast} on the same episodes, timed in one run " \
+               f"({run}): " in printed
     rows = json.loads((out / "results.json").read_text())
     assert [r["agent"] for r in rows] == AGENTS and {r["difficulty"] for r in rows} == {1}
     for row in rows:
         assert ROW_KEYS <= set(row) and row["status"] == "ok" and row["episodes"] == 1
         assert 0.0 <= row["success_rate"] <= 1.0 and row["median_error"] > 0
         assert row["seconds_per_episode"] > 0
+    assert {r["run"] for r in rows} == {run}
     assert {r["training_env_steps"] for r in rows if r["agent"] in ("ppo", "sac-her")} == {256}
     costs = {r["agent"]: r["sample_cost"] for r in rows}
     assert costs["sac-her"] == "256 env steps"
@@ -73,7 +76,7 @@ def test_agents_without_a_model_are_reported_not_dropped(tmp_path, capsys):
     out = tmp_path / "bench"
     code = main(["benchmark", "--quick", "--agent", "straight-line", "ppo", "sac-her",
                  "latent-tree", "--difficulty", "1", "2", "--episodes", "1",
-                 "--baselines", str(tmp_path / "none"), "--out", str(out)])
+                 "--baselines", str(tmp_path / "none"), "--allow-dirty", "--out", str(out)])
     assert code == 0
     rows = json.loads((out / "results.json").read_text())
     assert [(r["agent"], r["env"], r["difficulty"]) for r in rows] == [
@@ -98,7 +101,7 @@ def test_agents_without_a_model_are_reported_not_dropped(tmp_path, capsys):
 
 def test_resume_reuses_finished_cells(tmp_path, capsys):
     args = ["benchmark", "--agent", "straight-line", "--difficulty", "1", "--episodes", "1",
-            "--env", "dlo_env/DLOEndpoint-v0", "--out", str(tmp_path)]
+            "--env", "dlo_env/DLOEndpoint-v0", "--allow-dirty", "--out", str(tmp_path)]
     assert main(args) == 0
     first = json.loads((tmp_path / "results.json").read_text())
     capsys.readouterr()
@@ -110,4 +113,4 @@ def test_resume_reuses_finished_cells(tmp_path, capsys):
 
 def test_benchmark_rejects_an_unknown_agent(tmp_path, capsys):
     assert main(["benchmark", "--agent", "teleport", "--out", str(tmp_path)]) == 2
-    assert "agents must be" in capsys.readouterr().err
+    assert "argument --agent: agent name must be one of" in capsys.readouterr().err

@@ -1,0 +1,106 @@
+"""A bad command line is refused before any work starts.
+
+Every case below prints exactly one line on stderr, ``dlo COMMAND: error: ...`` naming the flag
+and the value given, returns exit status 2 with no traceback, and writes nothing: no progress
+bar, no training, no output folder. The values a flag takes are checked while the command line
+is parsed (``dlo_cli.flags``); what depends on several flags is checked first thing in ``run``.
+"""
+
+from __future__ import annotations
+
+import pytest
+
+from dlo_cli.main import main
+
+NOPE_ENV = "dlo_env/Nope-v0"
+ACCEPTED_ENVS = ("dlo_env/DLOEndpoint-v0", "dlo_env/DLODualEndpoint-v0")
+
+#: (command line with OUT for the output folder, the flag the line names, other words it holds)
+CASES = [
+    # One name for the environment on every command; unknown ids name the ids accepted.
+    ("evaluate --agent straight-line --env dlo_env/Nope-v0 --out OUT", "--env",
+     (NOPE_ENV, *ACCEPTED_ENVS)),
+    ("evaluate --agent straight-line --env Nope --out OUT", "--env", ("'Nope'", *ACCEPTED_ENVS)),
+    ("evaluate --agent straight-line --env-id Nope --out OUT", "--env-id", ACCEPTED_ENVS),
+    ("baseline --algo ppo --env dlo_env/Nope-v0 --out OUT", "--env", (NOPE_ENV, *ACCEPTED_ENVS)),
+    ("baseline --algo ppo --env-id Nope --out OUT", "--env-id", ACCEPTED_ENVS),
+    ("benchmark --env dlo_env/Nope-v0 --out OUT", "--env", (NOPE_ENV, *ACCEPTED_ENVS)),
+    ("benchmark --env DLOEndpoint-v0 Nope --out OUT", "--env", ("'Nope'",)),
+    ("export-minari --env dlo_env/Nope-v0 --root OUT", "--env", (NOPE_ENV, *ACCEPTED_ENVS)),
+    ("evaluate --agent straight-line --env gymnasium:dlo_env/DLOEndpoint-v0 --out OUT", "--env",
+     ("gymnasium:",)),
+    # Seeds are integers from 0 to 2**32 - 1 everywhere.
+    ("evaluate --agent straight-line --seed -5 --out OUT", "--seed", ("'-5'", "from 0")),
+    ("evaluate --agent straight-line --seed 4294967296 --out OUT", "--seed", ("4294967296",)),
+    ("baseline --algo ppo --seed -5 --out OUT", "--seed", ("'-5'",)),
+    ("benchmark --seed -5 --out OUT", "--seed", ("'-5'",)),
+    ("collect --num-shapes 10 --seed -5 --out OUT/d.npz", "--seed", ("'-5'",)),
+    ("train --data OUT/d.npz --seed -5 --out OUT", "--seed", ("'-5'",)),
+    ("finetune --seed 1.5 --model OUT --shapes OUT/s.npz --out OUT", "--seed", ("'1.5'",)),
+    # Difficulties are those of the tasks: 1 to dlo_env.tasks.MAX_DIFFICULTY.
+    ("evaluate --agent straight-line --difficulty 7 --out OUT", "--difficulty",
+     ("'7'", "from 1 to 5")),
+    ("evaluate --agent straight-line --difficulty 1 0 --out OUT", "--difficulty", ("'0'",)),
+    ("baseline --algo ppo --difficulty 7 --out OUT", "--difficulty", ("'7'", "from 1 to 5")),
+    ("benchmark --difficulty 7 --out OUT", "--difficulty", ("'7'", "from 1 to 5")),
+    # A planning budget is a number of seconds > 0.
+    ("evaluate --agent straight-line --max-seconds -1 --out OUT", "--max-seconds", ("'-1'",)),
+    ("evaluate --agent straight-line --max-seconds 0 --out OUT", "--max-seconds", ("'0'",)),
+    ("benchmark --max-seconds -1 --out OUT", "--max-seconds", ("'-1'",)),
+    ("benchmark --max-seconds nan --out OUT", "--max-seconds", ("'nan'",)),
+    # Episodes: at least 1, and no more than a suite's split holds.
+    ("evaluate --agent straight-line --episodes 0 --out OUT", "--episodes", ("'0'",)),
+    ("evaluate --agent straight-line --suite linear-1 --episodes 51 --out OUT", "--episodes",
+     ("50", "51")),
+    ("benchmark --episodes 0 --out OUT", "--episodes", ("'0'", "1 to 50")),
+    ("benchmark --episodes 51 --out OUT", "--episodes", ("'51'", "1 to 50")),
+    # Others found by trying.
+    ("evaluate --agent teleport --out OUT", "--agent", ("'teleport'", "straight-line")),
+    ("benchmark --agent teleport --out OUT", "--agent", ("'teleport'", "straight-line")),
+    ("benchmark --agent sb3:runs/ppo --out OUT", "--agent", ("sb3:runs/ppo",)),
+    ("evaluate --out OUT", "--agent", ("required",)),
+    ("evaluate --agent straight-line --split nope --out OUT", "--split", ("'nope'", "test")),
+    ("evaluate --agent straight-line --suite linear-9 --out OUT", "--suite",
+     ("'linear-9'", "linear-1")),
+    ("evaluate --agent latent-tree --model OUT/none.pt --out OUT", "--model", ("none.pt",)),
+    ("evaluate --agent latent-mpc --transition-model OUT/none.pt --out OUT",
+     "--transition-model", ("none.pt",)),
+    ("benchmark --model OUT/none.pt --out OUT", "--model", ("none.pt",)),
+    ("evaluate --agent latent-tree --env DLODualEndpoint-v0 --out OUT", "--env",
+     ("--agent latent-tree", "dlo_env/DLODualEndpoint-v0")),
+    ("evaluate --agent straight-line --threads 0 --out OUT", "--threads", ("'0'",)),
+    ("evaluate --agent straight-line --address auto --out OUT", "--address", ("--backend ray",)),
+    ("evaluate --agent straight-line --bogus --out OUT", "--bogus", ("unrecognized",)),
+    ("baseline --algo nope --out OUT", "--algo", ("'nope'", "sac-her")),
+    ("baseline --algo ppo --timesteps 0 --out OUT", "--timesteps", ("'0'",)),
+    ("baseline --algo ppo --set seed=-5 --out OUT", "--set seed", ("--seed",)),
+    ("baseline --algo ppo --set learning_rte=0.1 --out OUT", "--set learning_rte",
+     ("unknown key",)),
+    ("export-minari --suite linear-9 --root OUT", "--suite", ("'linear-9'",)),
+    ("export-minari --limit 0 --root OUT", "--limit", ("'0'",)),
+    ("export-minari --no-demonstrations --root OUT", "--no-demonstrations", ("--transitions",)),
+    ("collect --num-shapes 10 --out OUT/d.txt", "--out", ("d.txt", ".npz")),
+    ("train --stage transition --data OUT/d.npz --lr -1 --out OUT", "--lr", ("'-1'",)),
+    ("finetune --model OUT/none --shapes OUT/s.npz --out OUT", "--model", ("none",)),
+]
+
+
+@pytest.mark.parametrize("line, flag, words", CASES, ids=[c[0].replace(" OUT", "")
+                                                        for c in CASES])
+def test_a_bad_input_is_one_line_naming_the_flag_before_any_work(line, flag, words, tmp_path,
+                                                                  capsys):
+    out = tmp_path / "out"
+    argv = line.replace("OUT", str(out)).split()
+    code = main(argv)
+    captured = capsys.readouterr()
+    lines = [text for text in captured.err.splitlines() if text.strip()]
+    assert code == 2, captured.err
+    assert len(lines) == 1, captured.err
+    assert "Traceback" not in captured.err
+    assert lines[0].startswith(f"dlo {argv[0]}: error: "), lines[0]
+    assert flag in lines[0]
+    for word in words:
+        assert word in lines[0], lines[0]
+    assert captured.out == ""
+    assert not out.exists()
+
