@@ -20,24 +20,43 @@ COSINE_THRESHOLD = 0.25
 SEGMENT_TOLERANCE = 0.05
 
 
+def unflatten(shapes: object, n_points: int | None = None, dtype: type = np.float64
+              ) -> np.ndarray:
+    """``shapes`` as points ``(..., n, 2)``: flat shapes ``(2n,)`` or ``(B, 2n)``, as
+    observations hold them, are reshaped; ``(..., n, 2)`` arrays are returned as they are.
+
+    Args:
+        shapes: One shape or a batch, flat or as points.
+        n_points: The cord's points, if known: a flat shape must then have ``2 * n_points``
+            numbers. Without it, any last axis other than 2 of even length is a flat shape.
+        dtype: The array's dtype.
+    """
+    arr = np.asarray(shapes, dtype=dtype)
+    if arr.ndim in (1, 2) and arr.shape[-1] != 2 and arr.shape[-1] % 2 == 0 and (
+            n_points is None or arr.shape[-1] == 2 * n_points):
+        arr = arr.reshape(arr.shape[:-1] + (arr.shape[-1] // 2, 2))
+    return arr
+
+
 def error(a: np.ndarray, b: np.ndarray) -> np.ndarray | float:
     """Mean over points of the Euclidean distance between corresponding points.
 
     Args:
-        a: Shape ``(..., n, 2)``.
-        b: Shape ``(..., n, 2)``, broadcastable against ``a``.
+        a: Shape ``(..., n, 2)``, or flat ``(2n,)`` / ``(B, 2n)``.
+        b: Shape ``(..., n, 2)`` (or flat), broadcastable against ``a``.
 
     Returns:
         The distance in metres, of shape ``a.shape[:-2]`` (a float for single shapes).
     """
-    d = np.linalg.norm(np.asarray(a, dtype=np.float64) - np.asarray(b, dtype=np.float64), axis=-1)
+    d = np.linalg.norm(unflatten(a) - unflatten(b), axis=-1)
     out = d.mean(axis=-1)
     return float(out) if out.ndim == 0 else out
 
 
 def max_error(a: np.ndarray, b: np.ndarray) -> np.ndarray | float:
-    """Largest per-point Euclidean distance between two shapes (or batches), metres."""
-    d = np.linalg.norm(np.asarray(a, dtype=np.float64) - np.asarray(b, dtype=np.float64), axis=-1)
+    """Largest per-point Euclidean distance between two shapes (or batches, flat or as
+    points), metres."""
+    d = np.linalg.norm(unflatten(a) - unflatten(b), axis=-1)
     out = d.max(axis=-1)
     return float(out) if out.ndim == 0 else out
 

@@ -13,7 +13,7 @@ import numpy as np
 import torch
 
 from dlo_env.cord import CordParams
-from dlo_env.shapes import TABLE_HALF
+from dlo_env.shapes import TABLE_HALF, unflatten
 from latent_model import pose
 from latent_model.checkpoint import FORMAT, FORMAT_VERSION, load_checkpoint, save_atomic
 from latent_model.config import ModelConfig, config_from_dict
@@ -128,14 +128,15 @@ class ShapeModel:
 
     # ------------------------------------------------------------- conversion
     def _shapes_in(self, shapes: Any, name: str = "shapes") -> tuple[torch.Tensor, bool]:
-        arr = np.asarray(shapes, dtype=np.float32)
+        n = self.config.n_points
+        arr = unflatten(shapes, n, dtype=np.float32)  # flat shapes, as observations hold them
         single = arr.ndim == 2
         if single:
             arr = arr[None]
-        n = self.config.n_points
         if arr.ndim != 3 or arr.shape[1:] != (n, 2):
             raise ValueError(
-                f"{name} must have shape ({n}, 2) or (B, {n}, 2), got {np.shape(shapes)}"
+                f"{name} must have shape ({n}, 2), ({2 * n},), (B, {n}, 2) or (B, {2 * n}), "
+                f"got {np.shape(shapes)}"
             )
         if not np.isfinite(arr).all():
             raise ValueError(f"{name} must be finite, got NaN or infinite coordinates")

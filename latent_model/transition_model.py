@@ -32,7 +32,7 @@ from torch import nn
 
 from dlo_env.checks import non_negative, positive, positive_ints
 from dlo_env.cord import CordParams, reachable_targets
-from dlo_env.shapes import TABLE_HALF
+from dlo_env.shapes import TABLE_HALF, unflatten
 from dlo_env.tasks import DEFAULT_MAX_STEP
 from latent_model.checkpoint import load_checkpoint, save_atomic
 from latent_model.config import config_from_dict
@@ -507,9 +507,8 @@ class TransitionModel(nn.Module):
         if grasp not in GRASP_CODES:
             raise ValueError(f"grasp must be one of {tuple(GRASP_CODES)}, got {grasp!r}")
         n = self.config.n_points
-        arr = np.ascontiguousarray(shapes, dtype=np.float32)
-        if arr.ndim >= 1 and arr.shape[-1] == 2 * n and arr.ndim in (1, 2):
-            arr = arr.reshape(arr.shape[:-1] + (n, 2))  # flat shapes, as observations hold
+        # flat shapes, as observations hold them, too
+        arr = np.ascontiguousarray(unflatten(shapes, n, dtype=np.float32))
         single = arr.ndim == 2
         arr = arr[None] if single else arr
         if arr.ndim != 3 or arr.shape[1:] != (n, 2):

@@ -52,6 +52,14 @@ def test_error_and_max_error_work_on_batches():
     np.testing.assert_allclose(max_error(a, b), [0.0, np.hypot(0.1, 0.1)], atol=1e-6)
 
 
+def test_error_and_max_error_take_flat_shapes_as_observations_hold_them():
+    a = np.stack([straight(), straight() + 0.1])
+    b = straight() + np.array([0.0, 0.05])
+    np.testing.assert_allclose(error(a.reshape(2, -1), b.reshape(-1)), error(a, b))
+    np.testing.assert_allclose(max_error(a.reshape(2, -1), b), max_error(a, b))
+    assert error(a[1].reshape(-1), b.reshape(-1)) == pytest.approx(error(a[1], b))
+
+
 def test_a_straight_cord_is_cord_like_and_a_right_angle_is_not():
     bent = straight()
     bent[10:, 0] = bent[9, 0]

@@ -146,10 +146,20 @@ def test_loading_mismatched_weights_is_a_clear_error(model, tmp_path):
         ShapeModel.load(tmp_path / "bad.pt")
 
 
+def test_flat_shapes_as_observations_hold_them_are_accepted(model):
+    shapes = np.stack([np.stack([np.linspace(-0.5, 0.5, 20), np.full(20, y)], axis=1)
+                       for y in (-0.2, 0.3)]).astype(np.float32)
+    np.testing.assert_array_equal(model.encode(shapes.reshape(2, -1)), model.encode(shapes))
+    np.testing.assert_array_equal(model.encode(shapes[0].reshape(-1)), model.encode(shapes[0]))
+    z, err, ok = model.invert(shapes.reshape(2, -1))
+    assert z.shape == (2, model.latent_dim) and err.shape == (2,)
+
+
 @pytest.mark.parametrize(
     ("shapes", "match"),
     [
-        (np.zeros((3, 19, 2)), r"shapes must have shape \(20, 2\) or \(B, 20, 2\)"),
+        (np.zeros((3, 19, 2)), r"shapes must have shape \(20, 2\), \(40,\), \(B, 20, 2\)"),
+        (np.zeros((3, 38)), r"got \(3, 38\)"),
         (np.zeros((3, 20, 3)), r"got \(3, 20, 3\)"),
         (np.full((20, 2), np.nan), "finite"),
     ],
