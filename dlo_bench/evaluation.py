@@ -28,6 +28,11 @@ TRAVEL_BINS = (0.0, 0.05, 0.10, 0.20, 0.30, math.inf)
 MOVE_BINS = 3
 
 
+#: Episodes per row of a quick look (``evaluate``, ``dlo evaluate``, ``dlo demo``): an agent in
+#: a minute, not a measurement. ``dlo benchmark`` runs whole test splits instead (50 tasks per
+#: cell, ``dlo_bench.benchmark.BenchmarkConfig.episodes``).
+DEFAULT_EPISODES = 10
+
 @dataclass(frozen=True)
 class EpisodeRecord:
     """What happened in one episode; distances in metres, times in seconds.
@@ -273,7 +278,7 @@ def evaluate(
     env: Any = "dlo_env/DLOEndpoint-v0",
     difficulty: int | None = None,
     suite: str | None = None,
-    episodes: int = 10,
+    episodes: int = DEFAULT_EPISODES,
     seed: int = 0,
     *,
     split: str = "test",

@@ -2,7 +2,7 @@
 
 Runs latent-mpc (CEM on the learned transition model, the best agent), the paper's latent-tree
 planner (open and closed loop) and the straight-line reference on a handful of random tasks
-(5 of each difficulty 1-3), prints the results table, and writes into the output folder: the
+(10 of each difficulty 1-3), prints the results table, and writes into the output folder: the
 table as JSON and CSV, ``episode.gif`` (latent-mpc on a test task of the hardest named suite,
 linear-5: the real cord, the gripper and the goal in green) and ``interpolation.png`` (the
 paper's Fig. 2: a latent interpolation, next to a plan against the real cord).
@@ -12,7 +12,15 @@ from __future__ import annotations
 
 import argparse
 
-from dlo_cli.flags import add_difficulty, add_model, add_out, add_seed, add_threads, positive_int
+from dlo_cli.flags import (
+    add_difficulty,
+    add_episodes,
+    add_model,
+    add_out,
+    add_seed,
+    add_threads,
+    add_transition_model,
+)
 
 AGENTS = ("straight-line", "latent-tree", "latent-tree-closed", "latent-mpc")
 #: The agent the GIF shows, and how many test tasks of a suite it tries for a solved one.
@@ -24,11 +32,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     """Flags of ``dlo demo``."""
     add_out(parser, "demo", "the tables, episode.gif and interpolation.png")
     add_model(parser)
-    parser.add_argument("--transition-model", default=None,
-                        help="transition model file or folder for latent-mpc (None: the shipped "
-                             "latent_model/pretrained/transition.pt)")
-    parser.add_argument("--episodes", type=positive_int, default=5,
-                        help="tasks per difficulty and agent")
+    add_transition_model(parser)
+    add_episodes(parser, "tasks per difficulty and agent")
     add_difficulty(parser, [1, 2, 3], "random tasks; the GIF shows the hardest")
     add_seed(parser, "the tasks and the planners")
     add_threads(parser)

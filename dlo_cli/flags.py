@@ -12,10 +12,8 @@ import math
 from collections.abc import Callable, Iterable
 from typing import Any
 
-#: Episodes per row of the quick commands (``dlo evaluate``, ``dlo demo``): a look at an agent
-#: in a minute, not a measurement. ``dlo benchmark`` runs whole test splits instead (50 tasks
-#: per cell, ``dlo_bench.benchmark.BenchmarkConfig.episodes``).
-DEFAULT_EPISODES = 10
+from dlo_bench.evaluation import DEFAULT_EPISODES
+
 #: Largest seed: ``numpy.random.seed``, which Stable-Baselines3 calls, takes 32-bit seeds.
 MAX_SEED = 2**32 - 1
 
