@@ -27,7 +27,8 @@ EPILOG = "Run `dlo COMMAND --help` for a command's flags; docs/cli.md explains t
 
 #: subcommand -> (module, one-line help)
 COMMANDS: dict[str, tuple[str, str]] = {
-    "demo": ("dlo_cli.demo", "plan and execute a few tasks with the shipped model (start here)"),
+    "demo": ("dlo_cli.demo", "latent-mpc, the latent tree and the straight line on a few tasks "
+                             "with the shipped models (start here)"),
     "collect": ("dlo_cli.collect", "collect cord shapes or, with --kind transitions, one-move "
                                    "transitions from the simulator"),
     "train": ("dlo_cli.train", "train the shape model (GAN + encoder) on shapes or, with --stage "
