@@ -14,24 +14,26 @@ import math
 import time
 import warnings
 from dataclasses import dataclass, field
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 from dlo_bench.progress import progress_bar
 from planners.interfaces import EpisodeStats, PlanningPolicy, Policy
 
+if TYPE_CHECKING:
+    import gymnasium as gym
+
 #: Bins of the distance the manipulated end has travelled along a plan, metres: the
 #: divergence table reports the mean fidelity error of the planned shapes in each.
 TRAVEL_BINS = (0.0, 0.05, 0.10, 0.20, 0.30, math.inf)
 #: Straight moves of a plan reported one by one in the divergence table; later ones together.
 MOVE_BINS = 3
-
-
 #: Episodes per row of a quick look (``evaluate``, ``dlo evaluate``, ``dlo demo``): an agent in
 #: a minute, not a measurement. ``dlo benchmark`` runs whole test splits instead (50 tasks per
 #: cell, ``dlo_bench.benchmark.BenchmarkConfig.episodes``).
 DEFAULT_EPISODES = 10
+
 
 @dataclass(frozen=True)
 class EpisodeRecord:
@@ -275,7 +277,7 @@ def _run_episode(
 
 def evaluate(
     policy: Policy,
-    env: Any = "dlo_env/DLOEndpoint-v0",
+    env: gym.Env | str = "dlo_env/DLOEndpoint-v0",
     difficulty: int | None = None,
     suite: str | None = None,
     episodes: int = DEFAULT_EPISODES,
@@ -320,6 +322,8 @@ def evaluate(
     if difficulty is not None and suite is not None:
         raise ValueError("give difficulty or suite, not both")
     if env_id is not None:
+        if env != "dlo_env/DLOEndpoint-v0" and env != env_id:
+            raise ValueError("give env (env_id is its deprecated name), not both")
         warnings.warn("evaluate(env_id=...) is deprecated: use env=...", DeprecationWarning,
                       stacklevel=2)
         env = env_id
@@ -332,6 +336,9 @@ def evaluate(
     elif env_kwargs:
         raise ValueError("env_kwargs apply to an environment made from an id; got an "
                          "environment and env_kwargs")
+    elif getattr(env.spec, "max_episode_steps", None) is None:
+        raise ValueError("env must end its episodes: make it with gym.make (which adds the "
+                         "registered TimeLimit) or wrap it in gymnasium.wrappers.TimeLimit")
     spec = getattr(env.unwrapped, "spec", None)
     env_id = spec.id if spec is not None else type(env.unwrapped).__name__
     try:

@@ -38,6 +38,14 @@ def unflatten(shapes: object, n_points: int | None = None, dtype: type = np.floa
     return arr
 
 
+def _points(shapes: object) -> np.ndarray:
+    arr = unflatten(shapes)
+    if arr.ndim < 2 or arr.shape[-1] != 2:
+        raise ValueError(f"shapes must be (..., n, 2) points or flat (2n,) / (B, 2n), got shape "
+                         f"{arr.shape}")
+    return arr
+
+
 def error(a: np.ndarray, b: np.ndarray) -> np.ndarray | float:
     """Mean over points of the Euclidean distance between corresponding points.
 
@@ -48,7 +56,7 @@ def error(a: np.ndarray, b: np.ndarray) -> np.ndarray | float:
     Returns:
         The distance in metres, of shape ``a.shape[:-2]`` (a float for single shapes).
     """
-    d = np.linalg.norm(unflatten(a) - unflatten(b), axis=-1)
+    d = np.linalg.norm(_points(a) - _points(b), axis=-1)
     out = d.mean(axis=-1)
     return float(out) if out.ndim == 0 else out
 
@@ -56,7 +64,7 @@ def error(a: np.ndarray, b: np.ndarray) -> np.ndarray | float:
 def max_error(a: np.ndarray, b: np.ndarray) -> np.ndarray | float:
     """Largest per-point Euclidean distance between two shapes (or batches, flat or as
     points), metres."""
-    d = np.linalg.norm(unflatten(a) - unflatten(b), axis=-1)
+    d = np.linalg.norm(_points(a) - _points(b), axis=-1)
     out = d.max(axis=-1)
     return float(out) if out.ndim == 0 else out
 

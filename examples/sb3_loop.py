@@ -21,7 +21,9 @@ import torch
 
 import dlo_env  # noqa: F401  (registers the environments)
 from dlo_bench import AGENTS, build_agent
-from dlo_env.tasks import load_suite
+from dlo_bench.agents import agent_spec
+from dlo_env.tasks import Task, load_suite
+from planners.interfaces import Policy
 
 
 @dataclass
@@ -43,7 +45,8 @@ def parse_args() -> Args:
     return Args(**vars(parser.parse_args()))
 
 
-def plain_loop(policy, env: gym.Env, tasks, tell_starts: bool) -> list[bool]:
+def plain_loop(policy: Policy, env: gym.Env, tasks: list[Task], tell_starts: bool
+               ) -> list[bool]:
     """Success of each task, one environment, the loop a user writes by hand."""
     solved = []
     for task in tasks:
@@ -63,7 +66,7 @@ def plain_loop(policy, env: gym.Env, tasks, tell_starts: bool) -> list[bool]:
 class TaskSequence(gym.Wrapper):
     """An environment whose resets run ``tasks`` in order (then the last one again)."""
 
-    def __init__(self, env: gym.Env, tasks) -> None:
+    def __init__(self, env: gym.Env, tasks: list[Task]) -> None:
         super().__init__(env)
         self.tasks, self.started = list(tasks), 0
 
@@ -73,7 +76,8 @@ class TaskSequence(gym.Wrapper):
         return self.env.reset(seed=seed, options={"task": task})
 
 
-def vector_loop(policy, env_id: str, tasks, num_envs: int = 2) -> list[bool]:
+def vector_loop(policy: Policy, env_id: str, tasks: list[Task], num_envs: int = 2
+                ) -> list[bool]:
     """Success of each task, ``num_envs`` environments at a time in a Gymnasium vector env
     (one batched ``predict`` per step, no ``episode_start``; finished episodes reset
     themselves, as vector envs do)."""
@@ -89,7 +93,7 @@ def vector_loop(policy, env_id: str, tasks, num_envs: int = 2) -> list[bool]:
             if len(results[i]) < len(shares[i]):
                 results[i].append(bool(infos["is_success"][i]))
     envs.close()
-    return [ok for r in results for ok in r]
+    return [results[k % num_envs][k // num_envs] for k in range(len(tasks))]  # task order
 
 
 if __name__ == "__main__":
@@ -104,12 +108,16 @@ if __name__ == "__main__":
           f"{'seconds':>8}")
     for name in names:
         t0 = time.perf_counter()
+        spec = agent_spec(name)
+        if args.env not in spec.environments:
+            print(f"{name:<20} not run: it acts in {', '.join(spec.environments)}")
+            continue
         try:
-            build_agent(name, env)
-        except (FileNotFoundError, ValueError) as exc:  # no shipped model, another env
+            first = build_agent(name, env)
+        except FileNotFoundError as exc:  # no shipped model for this environment
             print(f"{name:<20} not run: {exc}")
             continue
-        told = plain_loop(build_agent(name, env), env, tasks, tell_starts=True)
+        told = plain_loop(first, env, tasks, tell_starts=True)
         plain = plain_loop(build_agent(name, env), env, tasks, tell_starts=False)
         vector = vector_loop(build_agent(name, env), args.env, tasks)
         print(f"{name:<20} {sum(told):>19} {sum(plain):>8} {sum(vector):>14} "

@@ -68,7 +68,7 @@ def _grasp_argument(grasp: str | None, end: str | None) -> str:
         if grasp is not None:
             raise ValueError(f"give grasp (end is its deprecated name), not both: got "
                              f"grasp={grasp!r} and end={end!r}")
-        warnings.warn("TransitionModel.predict(end=...) is deprecated: use grasp=...",
+        warnings.warn("TransitionModel: end=... is deprecated, use grasp=...",
                       DeprecationWarning, stacklevel=3)
         grasp = end
     if grasp is None:
@@ -466,11 +466,16 @@ class TransitionModel(nn.Module):
         return torch.cat([first[:, :, None], moved[:, :, 1:-1], last[:, :, None]], dim=2)
 
     # ------------------------------------------------------------- numpy API
-    def reachable_moves(self, shapes: np.ndarray, grasp: str, displacement: np.ndarray
+    def reachable_moves(self, shapes: np.ndarray, grasp: str | None = None,
+                        displacement: np.ndarray | None = None, *, end: str | None = None
                         ) -> np.ndarray:
         """``(B, 2, 2)`` displacement of [head, tail] the grippers really make, zero for an end
         not held: the move carried out as ``split_move`` actions, each clipped by the rule of
-        ``Cord.move`` (targets on the table, both ends within the span)."""
+        ``Cord.move`` (targets on the table, both ends within the span). ``end`` is the
+        deprecated name of ``grasp``."""
+        grasp = _grasp_argument(grasp, end)
+        if displacement is None:
+            raise ValueError("displacement is required")
         ends = {"head": [0], "tail": [-1], "both": [0, -1]}[grasp]
         start = shapes[:, ends].astype(np.float64)  # (B, k, 2)
         d = displacement.reshape(len(shapes), len(ends), 2).astype(np.float64)

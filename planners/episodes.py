@@ -15,18 +15,20 @@ before acting when
 
 - ``episode_start`` is true for its environment (SB3's signal), or
 - the goal changed (every ``reset`` of a task draws a new goal), or
-- a held gripper moved farther than one action can move it (``sqrt(2) * max_step``, as each
-  action component is clipped to ``[-1, 1]``): the cord was reset, even to the same goal.
+- a held gripper moved farther than one action can move it (:func:`gripper_reach`): the cord
+  was reset, even to the same goal.
 
-Only an episode that starts exactly where the last one stopped, with the same goal, looks like
-a continuation; pass ``episode_start`` (or call ``reset()``) there. An observation without the
-grippers (only ``achieved_goal`` and ``desired_goal``) is checked by the goal and by the cord
-jumping farther than :data:`JUMP_ERROR` (mean point distance) in one step.
+Only an episode with the last one's goal whose gripper starts within ``gripper_reach`` of where
+it stopped looks like a continuation; pass ``episode_start`` (or call ``reset()``) there. An
+observation without the grippers (only ``achieved_goal`` and ``desired_goal``) is checked by the
+goal and by the cord jumping farther than :data:`JUMP_ERROR` (mean point distance) in one step.
 
 A vector env (``gym.make_vec``, SB3's ``VecEnv``) passes a batch with one row per environment.
 The policy then keeps one copy of its episode state per environment (:attr:`env_policies`; the
 models and planners are shared, not copied) and plans for each environment in turn, one at a
-time: the actions come back as a ``(B, action_dim)`` batch.
+time: the actions come back as a ``(B, action_dim)`` batch. The copies are shallow, so a
+subclass's ``reset()`` must create anew every attribute an episode changes; everything else
+(models, planners, configs, scratch simulators used within one call) is shared.
 """
 
 from __future__ import annotations
@@ -37,6 +39,7 @@ from typing import Any
 
 import numpy as np
 
+from dlo_env.cord import CordParams
 from dlo_env.shapes import error
 from planners.interfaces import Observation
 from planners.observation import CordObservation, read_observation, split_batch
@@ -46,9 +49,24 @@ GOAL_TOLERANCE = 1e-6
 #: Slack on the farthest one action moves a gripper, metres (float32 rounding).
 GRIPPER_SLACK = 1e-5
 #: Without gripper positions: a cord whose mean point distance to the last observation exceeds
-#: this was reset, metres. One full-speed step moves it at most about 9 cm (measured with
-#: random full-speed actions, both ends held); resets to another shape move it 15 cm or more.
+#: this was reset, metres. Random full-speed steps move it at most about 9 cm with both ends
+#: held (``tests/planners/test_episodes.py`` checks the bound); a reset to another start
+#: moves it 15 cm or more.
 JUMP_ERROR = 0.12
+
+
+def gripper_reach(max_step: float, params: CordParams | None = None) -> float:
+    """The farthest one action can move a held gripper, metres: the rule of ``Cord.move``.
+
+    An action moves each gripper by at most ``max_step`` per axis. Its target is clipped to
+    the table less ``rim_margin`` (after a reset a gripper may sit up to ``rim_margin`` outside
+    that square, so one step can pull it in by as much), and with both ends held a pair
+    farther apart than ``max_span * length`` is pulled towards its middle, by at most the
+    half of what the two moves added to the gap. Together: ``2 * sqrt(2) * (max_step +
+    rim_margin)``.
+    """
+    p = params if params is not None else CordParams()
+    return 2.0 * math.sqrt(2.0) * (max_step + p.rim_margin) + GRIPPER_SLACK
 
 
 def _starts(episode_start: Any, size: int) -> np.ndarray:
@@ -71,13 +89,20 @@ class EpisodicPolicy:
     episode) and ``_act(obs) -> action`` for one environment's :class:`CordObservation`, and
     may set ``n_points`` (the cord its model was made for; otherwise the observation's).
 
-    Attributes:
-        env_policies: With a batch of B > 1 environments, the B copies that hold each
-            environment's episode (their ``episode_stats()`` report it); empty otherwise.
+    The copies a batch makes are shallow: ``reset()`` must create anew every attribute that an
+    episode changes.
     """
 
     max_step: float
     n_points: int | None = None
+    #: The cord's parameters where the policy knows them (``gripper_reach`` uses its rim).
+    params: CordParams | None = None
+
+    @property
+    def env_policies(self) -> list[EpisodicPolicy]:
+        """The copies that hold each environment's episode after a batch of B > 1 (their
+        ``episode_stats()`` report it), in the batch's order; empty before any batch."""
+        return getattr(self, "_env_policies", [])
 
     # ------------------------------------------------------------------ to override
     def reset(self) -> None:
@@ -97,7 +122,7 @@ class EpisodicPolicy:
         if float(np.abs(obs.goal - last.goal).max()) > GOAL_TOLERANCE:
             return True
         if len(obs.grippers) and obs.grippers.shape == last.grippers.shape:
-            reach = math.sqrt(2.0) * self.max_step + GRIPPER_SLACK
+            reach = gripper_reach(self.max_step, self.params)
             return bool((np.linalg.norm(obs.grippers - last.grippers, axis=1) > reach).any())
         return float(error(obs.shape, last.shape)) > JUMP_ERROR
 
@@ -114,16 +139,16 @@ class EpisodicPolicy:
 
     def _copies(self, size: int) -> list[EpisodicPolicy]:
         """``size`` policies sharing this one's models, each with its own episode state."""
-        copies: list[EpisodicPolicy] = getattr(self, "env_policies", [])
+        copies = self.env_policies
         if len(copies) != size:
             copies = []
             for _ in range(size):
                 twin = copy.copy(self)  # shallow: models, planners and configs are shared
-                twin.env_policies = []
+                twin._env_policies = []
                 twin._last_seen = None
                 twin.reset()
                 copies.append(twin)
-            self.env_policies = copies
+            self._env_policies = copies
         return copies
 
     # ------------------------------------------------------------------ SB3 interface

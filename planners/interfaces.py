@@ -16,7 +16,10 @@ from typing import Any, Protocol, runtime_checkable
 
 import numpy as np
 
+from planners.deprecated import renamed_field
 
+
+@renamed_field("end", "grasp")
 @dataclass(frozen=True)
 class Plan:
     """A planned shape transition: the decoded path and the end's straight moves.
@@ -48,11 +51,6 @@ class Plan:
     grasp: str = "head"
 
     @property
-    def end(self) -> str:
-        """Deprecated name of ``grasp``."""
-        return self.grasp
-
-    @property
     def corners(self) -> np.ndarray:
         """``(K, 2)`` end positions at the nodes: the end moves straight from one to the next."""
         return self.waypoints[self.nodes]
@@ -66,7 +64,6 @@ class Plan:
     def path_length(self) -> float:
         """Total distance the end travels, metres."""
         return float(np.linalg.norm(self.moves, axis=1).sum())
-
 
 
 #: A ``dlo_env`` goal observation: ``observation``, ``achieved_goal``, ``desired_goal`` arrays.

@@ -20,7 +20,7 @@ from __future__ import annotations
 import math
 import time
 import warnings
-from dataclasses import InitVar, dataclass, fields, replace
+from dataclasses import dataclass, fields, replace
 from typing import Any
 
 import numpy as np
@@ -32,6 +32,7 @@ from dlo_env.shapes import (
     segment_lengths,
     turning_cosines,
 )
+from planners.deprecated import renamed_field
 from planners.interfaces import Plan, ShapeSurrogate
 from planners.observation import as_shape
 from planners.surrogate import Surrogate
@@ -44,6 +45,7 @@ EDGES = ("latent", "moves")
 MIN_NODE_CHANGE = 0.005
 
 
+@renamed_field("end", "grasp")
 @dataclass(frozen=True)
 class TreeConfig:
     """Parameters of the latent-tree planner; the defaults are the documented ones.
@@ -119,14 +121,8 @@ class TreeConfig:
     move_samples: int = 32
     move_noise: float = 0.05
     max_move: float = 0.3
-    #: Deprecated name of ``grasp`` (``TreeConfig(end="tail")`` still works, with a warning).
-    end: InitVar[str | None] = None
 
-    def __post_init__(self, end: str | None) -> None:
-        if end is not None:
-            warnings.warn("TreeConfig(end=...) is deprecated: use grasp=...", DeprecationWarning,
-                          stacklevel=3)
-            object.__setattr__(self, "grasp", end)
+    def __post_init__(self) -> None:
         positive = ("step_length", "similarity", "straightness", "goal_threshold", "max_seconds",
                     "sample_margin", "move_noise", "max_move")
         for name in positive:
@@ -250,6 +246,10 @@ class LatentTreePlanner:
         self, model: ShapeSurrogate, config: TreeConfig | None = None, *, seed: int = 0,
         transition_model: Any = None, **overrides: Any,
     ) -> None:
+        if "end" in overrides and "grasp" not in overrides:  # grasp's deprecated name
+            warnings.warn("LatentTreePlanner(end=...) is deprecated: use grasp=...",
+                          DeprecationWarning, stacklevel=2)
+            overrides["grasp"] = overrides.pop("end")
         known = {f.name for f in fields(TreeConfig)}
         unknown = sorted(set(overrides) - known)
         if unknown:

@@ -197,12 +197,18 @@ def test_evaluate_records_what_a_planning_policy_reports_through_episode_stats()
     assert math.isnan(record.fidelity)  # no first plan reported: nothing to simulate
 
 
-def test_evaluate_takes_an_environment_as_build_agent_does_and_leaves_it_open():
+def test_evaluate_takes_an_environment_as_build_agent_does_and_leaves_it_open(monkeypatch):
     env = gym.make(ENV_ID)
+    closed: list[bool] = []
+    monkeypatch.setattr(env, "close", lambda: closed.append(True))
     by_env = evaluate(StraightLinePolicy(), env, suite="linear-1", episodes=2, fidelity=False)
     by_id = evaluate(StraightLinePolicy(), ENV_ID, suite="linear-1", episodes=2, fidelity=False)
     assert [r.final_error for r in by_env.records] == [r.final_error for r in by_id.records]
     assert by_env.summary["env_id"] == ENV_ID
-    env.reset(seed=0)  # still open: the caller owns it
+    assert not closed  # the caller owns it
     with pytest.raises(ValueError, match="env must be a dlo_env environment or its id"):
         evaluate(StraightLinePolicy(), 3)
+    with pytest.raises(ValueError, match="env must end its episodes"):
+        evaluate(StraightLinePolicy(), env.unwrapped)  # no TimeLimit: it could run forever
+    with pytest.raises(ValueError, match="not both"):
+        evaluate(StraightLinePolicy(), env, env_id=ENV_ID)

@@ -9,7 +9,9 @@ import numpy as np
 import pytest
 
 import dlo_env  # noqa: F401  (registers the environments)
-from dlo_env.tasks import load_suite
+from dlo_env.cord import Cord, CordParams
+from dlo_env.shapes import error
+from dlo_env.tasks import GRASP_ENDS, apply_action, load_suite, random_start
 from planners import (
     LatentMPCConfig,
     LatentMPCPolicy,
@@ -18,7 +20,7 @@ from planners import (
     PlannerPolicy,
     StraightLinePolicy,
 )
-from planners.episodes import EpisodicPolicy
+from planners.episodes import JUMP_ERROR, EpisodicPolicy, gripper_reach
 from planners.latent_tree import LatentTreePlanner, TreeConfig
 from tests.toy_models import ToyHeadModel
 
@@ -125,12 +127,13 @@ def test_a_new_goal_or_a_gripper_moved_farther_than_one_action_resets_the_policy
     policy.predict(_obs(a.start, a.goal, a.start[0]))
     policy.predict(_obs(a.start, a.goal, a.start[0]))
     assert policy.resets == 0  # the first observation and one that goes on: no reset
-    full_step = a.start[0] + np.float32(0.02)  # the farthest one action moves it (both axes)
-    policy.predict(_obs(a.start, a.goal, full_step))
+    reach = gripper_reach(policy.max_step)
+    step = a.start[0] + np.float32(0.9 * reach / np.sqrt(2.0))  # within reach
+    policy.predict(_obs(a.start, a.goal, step))
     assert policy.resets == 0
-    policy.predict(_obs(a.start, b.goal, full_step))
+    policy.predict(_obs(a.start, b.goal, step))
     assert policy.resets == 1  # the goal changed
-    policy.predict(_obs(a.start, b.goal, full_step + 0.05))
+    policy.predict(_obs(a.start, b.goal, step + np.float32(reach)))
     assert policy.resets == 2  # the gripper jumped: the cord was reset to the same goal
 
 
@@ -194,3 +197,96 @@ def test_sb3_evaluate_policy_runs_a_planner_on_a_vector_env():
                     callback=record, warn=False)
     # Random tasks of the default difficulty 1: one straight head move solves each.
     assert len(successes) >= 6 and all(successes)
+
+
+@pytest.mark.parametrize(("grasp", "max_step", "rim_margin"), [
+    ("head", 0.02, 0.02), ("both", 0.02, 0.02), ("head", 0.01, 0.05), ("both", 0.01, 0.05)])
+def test_no_step_moves_a_gripper_beyond_gripper_reach_or_the_cord_beyond_jump_error(
+        grasp, max_step, rim_margin):
+    """Random full-speed actions from random starts (to the rim and, both ends held, to the
+    largest span), and a first step from a gripper outside the rim's margin."""
+    params = CordParams(rim_margin=rim_margin)
+    reach = gripper_reach(max_step, params)
+    rng = np.random.default_rng(0)
+    cord = Cord(params, grasp=grasp)
+    ends = GRASP_ENDS[grasp]
+    worst, worst_error = 0.0, 0.0
+    corner = np.stack([np.linspace(0.995, 0.995 - 0.5, 20), np.linspace(0.995, 0.995 - 0.8, 20)],
+                      axis=1)
+    corner = corner[0] + (corner - corner[0]) / np.linalg.norm(corner[-1] - corner[0])
+    starts = [corner.astype(np.float32)] + [random_start(seed, grasp, params=params)
+                                            for seed in range(6)]
+    for start in starts:
+        cord.reset(start)
+        for _ in range(60):
+            before, shape = cord.gripper_positions(), cord.shape
+            apply_action(cord, np.sign(rng.uniform(-1, 1, 2 * len(ends))), max_step)
+            after = cord.gripper_positions()
+            worst = max(worst, *(float(np.linalg.norm(after[e] - before[e])) for e in ends))
+            worst_error = max(worst_error, float(error(cord.shape, shape)))
+    assert worst <= reach
+    assert worst > np.sqrt(2) * max_step  # the bound is needed: one action's own length is not
+    if max_step == 0.02:
+        assert worst_error < JUMP_ERROR
+
+
+def _count_resets(policy) -> list[int]:
+    calls: list[int] = []
+    original = policy.reset
+
+    def counting() -> None:
+        calls.append(1)
+        original()
+
+    policy.reset = counting
+    return calls
+
+
+@pytest.mark.parametrize("name", list(POLICIES))
+def test_whole_plain_loop_episodes_reset_the_policy_once_each_and_never_in_between(name):
+    build, env_id = POLICIES[name]
+    env = gym.make(env_id, max_episode_steps=80)
+    tasks = load_suite("linear-2", "test", grasp=env.unwrapped.cord.grasp, limit=3)
+    policy = build(env)
+    resets = _count_resets(policy)
+    for task in tasks:
+        obs, _ = env.reset(options={"task": task})
+        while True:
+            obs, _, terminated, truncated, _ = env.step(policy.predict(obs)[0])
+            if terminated or truncated:
+                break
+    assert len(resets) == len(tasks) - 1  # the first episode starts with a fresh policy
+
+
+@pytest.mark.parametrize("name", list(POLICIES))
+def test_every_policy_plans_a_batch_as_independent_policies_would(name):
+    build, env_id = POLICIES[name]
+    envs = gym.make_vec(env_id, num_envs=2, vectorization_mode="sync")
+    singles = [gym.make(env_id) for _ in range(2)]
+    batch_policy = build(singles[0])
+    single_policies = [build(env) for env in singles]
+    obs, _ = envs.reset(seed=[3, 4], options={"difficulty": 2})
+    single_obs = [env.reset(seed=s, options={"difficulty": 2})[0]
+                  for env, s in zip(singles, (3, 4))]
+    for _ in range(10):
+        actions, _ = batch_policy.predict(obs)
+        expected = [p.predict(o)[0] for p, o in zip(single_policies, single_obs)]
+        np.testing.assert_array_equal(actions, np.stack(expected))
+        obs, *_ = envs.step(actions)
+        single_obs = [env.step(a)[0] for env, a in zip(singles, expected)]
+
+
+def test_env_policies_is_empty_before_a_batch():
+    assert StraightLinePolicy().env_policies == []
+
+
+def test_the_sb3_loop_example_solves_the_same_tasks_in_every_loop():
+    from scripts import load_script
+
+    example = load_script("examples/sb3_loop.py")
+    env = gym.make(ENDPOINT)
+    tasks = load_suite("linear-1", "test", limit=3)
+    told = example.plain_loop(StraightLinePolicy(), env, tasks, tell_starts=True)
+    plain = example.plain_loop(StraightLinePolicy(), env, tasks, tell_starts=False)
+    vector = example.vector_loop(StraightLinePolicy(), ENDPOINT, tasks)
+    assert told == plain == vector == [True, True, True]  # one straight move solves linear-1
