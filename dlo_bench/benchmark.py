@@ -476,6 +476,9 @@ def run_benchmark(config: BenchmarkConfig, out_dir: str | os.PathLike, *,
 
     folder = Path(out_dir) / CELLS_DIR
     run_id = run_id or new_run_id()
+    # The code that runs, read once before any cell is written: a run writing into a tracked
+    # folder (``--out benchmarks``) must not mark its own later cells "+dirty".
+    version = code_version()
     shape_model, why = (None, "")
     if any(AGENTS[a].shape_model for a in config.agents):
         shape_model, why = load_shape_model(config.model)
@@ -513,7 +516,7 @@ def run_benchmark(config: BenchmarkConfig, out_dir: str | os.PathLike, *,
     def finish(k: int, result: Evaluation, seconds: float) -> None:
         slot, name, env_id, difficulty, agent, key = todo[k]
         cell = f"{name}-{env_label(env_id)}-d{difficulty}"
-        facts = {"wall_seconds": seconds, "commit": code_version(), "run": run_id}
+        facts = {"wall_seconds": seconds, "commit": version, "run": run_id}
         write_evaluation(result, folder, cell, extra={"benchmark_key": key, **facts})
         rows[slot] = {**row_of(agent, env_id, difficulty, result, config.episodes), **facts}
 

@@ -136,3 +136,17 @@ def test_a_ratio_that_would_mix_runs_is_not_comparable_not_a_number(runs):
 def test_run_ids_differ_and_sort_by_their_start():
     first, second = new_run_id(), new_run_id()
     assert first != second and first[:16] <= second[:16]
+
+
+def test_every_cell_of_a_run_records_the_code_read_before_its_first_cell(tmp_path, monkeypatch):
+    # A run writing into a tracked folder (--out benchmarks) dirties the tree as it goes: its
+    # later cells must still record the commit that ran, not "+dirty" from its own output.
+    from dlo_bench import benchmark
+    from dlo_bench.benchmark import BenchmarkConfig, run_benchmark
+
+    versions = iter(["abc1234", "abc1234+dirty", "abc1234+dirty"])
+    monkeypatch.setattr(benchmark, "code_version", lambda: next(versions))
+    config = BenchmarkConfig(agents=("straight-line",), envs=("dlo_env/DLOEndpoint-v0",),
+                             difficulties=(1, 2), episodes=1, fidelity=False)
+    rows = run_benchmark(config, tmp_path, progress=False)
+    assert [row["commit"] for row in rows] == ["abc1234", "abc1234"]
