@@ -69,6 +69,49 @@ def max_error(a: np.ndarray, b: np.ndarray) -> np.ndarray | float:
     return float(out) if out.ndim == 0 else out
 
 
+def direction_free_error(a: np.ndarray, b: np.ndarray) -> np.ndarray | float:
+    """``error`` ignoring which end is which: the smaller of the errors against ``b`` and
+    against ``b`` reversed (point n-1 first), metres. For designed goals, where the user does
+    not care where each end lies.
+
+    Args:
+        a: Shape ``(..., n, 2)`` (or flat).
+        b: Shape ``(..., n, 2)`` (or flat), broadcastable against ``a``.
+    """
+    b = _points(b)
+    out = np.minimum(error(a, b), error(a, b[..., ::-1, :]))
+    return float(out) if np.ndim(out) == 0 else out
+
+
+#: Distance from the goal curve within which a point counts as on it, metres: the bead
+#: threshold of DeformableRavens' cable-shape tasks.
+BEAD_TOLERANCE = 0.0175
+
+
+def bead_share(a: np.ndarray, goal: np.ndarray,
+               tolerance: float = BEAD_TOLERANCE) -> np.ndarray | float:
+    """Share of the points of ``a`` within ``tolerance`` of the goal's polyline (the segments
+    between its consecutive points), in ``[0, 1]``: DeformableRavens' bead metric. It ignores
+    the order of the points and which end is which.
+
+    Args:
+        a: Shape ``(..., n, 2)`` (or flat).
+        goal: Shape ``(..., m, 2)`` (or flat), broadcastable against ``a`` but for the points.
+        tolerance: Metres.
+    """
+    if not (isinstance(tolerance, (int, float)) and tolerance >= 0):
+        raise ValueError(f"tolerance must be a number >= 0 (metres), got {tolerance!r}")
+    pts = _points(a)[..., :, None, :]  # (..., n, 1, 2)
+    g = _points(goal)[..., None, :, :]  # (..., 1, m, 2)
+    start, seg = g[..., :-1, :], np.diff(g, axis=-2)  # (..., 1, m-1, 2)
+    length2 = np.maximum((seg * seg).sum(axis=-1), 1e-18)
+    t = np.clip(((pts - start) * seg).sum(axis=-1) / length2, 0.0, 1.0)
+    nearest = start + t[..., None] * seg
+    distance = np.sqrt(((pts - nearest) ** 2).sum(axis=-1)).min(axis=-1)  # (..., n)
+    out = (distance <= tolerance).mean(axis=-1)
+    return float(out) if np.ndim(out) == 0 else out
+
+
 def segment_vectors(shapes: np.ndarray) -> np.ndarray:
     """Difference vectors between consecutive points, ``(..., n-1, 2)``."""
     shapes = np.asarray(shapes)

@@ -15,7 +15,14 @@ import numpy as np
 from gymnasium import spaces
 
 from dlo_env.cord import Cord, CordParams, Grasp
-from dlo_env.shapes import TABLE_HALF, error, max_error, validate_shape
+from dlo_env.shapes import (
+    TABLE_HALF,
+    bead_share,
+    direction_free_error,
+    error,
+    max_error,
+    validate_shape,
+)
 from dlo_env.tasks import (
     DEFAULT_MAX_STEP,
     GRASP_ENDS,
@@ -197,11 +204,14 @@ class CordGoalEnv(gym.Env[dict[str, np.ndarray], np.ndarray]):
         for i, end in enumerate(self._ends):
             observation[n2 + 2 * i : n2 + 2 * i + 2] = self.cord.grippers[end].position
         goal = self._goal_flat
-        err = error(flat.reshape(-1, 2), goal.reshape(-1, 2))
+        shape, goal_points = flat.reshape(-1, 2), goal.reshape(-1, 2)
+        err = error(shape, goal_points)
         info = {
             "is_success": err <= self.success_threshold,
             "error": err,
-            "max_error": max_error(flat.reshape(-1, 2), goal.reshape(-1, 2)),
+            "max_error": max_error(shape, goal_points),
+            "direction_free_error": direction_free_error(shape, goal_points),
+            "bead_share": bead_share(shape, goal_points),
         }
         obs = {"observation": observation, "achieved_goal": flat, "desired_goal": goal.copy()}
         return obs, info

@@ -10,7 +10,7 @@ import pytest
 
 import dlo_env  # noqa: F401  (registers the environments)
 from dlo_env.envs import DLODualEndpointEnv, DLOEndpointEnv
-from dlo_env.shapes import TABLE_HALF, error, max_error
+from dlo_env.shapes import TABLE_HALF, bead_share, direction_free_error, error, max_error
 from dlo_env.tasks import SUCCESS_THRESHOLD, load_suite, make_task
 
 ENDPOINT, DUAL = "dlo_env/DLOEndpoint-v0", "dlo_env/DLODualEndpoint-v0"
@@ -71,15 +71,17 @@ def test_observation_holds_the_shape_and_the_gripper_positions(env_id):
 
 
 @pytest.mark.parametrize("env_id", IDS)
-def test_info_always_has_success_error_and_max_error(env_id):
+def test_info_always_has_success_the_errors_and_the_bead_share(env_id):
     env = gym.make(env_id)
     obs, info = env.reset(seed=0)
     for i in info, env.step(env.action_space.sample())[-1]:
-        assert {"is_success", "error", "max_error"} <= set(i)
+        assert {"is_success", "error", "max_error", "direction_free_error", "bead_share"} <= set(i)
         assert isinstance(i["is_success"], bool)
-    goal = obs["desired_goal"].reshape(-1, 2)
-    assert info["error"] == error(obs["achieved_goal"].reshape(-1, 2), goal)
-    assert info["max_error"] == max_error(obs["achieved_goal"].reshape(-1, 2), goal)
+    shape, goal = obs["achieved_goal"].reshape(-1, 2), obs["desired_goal"].reshape(-1, 2)
+    assert info["error"] == error(shape, goal)
+    assert info["max_error"] == max_error(shape, goal)
+    assert info["direction_free_error"] == direction_free_error(shape, goal) <= info["error"]
+    assert info["bead_share"] == bead_share(shape, goal)
     assert not info["is_success"]
 
 

@@ -6,8 +6,11 @@ import numpy as np
 import pytest
 
 from dlo_env.shapes import (
+    BEAD_TOLERANCE,
     COSINE_THRESHOLD,
+    bead_share,
     cord_length,
+    direction_free_error,
     error,
     is_cord_like,
     max_error,
@@ -204,3 +207,29 @@ def test_random_cord_shape_is_seeded_cord_like_exact_length_and_inside_the_margi
     assert np.abs(shapes).max() <= 0.9 + 1e-6
     # The family is varied: not all straight, not all alike.
     assert np.ptp(np.asarray(cord_length(shapes[:, [0, -1]]))) > 0.2
+
+
+def test_direction_free_error_is_the_smaller_of_the_ordered_and_reversed_errors():
+    a = straight()
+    np.testing.assert_allclose(direction_free_error(a, a[::-1]), 0.0, atol=1e-12)
+    assert error(a, a[::-1]) > 0.4
+    shifted = a + np.array([0.0, 0.03])
+    assert direction_free_error(shifted, a) == pytest.approx(error(shifted, a))
+    batch = np.stack([a, a[::-1]])
+    np.testing.assert_allclose(direction_free_error(batch, a), [0.0, 0.0], atol=1e-12)
+
+
+def test_bead_share_counts_points_within_the_tolerance_of_the_goal_polyline():
+    goal = straight()  # along x
+    assert bead_share(goal[::-1], goal) == 1.0  # order and direction do not matter
+    near = goal + np.array([0.0, 0.5 * BEAD_TOLERANCE])
+    far = goal + np.array([0.0, 2.0 * BEAD_TOLERANCE])
+    assert bead_share(near, goal) == 1.0 and bead_share(far, goal) == 0.0
+    half = np.concatenate([near[:10], far[10:]])
+    assert bead_share(half, goal) == pytest.approx(0.5)
+    # between the goal's points counts: the polyline, not its vertices
+    coarse = goal[::19]  # the two end points only
+    assert bead_share(goal, coarse) == 1.0
+    np.testing.assert_allclose(bead_share(np.stack([near, far]), goal), [1.0, 0.0])
+    with pytest.raises(ValueError, match="tolerance must be a number >= 0"):
+        bead_share(goal, goal, tolerance=-1.0)
