@@ -1,0 +1,246 @@
+"""Designed goals: letters, curves or any polyline, as shapes the cord can rest in.
+
+A designed goal starts as a drawing: a polyline of any size (a letter's stroke, an arc, an
+S-curve, a zigzag, a spiral, or the user's own points). :func:`polyline` makes a goal of it for
+a cord:
+
+1. it rounds the drawing's corners (Chaikin's corner cutting, ``rounding`` passes), scales it
+   so that its length is the cord's and walks along it with a compass whose span is one
+   segment, so the points have exactly the cord's spacing;
+2. it turns and moves it to the pose asked for (``center``, ``angle``) and checks that it lies
+   on the table (and, both ends held, that its ends fit the grippers' span);
+3. it relaxes it in the simulator (``relax=True``): the cord is laid in the drawn shape with
+   its held end(s) gripped and left until it is at rest, so the goal is a shape the cord can
+   rest in. A drawing the cord cannot hold (a corner sharper than it can bend, which springs
+   open) is refused when the rest shape lies more than ``max_change`` from it.
+
+Every error is one line naming the argument and why::
+
+    from dlo_env import goals
+    goal = goals.letter("S")                          # (20, 2) float32, at rest, on the table
+    obs, info = env.reset(options={"goal": goal})      # from a random start
+    goal = goals.arc(span=3.0, center=(0.2, -0.1), angle=0.5)
+    goal = goals.polyline([[0, 0], [0.3, 0.1], [0.6, 0]])   # the user's own drawing
+
+Score designed goals direction-free (``info["direction_free_error"]``, ``info["bead_share"]``):
+a drawing does not say which end is the head.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+
+import numpy as np
+
+from dlo_env.cord import Cord, CordParams
+from dlo_env.shapes import TABLE_HALF, error, on_table
+from dlo_env.tasks import GRASP_ENDS, REST_SPEED, SPAN_MARGIN
+
+#: The largest mean point distance between a drawing and the shape it relaxes into, metres.
+MAX_CHANGE = 0.03
+#: A goal keeps this far inside the table's edge, metres (the grippers' own margin).
+TABLE_MARGIN = 0.02
+
+
+def _arc(center: tuple[float, float], radius: float, start: float, stop: float,
+         count: int = 24) -> np.ndarray:
+    angles = np.linspace(start, stop, count)
+    return np.stack([center[0] + radius * np.cos(angles),
+                     center[1] + radius * np.sin(angles)], axis=1)
+
+
+def _stroke(*parts: Sequence[Sequence[float]] | np.ndarray) -> np.ndarray:
+    return np.concatenate([np.asarray(p, dtype=np.float64).reshape(-1, 2) for p in parts])
+
+
+#: Each letter as one stroke (x right, y up, about a unit box; M and W three times as wide: a
+#: cord of 20 points cannot rest in their narrow corners), drawn without lifting the pen.
+LETTERS: dict[str, np.ndarray] = {
+    "C": _arc((0.5, 0.5), 0.5, np.radians(50), np.radians(310)),
+    "J": _stroke([[1.0, 1.0]], _arc((0.6, 0.4), 0.4, 0.0, -np.pi)),
+    "L": _stroke([[0.0, 1.0], [0.0, 0.0], [0.6, 0.0]]),
+    "M": _stroke([[0.0, 0.0], [0.8, 1.0], [1.6, 0.3], [2.4, 1.0], [3.2, 0.0]]),
+    "S": _stroke(_arc((0.5, 0.75), 0.25, np.radians(20), np.radians(270)),
+                 _arc((0.5, 0.25), 0.25, np.radians(90), np.radians(-160))),
+    "U": _stroke([[0.0, 1.0]], _arc((0.5, 0.5), 0.5, np.pi, 2 * np.pi), [[1.0, 1.0]]),
+    "V": _stroke([[0.0, 1.0], [0.5, 0.0], [1.0, 1.0]]),
+    "W": _stroke([[0.0, 1.0], [0.8, 0.0], [1.6, 0.7], [2.4, 0.0], [3.2, 1.0]]),
+    "Z": _stroke([[0.0, 1.0], [1.0, 1.0], [0.0, 0.0], [1.0, 0.0]]),
+}
+
+
+def _rounded(drawing: np.ndarray, passes: int) -> np.ndarray:
+    """Chaikin's corner cutting, ``passes`` times, the ends kept: a corner becomes a curve
+    spread over several of the cord's joints instead of one bend sharper than a joint takes."""
+    for _ in range(passes):
+        cut = np.empty((2 * (len(drawing) - 1), 2))
+        cut[0::2] = 0.75 * drawing[:-1] + 0.25 * drawing[1:]
+        cut[1::2] = 0.25 * drawing[:-1] + 0.75 * drawing[1:]
+        drawing = np.concatenate([drawing[:1], cut, drawing[-1:]])
+    return drawing
+
+
+def _compass_walk(drawing: np.ndarray, n_points: int, segment: float) -> np.ndarray:
+    """``n_points`` points along ``drawing``, each ``segment`` from the last (a compass walked
+    along the polyline); past the drawing's end the walk goes on straight."""
+    heading = drawing[-1] - drawing[-2]
+    beyond = drawing[-1] + n_points * segment * heading / np.linalg.norm(heading)
+    path = np.concatenate([drawing, beyond[None]])
+    points = [path[0]]
+    k, here = 0, path[0]  # the walk is on the drawing's segment k, at ``here``
+    for _ in range(n_points - 1):
+        centre = points[-1]
+        # ``here`` is inside the compass's circle: find where the path leaves it.
+        while float(np.linalg.norm(path[k + 1] - centre)) < segment:
+            k, here = k + 1, path[k + 1]
+        d, f = path[k + 1] - here, here - centre
+        qa, qb, qc = d @ d, 2 * (f @ d), f @ f - segment**2
+        t = (-qb + np.sqrt(max(qb * qb - 4 * qa * qc, 0.0))) / (2 * qa)
+        here = here + t * d
+        points.append(here)
+    return np.asarray(points)
+
+
+def polyline(
+    points: Sequence[Sequence[float]] | np.ndarray,
+    *,
+    params: CordParams | None = None,
+    center: Sequence[float] = (0.0, 0.0),
+    angle: float = 0.0,
+    grasp: str = "head",
+    relax: bool = True,
+    max_change: float = MAX_CHANGE,
+    rounding: int = 3,
+) -> np.ndarray:
+    """A goal shape for the cord from any drawing: resampled, placed and relaxed.
+
+    Args:
+        points: ``(k, 2)`` the drawing, k >= 2, any size and units (it is scaled to the cord's
+            length); its first point becomes the head.
+        params: The cord (default cord if None): its length and points.
+        center: Where the goal's bounding-box centre goes on the table, metres.
+        angle: Rotation of the drawing about its centre, radians (counter-clockwise).
+        grasp: The end(s) held while the goal relaxes, as in the environment it is for:
+            ``"head"`` (``DLOEndpoint-v0``) or ``"both"`` (``DLODualEndpoint-v0``).
+        relax: Let the cord come to rest in the drawn shape in the simulator (the goal is then
+            a shape the cord rests in); False returns the resampled, placed drawing.
+        max_change: Refuse a drawing whose rest shape lies farther than this (mean point
+            distance, metres) from it.
+        rounding: Passes of corner cutting before resampling (0: the corners as drawn).
+
+    Returns:
+        float32 ``(n, 2)`` in world metres.
+
+    Raises:
+        ValueError: One line naming the argument: a drawing with fewer than two distinct
+            points or not finite, a pose off the table, ends wider than the grippers' span, or
+            a shape the cord cannot rest in.
+    """
+    p = params if params is not None else CordParams()
+    if grasp not in GRASP_ENDS:
+        raise ValueError(f"grasp must be one of {tuple(GRASP_ENDS)}, got {grasp!r}")
+    drawing = np.asarray(points, dtype=np.float64)
+    if drawing.ndim != 2 or drawing.shape[1] != 2 or len(drawing) < 2:
+        raise ValueError(f"points must be a (k, 2) polyline with k >= 2, got shape "
+                         f"{drawing.shape}")
+    if not np.isfinite(drawing).all():
+        raise ValueError("points must be finite, got NaN or infinite coordinates")
+    steps = np.linalg.norm(np.diff(drawing, axis=0), axis=1)
+    drawing = drawing[np.concatenate([[True], steps > 1e-12])]  # repeated points add nothing
+    total = float(steps.sum())
+    if total <= 1e-12:
+        raise ValueError("points must not all be the same point: the drawing has no length")
+    center = np.asarray(center, dtype=np.float64)
+    if center.shape != (2,) or not np.isfinite(center).all():
+        raise ValueError(f"center must be two finite numbers (metres), got {center.tolist()}")
+    if not np.isfinite(angle):
+        raise ValueError(f"angle must be a finite number (radians), got {angle!r}")
+    if not (isinstance(max_change, (int, float)) and max_change > 0):
+        raise ValueError(f"max_change must be a number > 0 (metres), got {max_change!r}")
+    if not (isinstance(rounding, int) and 0 <= rounding <= 8):
+        raise ValueError(f"rounding must be an int in 0..8, got {rounding!r}")
+
+    drawing = _rounded(drawing, rounding)
+    total = float(np.linalg.norm(np.diff(drawing, axis=0), axis=1).sum())
+    drawing = drawing * (p.length / total)
+    shape = _compass_walk(drawing, p.n_points, p.length / (p.n_points - 1))
+    c, s = np.cos(angle), np.sin(angle)
+    box = 0.5 * (shape.min(axis=0) + shape.max(axis=0))
+    shape = (shape - box) @ np.array([[c, s], [-s, c]]) + center
+    if not on_table(shape, TABLE_HALF - TABLE_MARGIN):
+        raise ValueError(f"center and angle must keep the goal on the table (within "
+                         f"{TABLE_HALF - TABLE_MARGIN:g} m of its centre on both axes), but it "
+                         f"reaches {np.abs(shape).max():.3f} m")
+    span = p.max_span * p.length - SPAN_MARGIN
+    if grasp == "both" and np.linalg.norm(shape[-1] - shape[0]) >= span:
+        raise ValueError(f"points must keep the ends closer than the grippers' span ({span:.3f} "
+                         f"m) for grasp='both', got {np.linalg.norm(shape[-1] - shape[0]):.3f} m")
+    shape = shape.astype(np.float32)
+    if not relax:
+        return shape
+    cord = Cord(p, grasp=grasp)
+    cord.reset(shape)
+    cord.settle(tolerance=REST_SPEED, max_time=3.0)
+    rest = cord.shape
+    change = float(error(rest, shape))
+    if change > max_change:
+        raise ValueError(f"points must draw a shape the cord can rest in: it relaxes "
+                         f"{100 * change:.1f} cm from the drawing (max_change "
+                         f"{100 * max_change:.1f} cm); smooth the sharp turns or draw it larger")
+    if not on_table(rest, TABLE_HALF):
+        raise ValueError("center and angle must keep the relaxed goal on the table")
+    return rest
+
+
+def letter(name: str, **pose: object) -> np.ndarray:
+    """A letter of :data:`LETTERS` (C, J, L, M, S, U, V, W, Z) as a goal: :func:`polyline`'s
+    keyword arguments place and relax it.
+
+    Raises:
+        ValueError: For a letter not in ``LETTERS``, or as :func:`polyline`.
+    """
+    key = str(name).upper()
+    if key not in LETTERS:
+        raise ValueError(f"name must be one of the letters {', '.join(LETTERS)}, got {name!r}")
+    return polyline(LETTERS[key], **pose)  # type: ignore[arg-type]
+
+
+def arc(span: float = np.pi, **pose: object) -> np.ndarray:
+    """A circular arc turning by ``span`` radians (0 < span < 2 pi) as a goal."""
+    if not (isinstance(span, (int, float)) and 0 < span < 2 * np.pi):
+        raise ValueError(f"span must be a number in (0, 2 pi) radians, got {span!r}")
+    return polyline(_arc((0.0, 0.0), 1.0, 0.0, float(span), 64), **pose)  # type: ignore[arg-type]
+
+
+def s_curve(amplitude: float = 0.25, **pose: object) -> np.ndarray:
+    """One full sine period, ``amplitude`` times its wavelength high, as a goal."""
+    if not (isinstance(amplitude, (int, float)) and 0 < amplitude <= 1):
+        raise ValueError(f"amplitude must be a number in (0, 1], got {amplitude!r}")
+    x = np.linspace(0.0, 1.0, 64)
+    return polyline(np.stack([x, amplitude * np.sin(2 * np.pi * x)], axis=1),
+                    **pose)  # type: ignore[arg-type]
+
+
+def zigzag(teeth: int = 3, amplitude: float = 0.25, **pose: object) -> np.ndarray:
+    """``teeth`` triangular teeth, ``amplitude`` times a tooth's width high, as a goal."""
+    if not (isinstance(teeth, int) and 1 <= teeth <= 8):
+        raise ValueError(f"teeth must be an int in 1..8, got {teeth!r}")
+    if not (isinstance(amplitude, (int, float)) and 0 < amplitude <= 2):
+        raise ValueError(f"amplitude must be a number in (0, 2], got {amplitude!r}")
+    x = np.arange(2 * teeth + 1) / 2.0
+    y = amplitude * (np.arange(2 * teeth + 1) % 2)
+    return polyline(np.stack([x, y], axis=1), **pose)  # type: ignore[arg-type]
+
+
+def spiral(turns: float = 1.25, **pose: object) -> np.ndarray:
+    """An Archimedean spiral of ``turns`` turns from its centre outwards, as a goal."""
+    if not (isinstance(turns, (int, float)) and 0.25 <= turns <= 3):
+        raise ValueError(f"turns must be a number in [0.25, 3], got {turns!r}")
+    t = np.linspace(0.0, 2 * np.pi * turns, 128)
+    radius = 0.3 + t  # a start off the centre: the innermost turn is not sharper than the cord
+    return polyline(np.stack([radius * np.cos(t), radius * np.sin(t)], axis=1),
+                    **pose)  # type: ignore[arg-type]
+
+
+#: The curve families by name (their default parameters): for suites and loops over families.
+CURVES = {"arc": arc, "s-curve": s_curve, "zigzag": zigzag, "spiral": spiral}

@@ -1,0 +1,73 @@
+"""Designed goals: drawings resampled to the cord, placed on the table and relaxed."""
+
+from __future__ import annotations
+
+import gymnasium as gym
+import numpy as np
+import pytest
+
+import dlo_env  # noqa: F401  (registers the environments)
+from dlo_env import goals
+from dlo_env.cord import CordParams
+from dlo_env.shapes import bead_share, error, segment_lengths
+
+SOFT = CordParams(bending_stiffness=0.001)  # a cord that rests in letters of its own length
+
+
+def test_a_drawing_is_resampled_to_the_cords_spacing_and_placed_at_the_pose():
+    drawing = [[0.0, 0.0], [3.0, 0.0], [3.0, 2.0]]  # any units: scaled to the cord's length
+    shape = goals.polyline(drawing, center=(0.2, -0.1), angle=np.pi / 2, relax=False)
+    assert shape.shape == (20, 2) and shape.dtype == np.float32
+    np.testing.assert_allclose(segment_lengths(shape), 1.0 / 19, atol=1e-6)
+    np.testing.assert_allclose(0.5 * (shape.min(axis=0) + shape.max(axis=0)), [0.2, -0.1],
+                               atol=1e-6)
+    assert shape[0, 0] > shape[-1, 0]  # turned a quarter: the drawing's first leg points up,
+    assert shape[5, 1] > shape[0, 1]   # its corner then turns left
+
+
+def test_a_gentle_arc_relaxes_close_to_its_drawing_and_is_a_goal_of_both_environments():
+    raw = goals.arc(1.5, relax=False)
+    goal = goals.arc(1.5)
+    assert error(goal, raw) < 0.01
+    for env_id, grasp in (("dlo_env/DLOEndpoint-v0", "head"),
+                          ("dlo_env/DLODualEndpoint-v0", "both")):
+        env = gym.make(env_id)
+        goal = goals.arc(2.5, grasp=grasp)  # ends 0.76 m apart: within the span
+        obs, _ = env.reset(seed=0, options={"goal": goal})
+        np.testing.assert_allclose(obs["desired_goal"], goal.reshape(-1))
+
+
+def test_letters_and_curves_relax_into_shapes_a_soft_cord_rests_in():
+    for name in goals.LETTERS:
+        raw = goals.letter(name, params=SOFT, relax=False)
+        goal = goals.letter(name, params=SOFT)
+        assert error(goal, raw) <= goals.MAX_CHANGE
+        assert bead_share(goal, raw) >= 0.5
+    for name, make in goals.CURVES.items():
+        assert error(make(params=SOFT), make(params=SOFT, relax=False)) <= goals.MAX_CHANGE, name
+
+
+def test_a_drawing_the_cord_cannot_rest_in_is_refused_saying_why():
+    with pytest.raises(ValueError, match="points must draw a shape the cord can rest in: it "
+                                         "relaxes .* cm from the drawing"):
+        goals.zigzag(teeth=8, amplitude=2.0)
+
+
+@pytest.mark.parametrize(("call", "match"), [
+    (lambda: goals.letter("Q"), "name must be one of the letters C, J, L, M, S, U, V, W, Z"),
+    (lambda: goals.polyline([[0.0, 0.0]]), r"points must be a \(k, 2\) polyline with k >= 2"),
+    (lambda: goals.polyline([[0.0, 0.0], [np.nan, 1.0]]), "points must be finite"),
+    (lambda: goals.polyline([[1.0, 1.0], [1.0, 1.0]]), "must not all be the same point"),
+    (lambda: goals.arc(1.0, center=(0.9, 0.0)), "center and angle must keep the goal on the"),
+    (lambda: goals.polyline([[0, 0], [1, 0]], grasp="both"), "closer than the grippers' span"),
+    (lambda: goals.arc(7.0), r"span must be a number in \(0, 2 pi\)"),
+    (lambda: goals.zigzag(teeth=0), "teeth must be an int in 1..8"),
+    (lambda: goals.spiral(turns=9), r"turns must be a number in \[0.25, 3\]"),
+    (lambda: goals.s_curve(amplitude=-1), r"amplitude must be a number in \(0, 1\]"),
+    (lambda: goals.arc(1.0, grasp="middle"), "grasp must be one of"),
+    (lambda: goals.arc(1.0, center=(0.0,)), "center must be two finite numbers"),
+])
+def test_bad_drawings_and_poses_get_one_line_naming_the_argument(call, match):
+    with pytest.raises(ValueError, match=match) as info:
+        call()
+    assert "\n" not in str(info.value)
