@@ -8,10 +8,13 @@ from __future__ import annotations
 
 from gymnasium.envs.registration import register, registry
 
+from dlo_env import goals
 from dlo_env.cord import Cord, CordParams
 from dlo_env.shapes import (
     COSINE_THRESHOLD,
     TABLE_HALF,
+    bead_share,
+    direction_free_error,
     error,
     is_cord_like,
     max_error,
@@ -26,7 +29,10 @@ __all__ = [
     "TABLE_HALF",
     "Cord",
     "CordParams",
+    "bead_share",
+    "direction_free_error",
     "error",
+    "goals",
     "is_cord_like",
     "max_error",
     "random_cord_shape",
