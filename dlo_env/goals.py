@@ -4,9 +4,9 @@ A designed goal starts as a drawing: a polyline of any size (a letter's stroke, 
 S-curve, a zigzag, a spiral, or the user's own points). :func:`polyline` makes a goal of it for
 a cord:
 
-1. it rounds the drawing's corners (Chaikin's corner cutting, ``rounding`` passes), scales it
-   so that its length is the cord's and walks along it with a compass whose span is one
-   segment, so the points have exactly the cord's spacing;
+1. it rounds the drawing's corners (Chaikin's corner cutting, ``rounding`` passes) and walks
+   along it with a compass whose span (found by bisection) puts the last point on its end, then
+   scales the points to the cord's spacing: every point lies on the drawing;
 2. it turns and moves it to the pose asked for (``center``, ``angle``) and checks that it lies
    on the table (and, both ends held, that its ends fit the grippers' span);
 3. it relaxes it in the simulator (``relax=True``): the cord is laid in the drawn shape with
@@ -17,10 +17,11 @@ a cord:
 Every error is one line naming the argument and why::
 
     from dlo_env import goals
-    goal = goals.letter("S")                          # (20, 2) float32, at rest, on the table
-    obs, info = env.reset(options={"goal": goal})      # from a random start
-    goal = goals.arc(span=3.0, center=(0.2, -0.1), angle=0.5)
-    goal = goals.polyline([[0, 0], [0.3, 0.1], [0.6, 0]])   # the user's own drawing
+    goal = goals.arc(span=2.5, center=(0.2, -0.1), angle=0.5)   # (20, 2) float32, at rest
+    obs, info = env.reset(options={"goal": goal})                # from a random start
+    goal = goals.polyline([[0, 0], [0.3, 0.1], [0.6, 0]])        # the user's own drawing
+    soft = CordParams(bending_stiffness=0.001)   # the default cord springs open out of letters
+    goal = goals.letter("S", params=soft)        # for gym.make(..., params=soft)
 
 Score designed goals direction-free (``info["direction_free_error"]``, ``info["bead_share"]``):
 a drawing does not say which end is the head.
@@ -28,6 +29,7 @@ a drawing does not say which end is the head.
 
 from __future__ import annotations
 
+import numbers
 from collections.abc import Sequence
 
 import numpy as np
@@ -38,8 +40,16 @@ from dlo_env.tasks import GRASP_ENDS, REST_SPEED, SPAN_MARGIN
 
 #: The largest mean point distance between a drawing and the shape it relaxes into, metres.
 MAX_CHANGE = 0.03
-#: A goal keeps this far inside the table's edge, metres (the grippers' own margin).
-TABLE_MARGIN = 0.02
+#: Simulated seconds the cord may take to come to rest in a drawing.
+RELAX_SECONDS = 3.0
+
+
+def _real(value: object) -> bool:
+    return isinstance(value, numbers.Real) and not isinstance(value, bool)
+
+
+def _integer(value: object) -> bool:
+    return isinstance(value, numbers.Integral) and not isinstance(value, bool)
 
 
 def _arc(center: tuple[float, float], radius: float, start: float, stop: float,
@@ -80,25 +90,44 @@ def _rounded(drawing: np.ndarray, passes: int) -> np.ndarray:
     return drawing
 
 
-def _compass_walk(drawing: np.ndarray, n_points: int, segment: float) -> np.ndarray:
-    """``n_points`` points along ``drawing``, each ``segment`` from the last (a compass walked
-    along the polyline); past the drawing's end the walk goes on straight."""
-    heading = drawing[-1] - drawing[-2]
-    beyond = drawing[-1] + n_points * segment * heading / np.linalg.norm(heading)
-    path = np.concatenate([drawing, beyond[None]])
-    points = [path[0]]
-    k, here = 0, path[0]  # the walk is on the drawing's segment k, at ``here``
+def _walk(drawing: np.ndarray, n_points: int, step: float) -> np.ndarray | None:
+    """``n_points`` points along ``drawing``, each ``step`` from the last (a compass walked
+    along the polyline), or None when the drawing ends first."""
+    points = [drawing[0]]
+    k, here = 0, drawing[0]  # the walk is on the drawing's segment k, at ``here``
     for _ in range(n_points - 1):
         centre = points[-1]
-        # ``here`` is inside the compass's circle: find where the path leaves it.
-        while float(np.linalg.norm(path[k + 1] - centre)) < segment:
-            k, here = k + 1, path[k + 1]
-        d, f = path[k + 1] - here, here - centre
-        qa, qb, qc = d @ d, 2 * (f @ d), f @ f - segment**2
-        t = (-qb + np.sqrt(max(qb * qb - 4 * qa * qc, 0.0))) / (2 * qa)
-        here = here + t * d
+        # ``here`` is inside the compass's circle: find where the drawing leaves it.
+        while float(np.linalg.norm(drawing[k + 1] - centre)) < step:
+            k, here = k + 1, drawing[k + 1]
+            if k + 1 >= len(drawing):
+                return None
+        d, f = drawing[k + 1] - here, here - centre
+        qa, qb, qc = d @ d, 2 * (f @ d), f @ f - step**2
+        here = here + (-qb + np.sqrt(max(qb * qb - 4 * qa * qc, 0.0))) / (2 * qa) * d
         points.append(here)
     return np.asarray(points)
+
+
+def _resampled(drawing: np.ndarray, n_points: int) -> np.ndarray:
+    """``n_points`` points on ``drawing`` with equal distances between neighbours, the first
+    and last at its ends (the compass's span found by bisection)."""
+    total = float(np.linalg.norm(np.diff(drawing, axis=0), axis=1).sum())
+    end = drawing[-1]
+    low, high = 0.0, total / (n_points - 1)  # chords are no longer than the drawing's arcs
+    best = None
+    for _ in range(60):
+        step = 0.5 * (low + high)
+        points = _walk(drawing, n_points, step)
+        if points is None:
+            high = step
+        else:
+            low, best = step, points
+    if best is None or float(np.linalg.norm(best[-1] - end)) > 0.01 * low:
+        raise ValueError("points must draw a line the cord can follow with its segments: it "
+                         "folds back on itself in less than one segment's length")
+    best[-1] = end  # within the bisection's last bit of the end
+    return best
 
 
 def polyline(
@@ -137,40 +166,47 @@ def polyline(
             a shape the cord cannot rest in.
     """
     p = params if params is not None else CordParams()
+    if not isinstance(p, CordParams):
+        raise ValueError(f"params must be a CordParams or None, got {type(p).__name__}")
     if grasp not in GRASP_ENDS:
         raise ValueError(f"grasp must be one of {tuple(GRASP_ENDS)}, got {grasp!r}")
-    drawing = np.asarray(points, dtype=np.float64)
+    try:
+        drawing = np.asarray(points, dtype=np.float64)
+    except (TypeError, ValueError):
+        raise ValueError(f"points must be a (k, 2) array of numbers, got {points!r:.60}") from None
     if drawing.ndim != 2 or drawing.shape[1] != 2 or len(drawing) < 2:
         raise ValueError(f"points must be a (k, 2) polyline with k >= 2, got shape "
                          f"{drawing.shape}")
     if not np.isfinite(drawing).all():
         raise ValueError("points must be finite, got NaN or infinite coordinates")
     steps = np.linalg.norm(np.diff(drawing, axis=0), axis=1)
-    drawing = drawing[np.concatenate([[True], steps > 1e-12])]  # repeated points add nothing
     total = float(steps.sum())
     if total <= 1e-12:
         raise ValueError("points must not all be the same point: the drawing has no length")
-    center = np.asarray(center, dtype=np.float64)
-    if center.shape != (2,) or not np.isfinite(center).all():
-        raise ValueError(f"center must be two finite numbers (metres), got {center.tolist()}")
-    if not np.isfinite(angle):
+    drawing = drawing[np.concatenate([[True], steps > 1e-9 * total])]  # repeats add nothing
+    try:
+        centre = np.asarray(center, dtype=np.float64)
+    except (TypeError, ValueError):
+        centre = np.full(1, np.nan)
+    if centre.shape != (2,) or not np.isfinite(centre).all():
+        raise ValueError(f"center must be two finite numbers (metres), got {center!r}")
+    if not (_real(angle) and np.isfinite(angle)):
         raise ValueError(f"angle must be a finite number (radians), got {angle!r}")
-    if not (isinstance(max_change, (int, float)) and max_change > 0):
+    if not (_real(max_change) and max_change > 0):
         raise ValueError(f"max_change must be a number > 0 (metres), got {max_change!r}")
-    if not (isinstance(rounding, int) and 0 <= rounding <= 8):
+    if not (_integer(rounding) and 0 <= rounding <= 8):
         raise ValueError(f"rounding must be an int in 0..8, got {rounding!r}")
 
     drawing = _rounded(drawing, rounding)
-    total = float(np.linalg.norm(np.diff(drawing, axis=0), axis=1).sum())
-    drawing = drawing * (p.length / total)
-    shape = _compass_walk(drawing, p.n_points, p.length / (p.n_points - 1))
+    shape = _resampled(drawing, p.n_points)
+    shape = shape * (p.length / float(np.linalg.norm(np.diff(shape, axis=0), axis=1).sum()))
     c, s = np.cos(angle), np.sin(angle)
-    box = 0.5 * (shape.min(axis=0) + shape.max(axis=0))
-    shape = (shape - box) @ np.array([[c, s], [-s, c]]) + center
-    if not on_table(shape, TABLE_HALF - TABLE_MARGIN):
+    shape = shape @ np.array([[c, s], [-s, c]])  # turned counter-clockwise
+    shape = shape - 0.5 * (shape.min(axis=0) + shape.max(axis=0)) + centre
+    if not on_table(shape, TABLE_HALF - p.rim_margin):
         raise ValueError(f"center and angle must keep the goal on the table (within "
-                         f"{TABLE_HALF - TABLE_MARGIN:g} m of its centre on both axes), but it "
-                         f"reaches {np.abs(shape).max():.3f} m")
+                         f"{TABLE_HALF - p.rim_margin:g} m of its centre on both axes, where "
+                         f"the grippers reach), but it reaches {np.abs(shape).max():.3f} m")
     span = p.max_span * p.length - SPAN_MARGIN
     if grasp == "both" and np.linalg.norm(shape[-1] - shape[0]) >= span:
         raise ValueError(f"points must keep the ends closer than the grippers' span ({span:.3f} "
@@ -180,13 +216,16 @@ def polyline(
         return shape
     cord = Cord(p, grasp=grasp)
     cord.reset(shape)
-    cord.settle(tolerance=REST_SPEED, max_time=3.0)
+    if cord.settle(tolerance=REST_SPEED, max_time=RELAX_SECONDS) >= RELAX_SECONDS:
+        raise ValueError(f"points must draw a shape the cord can rest in: it still moves after "
+                         f"{RELAX_SECONDS:g} s")
     rest = cord.shape
     change = float(error(rest, shape))
     if change > max_change:
         raise ValueError(f"points must draw a shape the cord can rest in: it relaxes "
                          f"{100 * change:.1f} cm from the drawing (max_change "
-                         f"{100 * max_change:.1f} cm); smooth the sharp turns or draw it larger")
+                         f"{100 * max_change:.1f} cm): bend it less (wider, more rounding) or "
+                         f"use a softer cord (params)")
     if not on_table(rest, TABLE_HALF):
         raise ValueError("center and angle must keep the relaxed goal on the table")
     return rest
@@ -207,14 +246,14 @@ def letter(name: str, **pose: object) -> np.ndarray:
 
 def arc(span: float = np.pi, **pose: object) -> np.ndarray:
     """A circular arc turning by ``span`` radians (0 < span < 2 pi) as a goal."""
-    if not (isinstance(span, (int, float)) and 0 < span < 2 * np.pi):
+    if not (_real(span) and 0 < span < 2 * np.pi):
         raise ValueError(f"span must be a number in (0, 2 pi) radians, got {span!r}")
     return polyline(_arc((0.0, 0.0), 1.0, 0.0, float(span), 64), **pose)  # type: ignore[arg-type]
 
 
 def s_curve(amplitude: float = 0.25, **pose: object) -> np.ndarray:
     """One full sine period, ``amplitude`` times its wavelength high, as a goal."""
-    if not (isinstance(amplitude, (int, float)) and 0 < amplitude <= 1):
+    if not (_real(amplitude) and 0 < amplitude <= 1):
         raise ValueError(f"amplitude must be a number in (0, 1], got {amplitude!r}")
     x = np.linspace(0.0, 1.0, 64)
     return polyline(np.stack([x, amplitude * np.sin(2 * np.pi * x)], axis=1),
@@ -223,9 +262,9 @@ def s_curve(amplitude: float = 0.25, **pose: object) -> np.ndarray:
 
 def zigzag(teeth: int = 3, amplitude: float = 0.25, **pose: object) -> np.ndarray:
     """``teeth`` triangular teeth, ``amplitude`` times a tooth's width high, as a goal."""
-    if not (isinstance(teeth, int) and 1 <= teeth <= 8):
+    if not (_integer(teeth) and 1 <= teeth <= 8):
         raise ValueError(f"teeth must be an int in 1..8, got {teeth!r}")
-    if not (isinstance(amplitude, (int, float)) and 0 < amplitude <= 2):
+    if not (_real(amplitude) and 0 < amplitude <= 2):
         raise ValueError(f"amplitude must be a number in (0, 2], got {amplitude!r}")
     x = np.arange(2 * teeth + 1) / 2.0
     y = amplitude * (np.arange(2 * teeth + 1) % 2)
@@ -234,7 +273,7 @@ def zigzag(teeth: int = 3, amplitude: float = 0.25, **pose: object) -> np.ndarra
 
 def spiral(turns: float = 1.25, **pose: object) -> np.ndarray:
     """An Archimedean spiral of ``turns`` turns from its centre outwards, as a goal."""
-    if not (isinstance(turns, (int, float)) and 0.25 <= turns <= 3):
+    if not (_real(turns) and 0.25 <= turns <= 3):
         raise ValueError(f"turns must be a number in [0.25, 3], got {turns!r}")
     t = np.linspace(0.0, 2 * np.pi * turns, 128)
     radius = 0.3 + t  # a start off the centre: the innermost turn is not sharper than the cord

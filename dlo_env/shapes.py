@@ -8,6 +8,7 @@ everything else in the project imports them from here.
 
 from __future__ import annotations
 
+import numbers
 from collections.abc import Callable
 
 import numpy as np
@@ -99,16 +100,20 @@ def bead_share(a: np.ndarray, goal: np.ndarray,
         goal: Shape ``(..., m, 2)`` (or flat), broadcastable against ``a`` but for the points.
         tolerance: Metres.
     """
-    if not (isinstance(tolerance, (int, float)) and tolerance >= 0):
+    if isinstance(tolerance, bool) or not (isinstance(tolerance, numbers.Real) and tolerance >= 0):
         raise ValueError(f"tolerance must be a number >= 0 (metres), got {tolerance!r}")
     pts = _points(a)[..., :, None, :]  # (..., n, 1, 2)
-    g = _points(goal)[..., None, :, :]  # (..., 1, m, 2)
+    g = _points(goal)
+    if g.shape[-2] < 2:
+        raise ValueError(f"goal must have at least 2 points (a polyline), got {g.shape[-2]}")
+    g = g[..., None, :, :]  # (..., 1, m, 2)
     start, seg = g[..., :-1, :], np.diff(g, axis=-2)  # (..., 1, m-1, 2)
     length2 = np.maximum((seg * seg).sum(axis=-1), 1e-18)
-    t = np.clip(((pts - start) * seg).sum(axis=-1) / length2, 0.0, 1.0)
-    nearest = start + t[..., None] * seg
-    distance = np.sqrt(((pts - nearest) ** 2).sum(axis=-1)).min(axis=-1)  # (..., n)
-    out = (distance <= tolerance).mean(axis=-1)
+    rel = pts - start
+    t = np.clip((rel * seg).sum(axis=-1) / length2, 0.0, 1.0)
+    off = rel - t[..., None] * seg
+    distance2 = (off * off).sum(axis=-1).min(axis=-1)  # (..., n) squared
+    out = (distance2 <= tolerance * tolerance).mean(axis=-1)
     return float(out) if np.ndim(out) == 0 else out
 
 

@@ -18,7 +18,6 @@ from dlo_env.cord import Cord, CordParams, Grasp
 from dlo_env.shapes import (
     TABLE_HALF,
     bead_share,
-    direction_free_error,
     error,
     max_error,
     validate_shape,
@@ -210,7 +209,7 @@ class CordGoalEnv(gym.Env[dict[str, np.ndarray], np.ndarray]):
             "is_success": err <= self.success_threshold,
             "error": err,
             "max_error": max_error(shape, goal_points),
-            "direction_free_error": direction_free_error(shape, goal_points),
+            "direction_free_error": min(err, error(shape, goal_points[::-1])),
             "bead_share": bead_share(shape, goal_points),
         }
         obs = {"observation": observation, "achieved_goal": flat, "desired_goal": goal.copy()}

@@ -230,6 +230,11 @@ def test_bead_share_counts_points_within_the_tolerance_of_the_goal_polyline():
     # between the goal's points counts: the polyline, not its vertices
     coarse = goal[::19]  # the two end points only
     assert bead_share(goal, coarse) == 1.0
+    beyond = goal + np.array([goal[-1, 0] - goal[0, 0] + 0.05, 0.0])  # on its line, past its end
+    assert bead_share(beyond, goal) == 0.0
     np.testing.assert_allclose(bead_share(np.stack([near, far]), goal), [1.0, 0.0])
     with pytest.raises(ValueError, match="tolerance must be a number >= 0"):
         bead_share(goal, goal, tolerance=-1.0)
+    assert bead_share(near, goal, tolerance=np.float32(0.01)) == 1.0
+    with pytest.raises(ValueError, match="goal must have at least 2 points"):
+        bead_share(goal, goal[:1])
