@@ -33,6 +33,8 @@ MOVE_BINS = 3
 #: a minute, not a measurement. ``dlo benchmark`` runs whole test splits instead (50 tasks per
 #: cell, ``dlo_bench.benchmark.BenchmarkConfig.episodes``).
 DEFAULT_EPISODES = 10
+#: The environment ``evaluate`` makes when given none.
+DEFAULT_ENV = "dlo_env/DLOEndpoint-v0"
 
 
 @dataclass(frozen=True)
@@ -277,7 +279,7 @@ def _run_episode(
 
 def evaluate(
     policy: Policy,
-    env: gym.Env | str = "dlo_env/DLOEndpoint-v0",
+    env: gym.Env | str = DEFAULT_ENV,
     difficulty: int | None = None,
     suite: str | None = None,
     episodes: int = DEFAULT_EPISODES,
@@ -322,7 +324,7 @@ def evaluate(
     if difficulty is not None and suite is not None:
         raise ValueError("give difficulty or suite, not both")
     if env_id is not None:
-        if env != "dlo_env/DLOEndpoint-v0" and env != env_id:
+        if not (isinstance(env, str) and env in (DEFAULT_ENV, env_id)):
             raise ValueError("give env (env_id is its deprecated name), not both")
         warnings.warn("evaluate(env_id=...) is deprecated: use env=...", DeprecationWarning,
                       stacklevel=2)

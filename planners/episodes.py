@@ -65,8 +65,8 @@ def gripper_reach(max_step: float, params: CordParams | None = None) -> float:
     half of what the two moves added to the gap. Together: ``2 * sqrt(2) * (max_step +
     rim_margin)``.
     """
-    p = params if params is not None else CordParams()
-    return 2.0 * math.sqrt(2.0) * (max_step + p.rim_margin) + GRIPPER_SLACK
+    rim = params.rim_margin if params is not None else CordParams.rim_margin  # the default's
+    return 2.0 * math.sqrt(2.0) * (max_step + rim) + GRIPPER_SLACK
 
 
 def _starts(episode_start: Any, size: int) -> np.ndarray:
