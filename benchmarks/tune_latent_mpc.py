@@ -33,7 +33,7 @@ GRID = {
     "samples": (64, 256),
     "iterations": (3, 5),
     "moves": (2, 3),
-    "stop_error": (0.0, 0.01),
+    "stop_fraction": (0.0, 0.5),
 }
 SUITES = ("linear-1", "linear-2", "linear-3", "linear-4", "linear-5")
 

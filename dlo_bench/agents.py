@@ -116,14 +116,26 @@ def load_transition_model(model: Any) -> Any:
                            "transition model", "dlo train --stage transition")
 
 
+def _goal_for(config: Any, env: Any) -> Any:
+    """``config`` (a ``TreeConfig``) with its ``goal_threshold`` scaled to ``env``'s success
+    threshold: the defaults were tuned at the default threshold (2 cm)."""
+    from dataclasses import replace as with_fields
+
+    from dlo_env.tasks import SUCCESS_THRESHOLD
+
+    scale = float(env.unwrapped.success_threshold) / SUCCESS_THRESHOLD
+    return with_fields(config, goal_threshold=config.goal_threshold * scale)
+
+
 def _latent_tree(closed: bool) -> Callable[[Any, AgentOptions], Policy]:
     def build(env: Any, options: AgentOptions) -> Policy:
-        from planners.latent_tree import LatentTreePlanner
+        from planners.latent_tree import LatentTreePlanner, TreeConfig
         from planners.policy import PlannerPolicy
 
         model = load_shape_model(options.model)
         budget = {} if options.max_seconds is None else {"max_seconds": options.max_seconds}
-        planner = LatentTreePlanner(model, seed=options.seed, **budget)
+        planner = LatentTreePlanner(model, _goal_for(TreeConfig(), env), seed=options.seed,
+                                    **budget)
         policy = PlannerPolicy(model, planner, max_step=_max_step(env),
                                replan_every=options.replan_every if closed else None)
         policy.check_env(env)
@@ -139,8 +151,9 @@ def _latent_tree_kino(env: Any, options: AgentOptions) -> Policy:
     from planners.policy import PlannerPolicy
 
     model = load_shape_model(options.model)
-    config = KINO_CONFIG if options.max_seconds is None else with_fields(
-        KINO_CONFIG, max_seconds=options.max_seconds)
+    config = _goal_for(KINO_CONFIG, env)
+    if options.max_seconds is not None:
+        config = with_fields(config, max_seconds=options.max_seconds)
     planner = LatentTreePlanner(model, config, seed=options.seed,
                                 transition_model=load_transition_model(options.transition_model))
     policy = PlannerPolicy(model, planner, max_step=_max_step(env), moves_per_plan=1,

@@ -2,13 +2,15 @@
 
 ``run_benchmark`` evaluates the registered agents (``dlo_bench.agents.AGENTS``) on the test
 split of the suites ``linear-1`` to ``linear-5`` in ``DLOEndpoint-v0`` and ``linear-1`` to
-``linear-3`` in ``DLODualEndpoint-v0`` (fixed tasks, so every agent sees the same episodes) with
-:func:`dlo_bench.evaluation.evaluate`. An agent that does not act in an environment, or whose
-model is missing, gets a row that says so, never silently none. Every row states the agent's
-sample cost: the data its model or policy was trained on. Every finished (agent, environment,
-difficulty) cell is written at once, so an interrupted run resumes;
-:func:`dlo_bench.benchmark_report.write_results` then writes the table (Markdown), the rows
-(JSON) and a bar chart (PNG), all atomically.
+``linear-3`` in ``DLODualEndpoint-v0``, and the long horizons ``linear-8`` and ``linear-10`` in
+both (fixed tasks, so every agent sees the same episodes) with
+:func:`dlo_bench.evaluation.evaluate`, once at each success threshold (2, 1 and 0.5 cm, judged
+on the cord at rest; the planners take their stopping rules from it). An agent that does not act
+in an environment, or whose model is missing, gets a row that says so, never silently none.
+Every row states the agent's sample cost: the data its model or policy was trained on. Every
+finished (agent, environment, difficulty, threshold) cell is written at once, so an interrupted
+run resumes; :func:`dlo_bench.benchmark_report.write_results` then writes the table (Markdown),
+the rows (JSON) and a bar chart (PNG), all atomically.
 
 Every cell records what made it: the git commit of the code (:func:`code_version`, ``+dirty``
 with uncommitted changes to tracked files) and the run (one invocation, :func:`new_run_id`) that
@@ -42,7 +44,7 @@ from dlo_bench.paths import (
     shipped_baseline,
     transition_model_file,
 )
-from dlo_bench.report import json_ready, write_evaluation
+from dlo_bench.report import json_ready, threshold_label, write_evaluation
 from dlo_env.atomic import file_digest
 from dlo_env.envs import ENVIRONMENTS
 from dlo_env.tasks import SPLIT_SIZES, SUITES
@@ -52,7 +54,11 @@ from planners.policy import DEFAULT_REPLAN_EVERY
 #: The test suite of every difficulty: ``linear-K`` holds tasks of K straight moves.
 SUITE_OF_DIFFICULTY = {difficulty: name for name, difficulty in SUITES.items()}
 #: The difficulties each environment is benchmarked on by default.
-DEFAULT_DIFFICULTIES = {ENDPOINT: (1, 2, 3, 4, 5), DUAL_ENDPOINT: (1, 2, 3)}
+DEFAULT_DIFFICULTIES = {ENDPOINT: (1, 2, 3, 4, 5, 8, 10), DUAL_ENDPOINT: (1, 2, 3, 8, 10)}
+#: Success thresholds every cell runs at, metres (judged at rest): one evaluation each.
+THRESHOLDS = (0.02, 0.01, 0.005)
+#: The threshold the report's first table shows.
+HEADLINE_THRESHOLD = 0.01
 #: Episodes of every cell in ``--quick`` runs.
 QUICK_EPISODES = 2
 #: Subfolder of the output folder holding one CSV/JSON of episodes per cell.
@@ -68,6 +74,8 @@ class BenchmarkConfig:
         envs: Environment ids, in table order.
         difficulties: Difficulties of every environment, each the test split of its suite
             ``linear-K``; None: ``DEFAULT_DIFFICULTIES`` of each environment.
+        thresholds: Success thresholds, metres: every cell runs once at each (the
+            environment's ``success_threshold``).
         episodes: Episodes per cell (the first tasks of the split; the split has 50).
         seed: Seed of the planners' sampling.
         baselines: Folder with one ``dlo baseline`` output folder per RL agent and environment
@@ -84,6 +92,7 @@ class BenchmarkConfig:
     agents: tuple[str, ...] = tuple(AGENTS)
     envs: tuple[str, ...] = tuple(DEFAULT_DIFFICULTIES)
     difficulties: tuple[int, ...] | None = None
+    thresholds: tuple[float, ...] = THRESHOLDS
     episodes: int = SPLIT_SIZES["test"]
     seed: int = 0
     baselines: str | None = None
@@ -106,20 +115,30 @@ class BenchmarkConfig:
             if bad or not self.difficulties:
                 raise ValueError(f"difficulties must be some of {tuple(SUITE_OF_DIFFICULTY)}, "
                                  f"got {self.difficulties!r}")
+        ok = [isinstance(t, (int, float)) and not isinstance(t, bool) and math.isfinite(t)
+              and t > 0 for t in self.thresholds]
+        if not self.thresholds or not all(ok) or len(set(self.thresholds)) < len(ok):
+            raise ValueError(f"thresholds must be distinct numbers > 0 (metres), "
+                             f"got {self.thresholds!r}")
         size = SPLIT_SIZES["test"]
         if not (isinstance(self.episodes, int) and 1 <= self.episodes <= size):
             raise ValueError(f"episodes must be an int in 1..{size} (the test split), "
                              f"got {self.episodes!r}")
 
-    def cells(self) -> list[tuple[str, int]]:
-        """``(env_id, difficulty)`` of every column of the table, in order."""
-        return [(env, d) for env in self.envs
+    def cells(self) -> list[tuple[str, int, float]]:
+        """``(env_id, difficulty, threshold)`` of every cell, in table order."""
+        return [(env, d, t) for t in self.thresholds for env in self.envs
                 for d in (self.difficulties or DEFAULT_DIFFICULTIES.get(env, (1, 2, 3)))]
 
 
 def env_label(env_id: str) -> str:
     """The short name of an environment in tables and file names (``endpoint``...)."""
     return ENVIRONMENTS[env_id][1]
+
+
+def cell_name(agent: str, env_id: str, difficulty: int, threshold: float) -> str:
+    """A cell's file name: ``latent-mpc-endpoint-d3-1cm``."""
+    return f"{agent}-{env_label(env_id)}-d{difficulty}-{threshold_label(threshold, '')}"
 
 
 @dataclass(frozen=True)
@@ -253,24 +272,26 @@ def load_shape_model(path: str | None) -> tuple[ShapeSurrogate | None, str]:
 
 
 def cell_key(config: BenchmarkConfig, agent: LoadedAgent, env_id: str,
-             difficulty: int) -> dict[str, Any]:
+             difficulty: int, threshold: float) -> dict[str, Any]:
     """What a cell's result depends on; a saved cell is reused only when its key matches."""
     key = asdict(config)
-    for name in ("agents", "envs", "difficulties"):
+    for name in ("agents", "envs", "difficulties", "thresholds"):
         key.pop(name)
     return {**key, "agent": agent.name, "env_id": env_id, "difficulty": difficulty,
+            "threshold": threshold,
             "model_digest": "+".join(file_digest(m) for m in agent.models),
             "settings": agent.settings}
 
 
-def row_of(agent: LoadedAgent, env_id: str, difficulty: int, evaluation: Evaluation | None,
-           episodes: int) -> dict[str, Any]:
+def row_of(agent: LoadedAgent, env_id: str, difficulty: int, threshold: float,
+           evaluation: Evaluation | None, episodes: int) -> dict[str, Any]:
     """One row of the results: the summary of a cell, or a row saying the agent is missing."""
     row: dict[str, Any] = {
         "agent": agent.name,
         "env": env_label(env_id),
         "env_id": env_id,
         "difficulty": difficulty,
+        "threshold": threshold,
         "suite": f"{SUITE_OF_DIFFICULTY[difficulty]}/test",
         "status": "ok" if not agent.missing else "missing",
         "note": agent.missing,
@@ -278,6 +299,7 @@ def row_of(agent: LoadedAgent, env_id: str, difficulty: int, evaluation: Evaluat
         "success_rate": None,
         "median_error": None,
         "mean_error": None,
+        "median_rest_error": None,
         "seconds_per_episode": None,
         "median_seconds_per_episode": None,
         "total_seconds": None,
@@ -298,6 +320,7 @@ def row_of(agent: LoadedAgent, env_id: str, difficulty: int, evaluation: Evaluat
             success_rate=s["success_rate"],
             median_error=s["median_final_error"],
             mean_error=s["mean_final_error"],
+            median_rest_error=s["median_rest_error"],
             seconds_per_episode=float(np.mean(seconds)),
             median_seconds_per_episode=float(np.median(seconds)),
             total_seconds=float(np.sum(seconds)),
@@ -408,8 +431,8 @@ def _warm_up(policy: Policy, env: Any) -> None:
 
 
 def run_cell(name: str, env_id: str, difficulty: int, config: BenchmarkConfig, *,
-             shape_model: ShapeSurrogate | None = None, threads: int | None = None,
-             progress: bool = False) -> tuple[Evaluation, float]:
+             threshold: float = THRESHOLDS[0], shape_model: ShapeSurrogate | None = None,
+             threads: int | None = None, progress: bool = False) -> tuple[Evaluation, float]:
     """Evaluate one cell with an agent built for it (and warmed up) from scratch.
 
     A cell depends only on its arguments, so it gives the same result in any process, in any
@@ -418,6 +441,7 @@ def run_cell(name: str, env_id: str, difficulty: int, config: BenchmarkConfig, *
 
     Args:
         name, env_id, difficulty: The cell.
+        threshold: The environment's success threshold, metres (the agent is built for it).
         config: The benchmark (models, seed, episodes...).
         shape_model: The loaded shape model of the latent-tree agents (None: loaded here).
         threads: Torch threads (None: leave as they are).
@@ -438,7 +462,7 @@ def run_cell(name: str, env_id: str, difficulty: int, config: BenchmarkConfig, *
         shape_model, why = load_shape_model(config.model)
         if shape_model is None:
             raise FileNotFoundError(f"no shape model: {why}")
-    with gym.make(env_id) as env:
+    with gym.make(env_id, success_threshold=threshold) as env:
         agent = load_agent(name, config, env, shape_model)
         if agent.policy is None:
             raise ValueError(f"agent {name!r} is missing in {env_id}: {agent.missing}")
@@ -446,7 +470,8 @@ def run_cell(name: str, env_id: str, difficulty: int, config: BenchmarkConfig, *
     t0 = time.perf_counter()
     result = evaluate(agent.policy, env_id, suite=SUITE_OF_DIFFICULTY[difficulty],
                       episodes=config.episodes, seed=config.seed, split="test", agent=name,
-                      fidelity=config.fidelity, progress=progress)
+                      fidelity=config.fidelity, progress=progress,
+                      env_kwargs={"success_threshold": threshold})
     return result, time.perf_counter() - t0
 
 
@@ -458,7 +483,7 @@ def run_benchmark(config: BenchmarkConfig, out_dir: str | os.PathLike, *,
     Args:
         config: What to run.
         out_dir: Output folder; cells go to
-            ``out_dir/results_episodes/<agent>-<env>-d<K>.csv/.json``.
+            ``out_dir/results_episodes/<agent>-<env>-d<K>-<threshold>.csv/.json``.
         resume: Reuse cells already written by a run with the same settings.
         progress: Show progress bars.
         backend: None runs the cells one after the other in this process; a
@@ -483,7 +508,7 @@ def run_benchmark(config: BenchmarkConfig, out_dir: str | os.PathLike, *,
     if any(AGENTS[a].shape_model for a in config.agents):
         shape_model, why = load_shape_model(config.model)
     rows: list[dict[str, Any]] = []
-    todo: list[tuple[int, str, str, int, LoadedAgent, dict[str, Any]]] = []
+    todo: list[tuple[int, str, str, int, float, LoadedAgent, dict[str, Any]]] = []
     for name in config.agents:
         agents: dict[str, LoadedAgent] = {}
         for env_id in config.envs:
@@ -492,49 +517,50 @@ def run_benchmark(config: BenchmarkConfig, out_dir: str | os.PathLike, *,
             if agent.missing.startswith("no shape model") and why:
                 agent = LoadedAgent(name, None, missing=f"no shape model: {why}")
             agents[env_id] = agent
-        for env_id, difficulty in config.cells():
+        for env_id, difficulty, threshold in config.cells():
             agent = agents[env_id]
-            cell = f"{name}-{env_label(env_id)}-d{difficulty}"
+            cell = cell_name(name, env_id, difficulty, threshold)
             if agent.policy is None:
-                rows.append(row_of(agent, env_id, difficulty, None, 0))
+                rows.append(row_of(agent, env_id, difficulty, threshold, None, 0))
                 if progress:
                     print(f"{cell}: missing ({agent.missing})", flush=True)
                 continue
-            key = cell_key(config, agent, env_id, difficulty)
+            key = cell_key(config, agent, env_id, difficulty, threshold)
             path = folder / f"{cell}.json"
             loaded = _load_cell(path, key) if resume else None
             if loaded is not None:
                 result, facts = loaded
-                rows.append({**row_of(agent, env_id, difficulty, result, config.episodes),
-                             **facts})
+                rows.append({**row_of(agent, env_id, difficulty, threshold, result,
+                                      config.episodes), **facts})
                 if progress:
                     print(f"{cell}: reused {path}", flush=True)
                 continue
-            todo.append((len(rows), name, env_id, difficulty, agent, key))
+            todo.append((len(rows), name, env_id, difficulty, threshold, agent, key))
             rows.append({})
 
     def finish(k: int, result: Evaluation, seconds: float) -> None:
-        slot, name, env_id, difficulty, agent, key = todo[k]
-        cell = f"{name}-{env_label(env_id)}-d{difficulty}"
+        slot, name, env_id, difficulty, threshold, agent, key = todo[k]
+        cell = cell_name(name, env_id, difficulty, threshold)
         facts = {"wall_seconds": seconds, "commit": version, "run": run_id}
         write_evaluation(result, folder, cell, extra={"benchmark_key": key, **facts})
-        rows[slot] = {**row_of(agent, env_id, difficulty, result, config.episodes), **facts}
+        rows[slot] = {**row_of(agent, env_id, difficulty, threshold, result, config.episodes),
+                      **facts}
 
     if backend is None:
-        for k, (_, name, env_id, difficulty, _, _) in enumerate(todo):
-            result, seconds = run_cell(name, env_id, difficulty, config,
+        for k, (_, name, env_id, difficulty, threshold, _, _) in enumerate(todo):
+            result, seconds = run_cell(name, env_id, difficulty, config, threshold=threshold,
                                        shape_model=shape_model, progress=progress)
             finish(k, result, seconds)
     else:
         threads = _torch_threads()
         config = absolute_paths(config)  # the tasks may run in another folder or node
-        calls = [(name, env_id, difficulty, config, None, threads)
-                 for _, name, env_id, difficulty, _, _ in todo]
+        calls = [(name, env_id, difficulty, threshold, config, None, threads)
+                 for _, name, env_id, difficulty, threshold, _, _ in todo]
         for done, (k, (result, seconds)) in enumerate(backend.map(_run_cell_task, calls), 1):
             finish(k, result, seconds)
             if progress:
-                _, name, env_id, difficulty, _, _ = todo[k]
-                print(f"{name}-{env_label(env_id)}-d{difficulty}: success "
+                _, name, env_id, difficulty, threshold, _, _ = todo[k]
+                print(f"{cell_name(name, env_id, difficulty, threshold)}: success "
                       f"{result.summary['success_rate']:.0%} ({done}/{len(todo)} cells)",
                       flush=True)
     return rows
@@ -549,11 +575,12 @@ def absolute_paths(config: BenchmarkConfig) -> BenchmarkConfig:
                               if getattr(config, f)})
 
 
-def _run_cell_task(name: str, env_id: str, difficulty: int, config: BenchmarkConfig,
-                   shape_model: ShapeSurrogate | None, threads: int | None
-                   ) -> tuple[Evaluation, float]:
+def _run_cell_task(name: str, env_id: str, difficulty: int, threshold: float,
+                   config: BenchmarkConfig, shape_model: ShapeSurrogate | None,
+                   threads: int | None) -> tuple[Evaluation, float]:
     """``run_cell`` with positional arguments, as a Ray task calls it."""
-    return run_cell(name, env_id, difficulty, config, shape_model=shape_model, threads=threads)
+    return run_cell(name, env_id, difficulty, config, threshold=threshold,
+                    shape_model=shape_model, threads=threads)
 
 
 def _torch_threads() -> int | None:

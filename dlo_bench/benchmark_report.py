@@ -16,7 +16,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from dlo_bench.report import cell_label, json_ready
+from dlo_bench.report import cell_label, json_ready, threshold_label
 from dlo_env.atomic import file_digest, write_text_atomic
 
 
@@ -44,6 +44,13 @@ class TimeRatio:
         return len(self.runs) == 1 and bool(self.runs[0])
 
 
+def _cell(row: dict[str, Any]) -> str:
+    """A cell with its threshold: ``endpoint d3 @ 1 cm`` (no threshold: ``endpoint d3``)."""
+    label = cell_label(row)
+    t = row.get("threshold")
+    return label if t is None else f"{label} @ {threshold_label(t)}"
+
+
 def planning_time_ratios(rows: list[dict[str, Any]], slow: str = "physics-mpc",
                          fast: str = "latent-tree") -> TimeRatio | None:
     """Total planning seconds of ``slow`` over ``fast`` on the same episodes.
@@ -52,16 +59,16 @@ def planning_time_ratios(rows: list[dict[str, Any]], slow: str = "physics-mpc",
         The ratio in every cell both agents ran with the same episodes and overall, with the
         runs that timed them; None when they share no cell.
     """
-    by = {(r["agent"], cell_label(r)): r for r in rows if r["status"] == "ok"}
+    by = {(r["agent"], _cell(r)): r for r in rows if r["status"] == "ok"}
     cells, runs, slow_total, fast_total = {}, set(), 0.0, 0.0
     for r in rows:
         if r["agent"] != slow or r["status"] != "ok":
             continue
-        other = by.get((fast, cell_label(r)))
+        other = by.get((fast, _cell(r)))
         if other is None or other["episodes"] != r["episodes"]:
             continue
         if other["total_seconds"] > 0:
-            cells[cell_label(r)] = r["total_seconds"] / other["total_seconds"]
+            cells[_cell(r)] = r["total_seconds"] / other["total_seconds"]
         slow_total += r["total_seconds"]
         fast_total += other["total_seconds"]
         runs |= {r.get("run") or "", other.get("run") or ""}
@@ -113,8 +120,23 @@ def run_summary(rows: list[dict[str, Any]]) -> str:
     return ", ".join(f"{run} ({n} cell{'s' * (n != 1)})" for run, n in sorted(counts.items()))
 
 
-def success_table(rows: list[dict[str, Any]]) -> list[str]:
-    """Markdown: one row per agent, one column per cell, success rate (– when missing)."""
+def thresholds_of(rows: list[dict[str, Any]]) -> list[float | None]:
+    """The success thresholds of the rows, in row order (None: rows without one)."""
+    return list(dict.fromkeys(r.get("threshold") for r in rows))
+
+
+def headline_first(thresholds: list[float | None]) -> list[float | None]:
+    """``thresholds`` with the headline one (1 cm) first."""
+    from dlo_bench.benchmark import HEADLINE_THRESHOLD
+
+    return sorted(thresholds, key=lambda t: t != HEADLINE_THRESHOLD)
+
+
+def success_table(rows: list[dict[str, Any]], threshold: float | None = None) -> list[str]:
+    """Markdown: one row per agent, one column per cell, success rate (– when missing), of the
+    rows at ``threshold`` (None: rows without one, or all when they have a single one)."""
+    if threshold is not None or len(thresholds_of(rows)) > 1:
+        rows = [r for r in rows if r.get("threshold") == threshold]
     cells = list(dict.fromkeys(cell_label(r) for r in rows))
     agents = list(dict.fromkeys(r["agent"] for r in rows))
     by = {(r["agent"], cell_label(r)): r for r in rows}
@@ -164,37 +186,45 @@ def results_markdown(rows: list[dict[str, Any]], machine: dict[str, Any], comman
     """The Markdown report: success per cell, the detailed table, the speed ratios, missing
     agents, machine and command."""
     episodes = max((r["episodes"] for r in rows), default=0)
+    thresholds = headline_first(thresholds_of(rows))
     lines = [
         "# Benchmark results",
         "",
         f"Every agent on the first {episodes} tasks of the test split of the suites `linear-K` "
         "(fixed tasks: every agent sees the same episodes) in `dlo_env/DLOEndpoint-v0` "
         "(*endpoint*) and `dlo_env/DLODualEndpoint-v0` (*dual-endpoint*); *dK* is difficulty "
-        "K (K straight moves from start to goal). Success means `error <= 2 cm` (mean point "
-        "distance). *Sample cost* is the data the agent's model or policy was trained on.",
+        "K (K straight moves from start to goal). Success means the cord at rest within the "
+        "threshold (`error`, the mean point distance), judged by the environment; every cell "
+        "runs once per threshold, the planners taking their stopping rules from it. "
+        "*Sample cost* is the data the agent's model or policy was trained on.",
         "",
-        "## Success",
-        "",
-        *success_table(rows),
-        "",
+    ]
+    for t in thresholds:
+        title = "Success" if t is None else f"Success at {threshold_label(t)}"
+        lines += [f"## {title}", "", *success_table(rows, t), ""]
+    lines += [
         "## Every cell",
         "",
-        "*seconds/episode* is planning (planners) or policy inference (RL) time, mean over "
-        "episodes; the simulator's own stepping is not counted.",
+        "*rest error* is the median over episodes of the error of the cord at rest after the "
+        "last step. *seconds/episode* is planning (planners) or policy inference (RL) time, "
+        "mean over episodes; the simulator's own stepping is not counted.",
         "",
-        "| agent | environment | difficulty | episodes | success | median error (cm) "
-        "| seconds/episode | fidelity (cm) |",
-        "|---|---|---|---|---|---|---|---|",
+        "| agent | environment | difficulty | threshold | episodes | success "
+        "| median rest error (cm) | seconds/episode | fidelity (cm) |",
+        "|---|---|---|---|---|---|---|---|---|",
     ]
     for r in rows:
         env = r.get("env", "endpoint")
+        t = r.get("threshold")
+        tl = "–" if t is None else threshold_label(t)
         if r["status"] != "ok":
-            lines.append(f"| {r['agent']} | {env} | {r['difficulty']} | – | missing | – | – "
-                         "| – |")
+            lines.append(f"| {r['agent']} | {env} | {r['difficulty']} | {tl} | – | missing | – "
+                         "| – | – |")
             continue
         lines.append(
-            f"| {r['agent']} | {env} | {r['difficulty']} | {r['episodes']} | "
-            f"{_fmt(r['success_rate'], '{:.0%}')} | {_fmt(r['median_error'], '{:.2f}', 100)} | "
+            f"| {r['agent']} | {env} | {r['difficulty']} | {tl} | {r['episodes']} | "
+            f"{_fmt(r['success_rate'], '{:.0%}')} | "
+            f"{_fmt(r.get('median_rest_error'), '{:.2f}', 100)} | "
             f"{_fmt(r['seconds_per_episode'], '{:.3f}')} | "
             f"{_fmt(r['mean_fidelity'], '{:.2f}', 100)} |"
         )

@@ -100,16 +100,20 @@ def save_interpolation_png(
 
 
 def plot_results(rows: list[dict[str, Any]], png: str | os.PathLike) -> None:
-    """Bar charts of success rate, median error and seconds per episode (missing rows skipped)."""
+    """Bar charts of success rate, median error at rest and seconds per episode (missing rows
+    skipped), at the headline threshold when the rows have several."""
     plt = _pyplot()
 
-    from dlo_bench.report import cell_label
+    from dlo_bench.benchmark_report import headline_first, thresholds_of
+    from dlo_bench.report import cell_label, threshold_label
 
+    threshold = headline_first(thresholds_of(rows))[0] if rows else None
+    rows = [r for r in rows if r.get("threshold") == threshold]
     agents = list(dict.fromkeys(r["agent"] for r in rows))
     cells = list(dict.fromkeys(cell_label(r) for r in rows))
     by = {(r["agent"], cell_label(r)): r for r in rows}
     panels = (("success_rate", "success rate", 1.0, False),
-              ("median_error", "median final error (cm)", 100.0, False),
+              ("median_rest_error", "median error at rest (cm)", 100.0, False),
               ("seconds_per_episode", "seconds per episode", 1.0, True))
     fig, axes = plt.subplots(3, 1, figsize=(max(8.0, 1.3 * len(cells)), 9.5))
     width = 0.8 / max(1, len(agents))
@@ -127,12 +131,14 @@ def plot_results(rows: list[dict[str, Any]], png: str | os.PathLike) -> None:
             ax.set_yscale("log")
         if key == "success_rate":
             ax.set_ylim(0, 1)
-        if key == "median_error":
-            ax.axhline(2.0, color="k", lw=0.8, ls="--")  # the success threshold
+        if key == "median_rest_error" and threshold is not None:
+            ax.axhline(100 * threshold, color="k", lw=0.8, ls="--")  # the success threshold
     handles, labels = axes[0].get_legend_handles_labels()
     fig.legend(handles, labels, loc="lower center", ncol=min(len(agents), 5), fontsize=8,
                frameon=False)
     title = "dlo benchmark (test suites)"
+    if threshold is not None:
+        title += f", success within {threshold_label(threshold)} at rest"
     if any(r["status"] != "ok" for r in rows):
         title += ": a missing cell has no bar (results.md says why)"
     fig.suptitle(title)

@@ -46,10 +46,14 @@ class EpisodeRecord:
         seed: Reset seed (``-1`` for suite tasks, which carry their own).
         task_seed: Seed of the task the environment made (or the suite's), ``-1`` if none.
         difficulty: Straight moves of the task.
-        success: Whether the episode ended solved (the environment terminates on success).
+        success: Whether the episode ended solved (the environment terminates on success,
+            judged on the cord at rest unless it was made with ``judge_at_rest=False``).
         start_error: ``error(start, goal)``.
         final_error: ``error(cord, goal)`` at the last step.
         final_max_error: Largest per-point distance at the last step.
+        rest_error: ``error`` of the shape the cord comes to rest in after the last step
+            (the environment's ``settled_metrics()``; ``final_error`` when it ended solved).
+        rest_direction_free_error: The same for ``direction_free_error``.
         steps: Environment steps taken.
         seconds: Wall time of all ``predict`` calls (planning and inference).
         planning_seconds: Time the policy reports spending on planning (``seconds`` if it
@@ -75,6 +79,8 @@ class EpisodeRecord:
     start_error: float
     final_error: float
     final_max_error: float
+    rest_error: float
+    rest_direction_free_error: float
     steps: int
     seconds: float
     planning_seconds: float
@@ -163,7 +169,8 @@ def _nanstat(values: list[float], fn: Any) -> float:
 
 
 def summarise(records: list[EpisodeRecord], agent: str = "", env_id: str = "") -> dict[str, Any]:
-    """Success rate, median and mean final error, steps, planning seconds and fidelity.
+    """Success rate, median and mean final and at-rest errors, steps, planning seconds and
+    fidelity.
 
     Returns:
         A JSON-ready dict; ``difficulty`` is the common difficulty or ``"mixed"``.
@@ -179,6 +186,10 @@ def summarise(records: list[EpisodeRecord], agent: str = "", env_id: str = "") -
         "success_rate": float(np.mean([r.success for r in records])),
         "median_final_error": _nanstat([r.final_error for r in records], np.median),
         "mean_final_error": _nanstat([r.final_error for r in records], np.mean),
+        "median_rest_error": _nanstat([r.rest_error for r in records], np.median),
+        "mean_rest_error": _nanstat([r.rest_error for r in records], np.mean),
+        "median_rest_direction_free_error": _nanstat(
+            [r.rest_direction_free_error for r in records], np.median),
         "mean_steps": float(np.mean([r.steps for r in records])),
         "median_planning_seconds": _nanstat([r.planning_seconds for r in records], np.median),
         "mean_planning_seconds": _nanstat([r.planning_seconds for r in records], np.mean),
@@ -240,6 +251,7 @@ def _run_episode(
         steps += 1
         if terminated or truncated:
             break
+    rest = base.settled_metrics()
     planned = isinstance(policy, PlanningPolicy)
     stats = policy.episode_stats() if planned else EpisodeStats(seconds=seconds)
     plan = stats.first_plan
@@ -261,6 +273,8 @@ def _run_episode(
         start_error=float(shape_error(start, goal)),
         final_error=float(info["error"]),
         final_max_error=float(info["max_error"]),
+        rest_error=float(rest["error"]),
+        rest_direction_free_error=float(rest["direction_free_error"]),
         steps=steps,
         seconds=seconds,
         planning_seconds=stats.seconds,
@@ -298,7 +312,9 @@ def evaluate(
         policy: A ``planners.interfaces.Policy`` (SB3's ``predict``).
         env: A ``dlo_env`` goal environment, or its id (as ``build_agent`` takes an
             environment): an environment given is used as it is and left open; one made from
-            an id (with ``env_kwargs``) is closed at the end.
+            an id (with ``env_kwargs``; with a ``suite``, episodes of
+            ``dlo_env.tasks.suite_max_steps`` steps unless ``env_kwargs`` says otherwise) is
+            closed at the end.
         difficulty: Straight moves per task (the environment's default if None).
         suite: A named suite (``linear-1``, ...) instead of ``difficulty``: its fixed tasks.
         episodes: Number of episodes.
@@ -331,7 +347,12 @@ def evaluate(
         env = env_id
     owned = isinstance(env, str)
     if owned:
-        env = gym.make(env, **(env_kwargs or {}))
+        kwargs = dict(env_kwargs or {})
+        if suite is not None:
+            from dlo_env.tasks import suite_max_steps
+
+            kwargs.setdefault("max_episode_steps", suite_max_steps(suite))
+        env = gym.make(env, **kwargs)
     elif not isinstance(env, gym.Env):
         raise ValueError(f"env must be a dlo_env environment or its id, got "
                          f"{type(env).__name__}")

@@ -149,3 +149,9 @@ def write_evaluation(
 def cell_label(row: dict[str, Any]) -> str:
     """A benchmark cell's short name in tables and charts: ``endpoint d3``, ``dual-endpoint d1``."""
     return f"{row.get('env', 'endpoint')} d{row['difficulty']}"
+
+
+def threshold_label(threshold: float, space: str = " ") -> str:
+    """A success threshold in tables and file names: ``1 cm``, ``0.5 cm`` (``1cm`` with
+    ``space=""``)."""
+    return f"{100 * threshold:g}{space}cm"

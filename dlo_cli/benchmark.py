@@ -41,7 +41,13 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     defaults = "; ".join(f"{e.split('/')[-1]}: {' '.join(map(str, d))}"
                          for e, d in DEFAULT_DIFFICULTIES.items())
     add_difficulty(parser, None, "each runs the test split of suite linear-K in every "
-                                 f"--env (None: {defaults})")
+                                 f"--env (None: {defaults})", suites=True)
+    parser.add_argument("--threshold", nargs="+", metavar="METRES",
+                        default=list(BenchmarkConfig.thresholds),
+                        type=number_in(float, 1e-4, 1.0, expected="a number of metres in "
+                                                                  "[0.0001, 1]"),
+                        help="success thresholds, metres: every cell runs once at each, judged "
+                             "on the cord at rest (default: 0.02 0.01 0.005)")
     parser.add_argument("--baselines", default=BenchmarkConfig.baselines,
                         help="folder with one `dlo baseline` output folder per RL agent and "
                              "environment (BASELINES/ppo, BASELINES/sac-her, BASELINES/bc; "
@@ -106,13 +112,15 @@ def run(args: argparse.Namespace) -> int:
 
     from dlo_bench.benchmark import QUICK_EPISODES, BenchmarkConfig, new_run_id, run_benchmark
     from dlo_bench.benchmark_report import ratio_lines, write_results
+    from dlo_bench.report import threshold_label
 
     torch.set_num_threads(args.threads)
     episodes = args.episodes if args.episodes is not None else (
         QUICK_EPISODES if args.quick else BenchmarkConfig.episodes)
     config = BenchmarkConfig(
         agents=tuple(args.agent), envs=tuple(args.env),
-        difficulties=tuple(args.difficulty) if args.difficulty else None, episodes=episodes,
+        difficulties=tuple(args.difficulty) if args.difficulty else None,
+        thresholds=tuple(args.threshold), episodes=episodes,
         seed=args.seed, baselines=args.baselines, model=args.model,
         transition_model=args.transition_model,
         replan_every=args.replan_every, max_seconds=args.max_seconds,
@@ -120,8 +128,9 @@ def run(args: argparse.Namespace) -> int:
     )
     backend = backend_of(args)
     run_id = new_run_id()
-    cells = ", ".join(f"{e.split('/')[-1]} d{d}" for e, d in config.cells())
-    print(f"benchmark run {run_id}: {len(config.agents)} agents x ({cells}) x "
+    cells = ", ".join(dict.fromkeys(f"{e.split('/')[-1]} d{d}" for e, d, _ in config.cells()))
+    at = ", ".join(threshold_label(t) for t in config.thresholds)
+    print(f"benchmark run {run_id}: {len(config.agents)} agents x ({cells}) x ({at}) x "
           f"{config.episodes} episodes -> {args.out}", flush=True)
     t0 = time.perf_counter()
     rows = run_benchmark(config, args.out, resume=args.resume, progress=True,
@@ -130,9 +139,11 @@ def run(args: argparse.Namespace) -> int:
     parser = argparse.ArgumentParser()
     add_arguments(parser)
     paths = write_results(rows, args.out, _command(args, vars(parser.parse_args([]))), seconds)
-    from dlo_bench.benchmark_report import success_table
+    from dlo_bench.benchmark_report import headline_first, success_table, thresholds_of
 
-    print("\n".join(success_table(rows)))
+    for t in headline_first(thresholds_of(rows)):
+        print(f"success at {threshold_label(t)}, judged at rest:")
+        print("\n".join(success_table(rows, t)))
     print("\n".join(ratio_lines(rows)) or "planning time ratios not measured: physics-mpc did "
                                           "not run with a cheaper planner")
     missing = sorted({r["agent"] for r in rows if r["status"] != "ok"})

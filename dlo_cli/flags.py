@@ -186,19 +186,38 @@ def add_agent(parser: argparse.ArgumentParser, default: list[str] | None,
                         help=f"one or several agents. {names}{folder}")
 
 
-def difficulty_type() -> Callable[[str], int]:
-    """An argparse type: a task difficulty, 1 to ``dlo_env.tasks.MAX_DIFFICULTY``."""
-    from dlo_env.tasks import MAX_DIFFICULTY
+def difficulty_type(suites: bool = False) -> Callable[[str], int]:
+    """An argparse type: a task difficulty, 1 to ``dlo_env.tasks.MAX_DIFFICULTY`` (with
+    ``suites``, one that has a named suite ``linear-K``)."""
+    from dlo_env.tasks import MAX_DIFFICULTY, SUITES
 
-    return number_in(int, 1, MAX_DIFFICULTY, expected=f"an integer from 1 to {MAX_DIFFICULTY}")
+    if not suites:
+        return number_in(int, 1, MAX_DIFFICULTY,
+                         expected=f"an integer from 1 to {MAX_DIFFICULTY}")
+    known = sorted(SUITES.values())
+    any_int = number_in(int, expected="")
+    expected = f"one of {' '.join(map(str, known))} (the suites linear-K)"
+
+    def parse(text: str) -> int:
+        try:
+            value = any_int(text)
+        except argparse.ArgumentTypeError:
+            value = None
+        if value not in known:
+            raise argparse.ArgumentTypeError(f"expected {expected}, got {text!r}")
+        return value
+
+    return parse
 
 
 def add_difficulty(parser: argparse.ArgumentParser | argparse._MutuallyExclusiveGroup,
-                   default: list[int] | None, what: str) -> None:
-    """``--difficulty``: one or several task difficulties (straight moves from start to goal)."""
-    parser.add_argument("--difficulty", type=difficulty_type(), nargs="+", default=default,
-                        metavar="K", help=f"difficulty, one or several: K straight moves from "
-                                          f"start to goal; {what}")
+                   default: list[int] | None, what: str, *, suites: bool = False) -> None:
+    """``--difficulty``: one or several task difficulties (straight moves from start to goal);
+    with ``suites``, only those of the named suites."""
+    parser.add_argument("--difficulty", type=difficulty_type(suites), nargs="+",
+                        default=default, metavar="K",
+                        help=f"difficulty, one or several: K straight moves from start to goal; "
+                             f"{what}")
 
 
 def add_seed(parser: argparse.ArgumentParser, what: str, default: int = 0) -> None:

@@ -318,13 +318,17 @@ class Cord:
         """Velocity of every point, ``(n, 2)`` m/s (inner points average the two ends)."""
         self._require_reset()
         pos, ang, vel, omega = self._body_state()
+        return self._point_velocities(ang, vel, omega)
+
+    def _point_velocities(self, ang: np.ndarray, vel: np.ndarray, omega: np.ndarray
+                          ) -> np.ndarray:
         half = 0.5 * self.params.segment
         # The spin's contribution at each link's ends: omega x r, r = half * (cos, sin).
         spin = np.empty_like(vel)
         spin[:, 0] = omega * -(half * np.sin(ang))
         spin[:, 1] = omega * (half * np.cos(ang))
         v_start, v_end = vel - spin, vel + spin
-        out = np.empty((len(pos) + 1, 2))
+        out = np.empty((len(vel) + 1, 2))
         out[0] = v_start[0]
         out[-1] = v_end[-1]
         out[1:-1] = 0.5 * (v_end[:-1] + v_start[1:])
@@ -334,6 +338,15 @@ class Cord:
         """The fastest point's speed, m/s (the rest test of ``settle`` and the tasks)."""
         v = self.point_velocities()
         return math.sqrt(float((v * v).sum(axis=1).max()))
+
+    def shape_and_speed(self) -> tuple[np.ndarray, float]:
+        """``shape`` and ``max_point_speed()`` from one read of the bodies (the environments'
+        per-step read-out)."""
+        self._require_reset()
+        pos, ang, vel, omega = self._body_state()
+        v = self._point_velocities(ang, vel, omega)
+        speed = math.sqrt(float((v * v).sum(axis=1).max()))
+        return self._points(pos, ang).astype(np.float32), speed
 
     def gripper_positions(self) -> dict[str, np.ndarray]:
         """Positions of the grippers that are attached, by end name."""

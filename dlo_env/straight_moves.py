@@ -49,13 +49,20 @@ class StraightMoves(gym.Wrapper, gym.utils.RecordConstructorArgs):
         if move.shape != self.action_space.shape or not np.isfinite(move).all():
             raise ValueError(f"action must be a finite array of shape "
                              f"{self.action_space.shape}, got {move.tolist()}")
-        max_step = self.env.unwrapped.max_step
+        base = self.env.unwrapped
         zero = np.zeros(self.action_space.shape, dtype=np.float32)
-        actions = list(split_move(move, max_step)) + [zero] * MAX_SETTLE_ACTIONS
-        for k, a in enumerate(actions):
-            if k >= len(actions) - MAX_SETTLE_ACTIONS and at_rest(self.env.unwrapped.cord):
-                break
-            obs, reward, _, truncated, info = self.env.step(a)
-            if truncated:
-                break
+        actions = list(split_move(move, base.max_step)) + [zero] * MAX_SETTLE_ACTIONS
+        judge = base.judge_at_rest
+        try:
+            for k, a in enumerate(actions):
+                settling = k >= len(actions) - MAX_SETTLE_ACTIONS
+                if settling and at_rest(base.cord):
+                    break
+                # The move is one action here: the cord is judged once it has been carried out.
+                base.judge_at_rest = judge and settling
+                obs, reward, _, truncated, info = self.env.step(a)
+                if truncated:
+                    break
+        finally:
+            base.judge_at_rest = judge
         return obs, float(reward), bool(info["is_success"]), bool(truncated), info

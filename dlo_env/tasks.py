@@ -6,10 +6,13 @@ when both are held) run through :func:`apply_action`, the very step primitive of
 environments: each move is split into ``ceil(length / max_step)`` equal actions, and zero
 actions follow the last move until the cord is at rest. Because ``Cord.reset`` rebuilds the
 simulation from scratch, replaying ``reference_actions`` through ``env.step`` from the reset
-state reproduces the goal bitwise: they are an oracle and a source of demonstrations.
+state reproduces the goal bitwise (with ``judge_at_rest=False``; judged at rest, an episode
+may end solved a few actions earlier): they are an oracle and a source of demonstrations.
 
-Named suites (``linear-1`` to ``linear-5``: difficulty 1 to 5) fix the seeds of a
-train and a test split so results are comparable. Task lists are saved as ``.npz`` data files.
+Named suites (``linear-1`` to ``linear-5``, and the long horizons ``linear-8`` and
+``linear-10``: difficulty K) fix the seeds of a train and a test split so results are
+comparable; ``suite_max_steps`` gives their episode lengths. Task lists are saved as ``.npz``
+data files.
 """
 
 from __future__ import annotations
@@ -37,7 +40,7 @@ from dlo_env.shapes import (
 #: Range of the length of one random straight move of a grasped end, metres.
 MOVE_LENGTH = (0.05, 0.30)
 #: Largest number of straight moves in a task.
-MAX_DIFFICULTY = 5
+MAX_DIFFICULTY = 10
 #: Gripper displacement of an action of 1.0 on one axis, metres (the environments' default).
 DEFAULT_MAX_STEP = 0.02
 #: A task is solved when ``error(cord, goal)`` is at most this, metres.
@@ -46,6 +49,11 @@ SUCCESS_THRESHOLD = 0.02
 REST_SPEED = 1e-3
 #: At most this many zero actions after the last move wait for the cord to come to rest.
 MAX_SETTLE_ACTIONS = 10
+#: The environments test whether a moving cord would come to rest within the success threshold
+#: when its error is at most the threshold plus this, metres. A cord moves less than this while
+#: coming to rest after any action (at most 0.7 cm in mean point distance after full-speed random
+#: actions, ``tests/env/test_judged_at_rest.py``); a larger margin only costs time.
+REST_CHECK_MARGIN = 0.01
 #: Move targets keep this distance from the table edge, metres (the cord is not pressed on it).
 TARGET_MARGIN = 0.1
 #: With both ends held, head and tail stay this much closer than ``max_span * length``, metres.
@@ -59,8 +67,12 @@ GRASP_ENDS: dict[str, tuple[str, ...]] = {
     "tail": ("tail",),
     "both": ("head", "tail"),
 }
-#: Named suites: name -> difficulty.
-SUITES = {f"linear-{k}": k for k in range(1, MAX_DIFFICULTY + 1)}
+#: Named suites: name -> difficulty (straight moves from start to goal); linear-8 and
+#: linear-10 are the long horizons.
+SUITES = {f"linear-{k}": k for k in (1, 2, 3, 4, 5, 8, 10)}
+#: Steps of an episode on a suite's task: the registered 100, or 20 per move for long horizons
+#: (a move takes 9 actions on average; linear-10's reference actions take up to about 120).
+STEPS_PER_MOVE = 20
 #: Tasks per split of every suite.
 SPLIT_SIZES = {"train": 200, "test": 50}
 _SPLIT_OFFSETS = {"train": 0, "test": 50_000}
@@ -141,7 +153,7 @@ class Task:
 
 
 def check_difficulty(difficulty: object, name: str = "difficulty") -> int:
-    """Return ``difficulty`` as an int, or raise ``ValueError`` unless it is an int in 1-5."""
+    """Return ``difficulty`` as an int, or raise ``ValueError`` unless it is an int in 1-10."""
     ok = isinstance(difficulty, (int, np.integer)) and not isinstance(difficulty, bool)
     if not ok or not 1 <= int(difficulty) <= MAX_DIFFICULTY:
         raise ValueError(f"{name} must be an int from 1 to {MAX_DIFFICULTY}, got {difficulty!r}")
@@ -293,7 +305,7 @@ def make_task(
 
     Args:
         seed: Seed of everything random in the task; the same seed gives the same task.
-        difficulty: Number of straight moves, 1-5.
+        difficulty: Number of straight moves, 1-10.
         grasp: Held ends, ``"head"``, ``"tail"`` or ``"both"``.
         params: Cord parameters (default cord if None).
         max_step: Gripper displacement of an action of 1.0, metres.
@@ -346,6 +358,13 @@ def make_task(
     raise RuntimeError(f"no goal farther than min_error={min_error} m from the start")
 
 
+def suite_max_steps(name: str) -> int:
+    """The episode length for a named suite's tasks: ``max(100, STEPS_PER_MOVE * K)``."""
+    if name not in SUITES:
+        raise ValueError(f"suite name must be one of {tuple(SUITES)}, got {name!r}")
+    return max(100, STEPS_PER_MOVE * SUITES[name])
+
+
 def suite_seeds(name: str, split: str) -> np.ndarray:
     """The fixed task seeds of a named suite's split."""
     if name not in SUITES:
@@ -362,7 +381,7 @@ def load_suite(
     """The tasks of a named suite (generated from its fixed seeds on the default cord).
 
     Args:
-        name: ``"linear-K"``, K = 1..5 (difficulty K).
+        name: ``"linear-K"``, K = 1..5, 8 or 10 (difficulty K).
         split: ``"train"`` (200 tasks) or ``"test"`` (50 tasks); their seeds never overlap.
         grasp: ``"head"`` for ``DLOEndpoint-v0``, ``"both"`` for ``DLODualEndpoint-v0``.
         limit: Only the first ``limit`` tasks.

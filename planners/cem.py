@@ -36,8 +36,9 @@ class CEMConfig:
         iterations: CEM iterations per planning call (at most).
         init_std: Initial standard deviation of every displacement coordinate, metres.
         max_move: Largest displacement of one move, metres (per end).
-        stop_error: Stop iterating once the best predicted error is at most this, metres
-            (0: always run every iteration).
+        stop_fraction: Stop iterating once the best predicted error is at most this fraction
+            of the policy's ``success_threshold`` (the environment's; 0: always run every
+            iteration).
         seed: Seed of the sampling.
     """
 
@@ -47,14 +48,14 @@ class CEMConfig:
     iterations: int = 3
     init_std: float = 0.08
     max_move: float = 0.4
-    stop_error: float = 0.0
+    stop_fraction: float = 0.0
     seed: int = 0
 
     def __post_init__(self) -> None:
         name = type(self).__name__
         positive_ints(self, "moves", "samples", "elites", "iterations")
         positive(self, "init_std", "max_move")
-        non_negative(self, "stop_error")
+        non_negative(self, "stop_fraction")
         if self.elites > self.samples:
             raise ValueError(f"{name}.elites must be <= samples ({self.samples}), "
                              f"got {self.elites}")
@@ -83,7 +84,8 @@ class CEMPolicy(EpisodicPolicy):
         grasp: The held end(s): ``"head"`` (``DLOEndpoint-v0``), ``"tail"`` or ``"both"``
             (``DLODualEndpoint-v0``).
         max_step: The environment's ``max_step`` (metres per unit action).
-        success_threshold: Shape error (metres) below which the policy holds still.
+        success_threshold: The environment's success threshold, metres: the policy holds still
+            within it, and stops a plan's iterations at ``config.stop_fraction`` of it.
         config: CEM budget.
     """
 
@@ -156,7 +158,7 @@ class CEMPolicy(EpisodicPolicy):
             order = np.argsort(errors)
             if errors[order[0]] < best_err:
                 best_err, best_plan = float(errors[order[0]]), candidates[order[0]].copy()
-            if best_err <= cfg.stop_error:
+            if best_err <= cfg.stop_fraction * self.success_threshold:
                 break
             elite = candidates[order[: cfg.elites]]
             mean, std = elite.mean(axis=0), elite.std(axis=0) + 1e-3

@@ -27,7 +27,8 @@ class LatentMPCConfig(CEMConfig):
     how it uses the model. The defaults were chosen on the train splits of linear-1 to
     linear-5 (``benchmarks/tune_latent_mpc.py``; the sweep is in docs/history.md): one network
     scores as well as five at a fifth of the cost, a horizon of 3 moves beats 2, and stopping
-    once a plan is predicted within 1 cm halves the time for the same success.
+    once a plan is predicted within half the success threshold (1 cm of 2 cm) halves the time
+    for the same success.
 
     Attributes:
         members: Ensemble members that score the candidates (the first ones), or None: the
@@ -48,7 +49,7 @@ class LatentMPCConfig(CEMConfig):
     iterations: int = 3
     init_std: float = 0.08
     max_move: float = 0.35
-    stop_error: float = 0.01
+    stop_fraction: float = 0.5
     members: int | None = None
     spread_weight: float = 0.0
     settle_actions: int = 3
@@ -72,7 +73,9 @@ class LatentMPCPolicy(CEMPolicy):
             environment's).
         grasp: ``"head"`` for ``DLOEndpoint-v0``, ``"both"`` for ``DLODualEndpoint-v0``
             (``"tail"`` for a cord held at the tail).
-        success_threshold: Shape error (metres) below which the policy holds still.
+        success_threshold: The environment's success threshold, metres (``for_env`` reads it):
+            the policy holds still within it and stops planning at ``config.stop_fraction``
+            of it.
         config: CEM budget.
     """
 

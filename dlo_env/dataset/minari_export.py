@@ -41,7 +41,7 @@ from dlo_env.dataset.transitions import GRASP_NAMES, load_transitions
 from dlo_env.envs import ENVIRONMENTS
 from dlo_env.shapes import error
 from dlo_env.straight_moves import StraightMoves
-from dlo_env.tasks import SUITES, load_suite
+from dlo_env.tasks import SUITES, load_suite, suite_max_steps
 
 #: Namespace of every exported dataset.
 NAMESPACE = "dlo"
@@ -148,7 +148,8 @@ def export_demonstrations(
 
     Args:
         env_id: ``"dlo_env/DLOEndpoint-v0"`` or ``"dlo_env/DLODualEndpoint-v0"``.
-        suite: A named suite (``linear-1`` to ``linear-5``).
+        suite: A named suite (``dlo_env.tasks.SUITES``); its episodes last
+            ``suite_max_steps(suite)`` steps.
         root: Minari dataset root (None: Minari's own).
         limit: Only the first ``limit`` train tasks (all 200 if None).
         progress: ``progress(done, 0)`` after every episode.
@@ -160,17 +161,18 @@ def export_demonstrations(
     dataset_id = demonstrations_id(env_id, suite)
     grasp = ENVIRONMENTS[env_id][0]
     tasks = load_suite(suite, "train", grasp=grasp, limit=limit)
-    env = gym.make(env_id)
+    env = gym.make(env_id, max_episode_steps=suite_max_steps(suite))
     buffers = []
     for task in tasks:
         buffers.append(record_episode(env, {"task": task}, task.reference_actions))
         if progress is not None:
             progress(1, 0)
+    spec = env.spec  # with this suite's episode length
     env.close()
     description = (f"Oracle demonstrations: the reference_actions of the {len(tasks)} train "
                    f"tasks of suite {suite} (dlo_env.tasks.load_suite), episode i being task i; "
                    "an episode ends on success.")
-    _write(dataset_id, buffers, gym.spec(env_id), "oracle", description, root)
+    _write(dataset_id, buffers, spec, "oracle", description, root)
     return _summary(dataset_id, buffers)
 
 

@@ -44,9 +44,9 @@ class DLODualEndpointEnv(CordGoalEnv):
 
     ## Rewards and Success
 
-    As in `DLOEndpoint-v0`: dense `-error` (default) or sparse 0 / -1; success when
-    `error <= success_threshold` (0.02 m); `info` always holds `is_success`, `error`,
-    `max_error`; `compute_reward` is batched.
+    As in `DLOEndpoint-v0`: dense `-error` (default) or sparse 0 / -1; success when the cord
+    comes to rest with `error <= success_threshold` (0.02 m), judged at rest; `info` holds the
+    same keys; `compute_reward` is batched.
 
     ## Starting State
 
@@ -74,13 +74,14 @@ class DLODualEndpointEnv(CordGoalEnv):
     env = gym.make(
         "dlo_env/DLODualEndpoint-v0",
         params=None, max_step=0.02, reward_type="dense", success_threshold=0.02,
-        difficulty=1, render_mode=None,
+        judge_at_rest=True, difficulty=1, render_mode=None,
     )
     ```
 
     ## Version History
 
-    * v0: Initial release.
+    * v0: Initial release. Since dlo 0.2 (2026-11) success is judged at rest;
+      `judge_at_rest=False` gives the first rule.
     """
 
     grasp: ClassVar[Grasp] = "both"

@@ -52,8 +52,20 @@ class DLOEndpointEnv(CordGoalEnv):
 
     ## Success
 
-    `error <= success_threshold` (default 0.02 m, 2 % of the cord length). `info` always holds
-    `is_success` (bool), `error` and `max_error` (largest per-point distance), metres.
+    Judged on the cord at rest. A step succeeds when the cord, if the gripper stopped now, would
+    come to rest with `error <= success_threshold` (default 0.02 m, 2 % of the cord length); the
+    step then waits until it is at rest (`info["settle_actions"]` zero actions, at most 10), so
+    the observation of a solved step is the cord at rest. A cord that only passes through the
+    goal does not count. An agent never has to stop on its own, and may send zero actions (each
+    waits one control period). `judge_at_rest=False` restores the earlier rule: the moving cord
+    within the threshold.
+
+    `info` always holds `is_success` (bool), `at_rest` (every point slower than 1 mm/s),
+    `settle_actions`, and the errors of the returned shape: `error`, `max_error` (largest
+    per-point distance), `direction_free_error` (the smaller of the errors to the goal and to
+    the reversed goal) and `bead_share` (share of points within 1.75 cm of the goal polyline),
+    metres. `env.unwrapped.settled_metrics()` gives the same errors for the shape the cord
+    would come to rest in now, without changing the episode.
 
     ## Starting State
 
@@ -67,7 +79,7 @@ class DLOEndpointEnv(CordGoalEnv):
 
     | Option       | Value                  | Effect                                      |
     |--------------|------------------------|---------------------------------------------|
-    | `difficulty` | int 1-5                | straight moves from start to goal           |
+    | `difficulty` | int 1-10               | straight moves from start to goal           |
     | `start`      | `(20, 2)` or `(40,)`   | start there (not settled); goal made from it |
     | `goal`       | `(20, 2)` or `(40,)`   | this goal; random start; no reference moves |
     | `task`       | `dlo_env.tasks.Task`   | the task's start and goal (not combinable)  |
@@ -98,14 +110,16 @@ class DLOEndpointEnv(CordGoalEnv):
         max_step=0.02,           # metres per unit action
         reward_type="dense",     # or "sparse"
         success_threshold=0.02,  # metres
-        difficulty=1,            # default number of straight moves, 1-5
+        judge_at_rest=True,      # success judged on the cord at rest
+        difficulty=1,            # default number of straight moves, 1-10
         render_mode=None,        # or "rgb_array", "human"
     )
     ```
 
     ## Version History
 
-    * v0: Initial release.
+    * v0: Initial release. Since dlo 0.2 (2026-11) success is judged at rest;
+      `judge_at_rest=False` gives the first rule.
     """
 
     grasp: ClassVar[Grasp] = "head"

@@ -8,6 +8,7 @@ choose the grasp and carry the documentation.
 
 from __future__ import annotations
 
+import copy
 from typing import Any, ClassVar
 
 import gymnasium as gym
@@ -25,12 +26,16 @@ from dlo_env.shapes import (
 from dlo_env.tasks import (
     DEFAULT_MAX_STEP,
     GRASP_ENDS,
+    REST_CHECK_MARGIN,
+    REST_SPEED,
     SUCCESS_THRESHOLD,
     Task,
     apply_action,
+    at_rest,
     check_difficulty,
     make_task,
     random_start,
+    wait_for_rest,
 )
 
 _OPTIONS = ("difficulty", "start", "goal", "task")
@@ -47,7 +52,11 @@ class CordGoalEnv(gym.Env[dict[str, np.ndarray], np.ndarray]):
         max_step: Gripper displacement of an action of 1.0 on one axis, metres.
         reward_type: ``"dense"`` (``-error``) or ``"sparse"`` (0 on success, else -1).
         success_threshold: Success when ``error(cord, goal)`` is at most this, metres.
-        difficulty: Straight moves between start and goal when ``reset`` draws a task (1-5).
+        judge_at_rest: Judge success on the cord at rest (default): a step succeeds when the
+            cord, if the grippers stopped now, comes to rest within ``success_threshold``; the
+            step then lets it come to rest. False: the earlier rule, the moving cord within
+            ``success_threshold``.
+        difficulty: Straight moves between start and goal when ``reset`` draws a task (1-10).
         render_mode: ``None``, ``"rgb_array"`` or ``"human"``.
     """
 
@@ -62,6 +71,7 @@ class CordGoalEnv(gym.Env[dict[str, np.ndarray], np.ndarray]):
         max_step: float = DEFAULT_MAX_STEP,
         reward_type: str = "dense",
         success_threshold: float = SUCCESS_THRESHOLD,
+        judge_at_rest: bool = True,
         difficulty: int = 1,
         render_mode: str | None = None,
     ) -> None:
@@ -73,6 +83,8 @@ class CordGoalEnv(gym.Env[dict[str, np.ndarray], np.ndarray]):
             raise ValueError(f"reward_type must be one of {_REWARD_TYPES}, got {reward_type!r}")
         if not (isinstance(success_threshold, (int, float)) and success_threshold > 0):
             raise ValueError(f"success_threshold must be a number > 0, got {success_threshold!r}")
+        if not isinstance(judge_at_rest, (bool, np.bool_)):
+            raise ValueError(f"judge_at_rest must be True or False, got {judge_at_rest!r}")
         if render_mode is not None and render_mode not in self.metadata["render_modes"]:
             raise ValueError(
                 f"render_mode must be None or one of {self.metadata['render_modes']}, "
@@ -82,6 +94,7 @@ class CordGoalEnv(gym.Env[dict[str, np.ndarray], np.ndarray]):
         self.max_step = float(max_step)
         self.reward_type = reward_type
         self.success_threshold = float(success_threshold)
+        self.judge_at_rest = bool(judge_at_rest)
         self.difficulty = check_difficulty(difficulty)
         self.render_mode = render_mode
 
@@ -163,6 +176,7 @@ class CordGoalEnv(gym.Env[dict[str, np.ndarray], np.ndarray]):
         self._goal_flat = goal.reshape(-1)
         self.cord.reset(start)
         obs, info = self._observe()
+        info["settle_actions"] = 0
         # Tuples, not (T, dim) arrays: their length varies per episode, and Gymnasium's vector
         # envs stack equal-shape arrays but keep other objects as they are.
         info["task"] = task
@@ -179,6 +193,11 @@ class CordGoalEnv(gym.Env[dict[str, np.ndarray], np.ndarray]):
     ) -> tuple[dict[str, np.ndarray], float, bool, bool, dict[str, Any]]:
         """Move the held end(s) by ``clip(action, -1, 1) * max_step`` metres (one ``Cord.move``).
 
+        With ``judge_at_rest`` (the default), a step whose cord would come to rest within
+        ``success_threshold`` if the grippers stopped now also waits until it is at rest
+        (``info["settle_actions"]`` zero actions, at most ``MAX_SETTLE_ACTIONS``) and ends the
+        episode solved: the returned shape is the one at rest.
+
         Raises:
             ValueError: If ``action`` has the wrong shape or is not finite.
         """
@@ -188,29 +207,84 @@ class CordGoalEnv(gym.Env[dict[str, np.ndarray], np.ndarray]):
         if not np.isfinite(a).all():
             raise ValueError(f"action must be finite, got {a.tolist()}")
         apply_action(self.cord, a, self.max_step)
-        obs, info = self._observe()
+        state = self.cord.shape_and_speed()
+        settle = self._settle_if_solved(*state) if self.judge_at_rest else 0
+        obs, info = self._observe(None if settle else state)
+        info["settle_actions"] = settle
         reward = float(self.compute_reward(obs["achieved_goal"], obs["desired_goal"], info))
         if self.render_mode == "human":
             self.render()
         return obs, reward, bool(info["is_success"]), False, info
 
-    def _observe(self) -> tuple[dict[str, np.ndarray], dict[str, Any]]:
-        # One read of the shape per step (it is the costliest read-out).
-        flat = self.cord.shape.reshape(-1)
+    def _settle_if_solved(self, shape: np.ndarray, speed: float) -> int:
+        """Zero actions until the cord is at rest, when it would come to rest within the
+        threshold; the number taken (0 when it is at rest already or would rest outside).
+
+        A copy judges first, so a cord that would not rest within the threshold goes on
+        undisturbed; the cord itself then takes the zero actions, exactly as an agent sending
+        them would (a copy continues close to, not bitwise like, the original).
+        """
+        goal = self._goal_flat.reshape(-1, 2)
+        if speed < REST_SPEED:
+            return 0
+        if error(shape, goal) > self.success_threshold + REST_CHECK_MARGIN:
+            return 0
+        trial = copy.deepcopy(self.cord)
+        wait_for_rest(trial, self.max_step)
+        if not (at_rest(trial) and error(trial.shape, goal) <= self.success_threshold):
+            return 0
+        return wait_for_rest(self.cord, self.max_step)
+
+    def settled_metrics(self) -> dict[str, float]:
+        """The error metrics of the shape the cord comes to rest in if the grippers stop now.
+
+        Simulates a copy of the cord (zero actions until it is at rest, at most
+        ``MAX_SETTLE_ACTIONS``); the episode goes on unchanged. ``evaluate`` records it after an
+        episode's last step.
+
+        Returns:
+            ``error``, ``max_error``, ``direction_free_error`` and ``bead_share`` of the shape
+            at rest, and ``at_rest`` (False when the cord still moves after the zero actions).
+        """
+        if self.cord.space is None or self._goal_flat is None:
+            raise RuntimeError("settled_metrics() needs an episode: call reset() first")
+        cord = self.cord if at_rest(self.cord) else copy.deepcopy(self.cord)
+        if cord is not self.cord:
+            wait_for_rest(cord, self.max_step)
+        metrics = self._metrics(cord.shape, self._goal_flat.reshape(-1, 2))
+        metrics["at_rest"] = at_rest(cord)
+        return metrics
+
+    @staticmethod
+    def _metrics(shape: np.ndarray, goal: np.ndarray) -> dict[str, Any]:
+        err = error(shape, goal)
+        return {
+            "error": err,
+            "max_error": max_error(shape, goal),
+            "direction_free_error": min(err, error(shape, goal[::-1])),
+            "bead_share": bead_share(shape, goal),
+        }
+
+    def _observe(self, state: tuple[np.ndarray, float] | None = None
+                 ) -> tuple[dict[str, np.ndarray], dict[str, Any]]:
+        # One read of the bodies per step (the costliest read-out): ``state`` is the cord's
+        # ``shape_and_speed()`` when the caller has read it.
+        shape, speed = state if state is not None else self.cord.shape_and_speed()
+        flat = shape.reshape(-1)
         n2 = flat.shape[0]
         observation = np.empty(n2 + 2 * len(self._ends), dtype=np.float32)
         observation[:n2] = flat
         for i, end in enumerate(self._ends):
             observation[n2 + 2 * i : n2 + 2 * i + 2] = self.cord.grippers[end].position
         goal = self._goal_flat
-        shape, goal_points = flat.reshape(-1, 2), goal.reshape(-1, 2)
-        err = error(shape, goal_points)
+        goal_points = goal.reshape(-1, 2)
+        metrics = self._metrics(shape, goal_points)
+        resting = speed < REST_SPEED
+        solved = metrics["error"] <= self.success_threshold
         info = {
-            "is_success": err <= self.success_threshold,
-            "error": err,
-            "max_error": max_error(shape, goal_points),
-            "direction_free_error": min(err, error(shape, goal_points[::-1])),
-            "bead_share": bead_share(shape, goal_points),
+            "is_success": solved and (resting or not self.judge_at_rest),
+            "at_rest": resting,
+            **metrics,
         }
         obs = {"observation": observation, "achieved_goal": flat, "desired_goal": goal.copy()}
         return obs, info

@@ -38,11 +38,12 @@ CASES = [
     ("train --data OUT/d.npz --seed -5 --out OUT", "--seed", ("'-5'",)),
     ("finetune --seed 1.5 --model OUT --shapes OUT/s.npz --out OUT", "--seed", ("'1.5'",)),
     # Difficulties are those of the tasks: 1 to dlo_env.tasks.MAX_DIFFICULTY.
-    ("evaluate --agent straight-line --difficulty 7 --out OUT", "--difficulty",
-     ("'7'", "from 1 to 5")),
+    ("evaluate --agent straight-line --difficulty 11 --out OUT", "--difficulty",
+     ("'11'", "from 1 to 10")),
     ("evaluate --agent straight-line --difficulty 1 0 --out OUT", "--difficulty", ("'0'",)),
-    ("baseline --algo ppo --difficulty 7 --out OUT", "--difficulty", ("'7'", "from 1 to 5")),
-    ("benchmark --difficulty 7 --out OUT", "--difficulty", ("'7'", "from 1 to 5")),
+    ("baseline --algo ppo --difficulty 11 --out OUT", "--difficulty", ("'11'", "from 1 to 10")),
+    ("benchmark --difficulty 7 --out OUT", "--difficulty", ("'7'", "one of 1 2 3 4 5 8 10")),
+    ("benchmark --threshold 0 --out OUT", "--threshold", ("'0'", "metres")),
     # A planning budget is a number of seconds > 0.
     ("evaluate --agent straight-line --max-seconds -1 --out OUT", "--max-seconds", ("'-1'",)),
     ("evaluate --agent straight-line --max-seconds 0 --out OUT", "--max-seconds", ("'0'",)),

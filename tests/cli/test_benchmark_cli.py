@@ -43,7 +43,8 @@ def test_quick_benchmark_writes_every_agent_and_difficulty(models, tmp_path, cap
     # Difficulty 1 only: the physics planner is the slow agent (the other suites run the same
     # code, and the missing-agent test covers all three).
     code = main(["benchmark", "--quick", "--episodes", "1", "--difficulty", "1",
-                 "--env", "dlo_env/DLOEndpoint-v0", "--baselines", str(models),
+                 "--threshold", "0.02", "--env", "dlo_env/DLOEndpoint-v0",
+                 "--baselines", str(models),
                  "--model", str(models / "shape.pt"), "--max-seconds", "0.05",
                  "--replan-every", "50", "--allow-dirty", "--out", str(out)])
     assert code == 0
@@ -54,9 +55,11 @@ def test_quick_benchmark_writes_every_agent_and_difficulty(models, tmp_path, cap
                f"({run}): " in printed
     rows = json.loads((out / "results.json").read_text())
     assert [r["agent"] for r in rows] == AGENTS and {r["difficulty"] for r in rows} == {1}
+    assert {r["threshold"] for r in rows} == {0.02}
     for row in rows:
         assert ROW_KEYS <= set(row) and row["status"] == "ok" and row["episodes"] == 1
         assert 0.0 <= row["success_rate"] <= 1.0 and row["median_error"] > 0
+        assert row["median_rest_error"] > 0
         assert row["seconds_per_episode"] > 0
     assert {r["run"] for r in rows} == {run}
     assert {r["training_env_steps"] for r in rows if r["agent"] in ("ppo", "sac-her")} == {256}
@@ -65,23 +68,24 @@ def test_quick_benchmark_writes_every_agent_and_difficulty(models, tmp_path, cap
     assert "env steps" in costs["latent-mpc"] and "simulated shapes" in costs["latent-tree"]
     assert costs["physics-mpc"].startswith("none")
     table = (out / "results.md").read_text()
-    assert "| physics-mpc | endpoint | 1 | 1 |" in table and "Machine:" in table
-    assert "| agent | endpoint d1 | sample cost |" in table
+    assert "| physics-mpc | endpoint | 1 | 2 cm | 1 |" in table and "Machine:" in table
+    assert "## Success at 2 cm\n\n| agent | endpoint d1 | sample cost |" in table
     assert "Command: `dlo benchmark --quick --episodes 1" in table
     assert (out / "results.png").stat().st_size > 0
-    assert (out / "results_episodes" / "sac-her-endpoint-d1.csv").is_file()
+    assert (out / "results_episodes" / "sac-her-endpoint-d1-2cm.csv").is_file()
 
 
 def test_agents_without_a_model_are_reported_not_dropped(tmp_path, capsys):
     out = tmp_path / "bench"
     code = main(["benchmark", "--quick", "--agent", "straight-line", "ppo", "sac-her",
                  "latent-tree", "--difficulty", "1", "2", "--episodes", "1",
+                 "--threshold", "0.02", "0.01",
                  "--baselines", str(tmp_path / "none"), "--allow-dirty", "--out", str(out)])
     assert code == 0
     rows = json.loads((out / "results.json").read_text())
-    assert [(r["agent"], r["env"], r["difficulty"]) for r in rows] == [
-        (a, e, d) for a in ("straight-line", "ppo", "sac-her", "latent-tree")
-        for e in ("endpoint", "dual-endpoint") for d in (1, 2)]
+    assert [(r["agent"], r["threshold"], r["env"], r["difficulty"]) for r in rows] == [
+        (a, t, e, d) for a in ("straight-line", "ppo", "sac-her", "latent-tree")
+        for t in (0.02, 0.01) for e in ("endpoint", "dual-endpoint") for d in (1, 2)]
     for r in rows:
         if r["agent"] == "straight-line" or (r["agent"], r["env"]) == ("latent-tree",
                                                                          "endpoint"):
@@ -93,7 +97,8 @@ def test_agents_without_a_model_are_reported_not_dropped(tmp_path, capsys):
         else:
             assert r["note"].startswith(f"no trained model for {r['env_id']}")
     table = (out / "results.md").read_text()
-    assert "| ppo | dual-endpoint | 2 | – | missing |" in table
+    assert "| ppo | dual-endpoint | 2 | 1 cm | – | missing |" in table
+    assert table.index("## Success at 1 cm") < table.index("## Success at 2 cm")
     assert "| ppo | – | – | – | – |" in table  # the success table
     assert "with missing cells (reported in the table): latent-tree, ppo, sac-her" in \
         capsys.readouterr().out
@@ -106,7 +111,7 @@ def test_resume_reuses_finished_cells(tmp_path, capsys):
     first = json.loads((tmp_path / "results.json").read_text())
     capsys.readouterr()
     assert main([*args, "--resume"]) == 0
-    assert "straight-line-endpoint-d1: reused" in capsys.readouterr().out
+    assert "straight-line-endpoint-d1-0.5cm: reused" in capsys.readouterr().out
     assert json.loads((tmp_path / "results.json").read_text())[0]["median_error"] == \
         first[0]["median_error"]
 

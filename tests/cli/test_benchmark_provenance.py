@@ -105,7 +105,7 @@ def test_allow_dirty_runs_and_marks_every_cell_dirty_with_its_run(monkeypatch, t
     assert main([*argv, "--resume"]) == 0  # reused cells keep the run that timed them
     assert {r["run"] for r in json.loads((out / "results.json").read_text())} == {run}
     table = (out / "results.md").read_text()
-    assert "--allow-dirty" in table and f"{run} (2 cells)" in table
+    assert "--allow-dirty" in table and f"{run} (6 cells)" in table
 
 
 def _row(agent: str, difficulty: int, seconds: float, run: str) -> dict:
@@ -147,6 +147,7 @@ def test_every_cell_of_a_run_records_the_code_read_before_its_first_cell(tmp_pat
     versions = iter(["abc1234", "abc1234+dirty", "abc1234+dirty"])
     monkeypatch.setattr(benchmark, "code_version", lambda: next(versions))
     config = BenchmarkConfig(agents=("straight-line",), envs=("dlo_env/DLOEndpoint-v0",),
-                             difficulties=(1, 2), episodes=1, fidelity=False)
+                             difficulties=(1, 2), thresholds=(0.02,), episodes=1,
+                             fidelity=False)
     rows = run_benchmark(config, tmp_path, progress=False)
     assert [row["commit"] for row in rows] == ["abc1234", "abc1234"]

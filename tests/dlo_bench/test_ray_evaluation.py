@@ -35,14 +35,15 @@ def test_benchmark_cells_on_ray_equal_the_local_ones(local_ray, tmp_path):
     config = BenchmarkConfig(agents=("straight-line", "physics-mpc", "latent-mpc",
                                      "latent-tree-kino"),
                              envs=("dlo_env/DLOEndpoint-v0", "dlo_env/DLODualEndpoint-v0"),
-                             difficulties=(2,), episodes=2, fidelity=False,
+                             difficulties=(2,), thresholds=(0.02,), episodes=2,
+                             fidelity=False,
                              max_seconds=60.0)  # kino's search ends by goal or nodes, not time
     local = run_benchmark(config, tmp_path / "local", progress=False)
     on_ray = run_benchmark(config, tmp_path / "ray", progress=False, backend=RayBackend())
     assert [{k: r[k] for k in SAME} for r in on_ray] == [{k: r[k] for k in SAME} for r in local]
     assert [r["status"] for r in local].count("missing") == 1  # kino: endpoint only
     for r in (r for r in local if r["status"] == "ok"):
-        cell = f"{r['agent']}-{r['env']}-d2.json"
+        cell = f"{r['agent']}-{r['env']}-d2-2cm.json"
         records = [json.loads((tmp_path / d / "results_episodes" / cell).read_text())["records"]
                    for d in ("local", "ray")]
         assert [x["final_error"] for x in records[0]] == [x["final_error"] for x in records[1]]

@@ -100,7 +100,8 @@ def test_same_seed_and_actions_give_bitwise_identical_rollouts(env_id):
 @pytest.mark.parametrize("env_id", IDS)
 @pytest.mark.parametrize("difficulty", [1, 3])
 def test_reference_actions_replayed_through_step_reach_the_goal_exactly(env_id, difficulty):
-    env = gym.make(env_id)
+    # The moving-cord rule never settles the cord on its own: the replay is bitwise.
+    env = gym.make(env_id, judge_at_rest=False)
     for seed in range(2):
         obs, info = env.reset(seed=seed, options={"difficulty": difficulty})
         assert len(info["moves"]) == difficulty == info["difficulty"]
@@ -110,8 +111,25 @@ def test_reference_actions_replayed_through_step_reach_the_goal_exactly(env_id, 
             obs, reward, terminated, truncated, step_info = env.unwrapped.step(a)
             success = step_info["error"] <= SUCCESS_THRESHOLD
             assert terminated == step_info["is_success"] == success
+            assert step_info["settle_actions"] == 0
         assert np.array_equal(obs["achieved_goal"], obs["desired_goal"])
         assert step_info["error"] == 0.0 and step_info["is_success"] and terminated
+
+
+@pytest.mark.parametrize("env_id", IDS)
+def test_reference_actions_solve_the_task_at_rest(env_id):
+    env = gym.make(env_id)
+    for seed in range(3):
+        obs, info = env.reset(seed=seed, options={"difficulty": 2})
+        for a in info["reference_actions"]:
+            obs, reward, terminated, truncated, step_info = env.step(a)
+            # Success only ever comes with the cord at rest, and within the threshold.
+            assert terminated == step_info["is_success"]
+            if terminated:
+                break
+        assert terminated and step_info["at_rest"]
+        assert step_info["error"] <= SUCCESS_THRESHOLD
+        assert step_info["error"] == env.unwrapped.settled_metrics()["error"]
 
 
 def test_reset_info_describes_the_task():
@@ -127,7 +145,9 @@ def test_reset_info_describes_the_task():
 
 @pytest.mark.parametrize("reward_type", ["dense", "sparse"])
 def test_compute_reward_on_a_batch_equals_the_step_rewards(reward_type):
-    env = gym.make(ENDPOINT, reward_type=reward_type, success_threshold=0.05)
+    # The moving-cord rule: the replay runs past the step that solves it, bitwise to the goal.
+    env = gym.make(ENDPOINT, reward_type=reward_type, success_threshold=0.05,
+                   judge_at_rest=False)
     obs, info = env.reset(seed=2)
     achieved, desired, rewards = [], [], []
     for a in info["reference_actions"]:
@@ -203,7 +223,7 @@ def test_start_and_goal_options_are_used_as_given():
 
 
 def test_start_option_alone_generates_a_goal_from_that_start():
-    env = gym.make(ENDPOINT)
+    env = gym.make(ENDPOINT, judge_at_rest=False)  # a bitwise replay past the solving step
     start = make_task(9, 1).goal
     obs, info = env.reset(seed=1, options={"start": start, "difficulty": 2})
     assert np.array_equal(info["task"].start, start)
@@ -235,8 +255,8 @@ def test_task_option_resets_to_the_tasks_start_and_goal(env_id):
 # ------------------------------------------------------------------- bad input
 
 BAD_OPTIONS = [
-    ({"difficulty": 0}, r"options\['difficulty'\] must be an int from 1 to 5"),
-    ({"difficulty": 6}, r"options\['difficulty'\] must be an int from 1 to 5"),
+    ({"difficulty": 0}, r"options\['difficulty'\] must be an int from 1 to 10"),
+    ({"difficulty": 11}, r"options\['difficulty'\] must be an int from 1 to 10"),
     ({"difficulty": 2.0}, r"options\['difficulty'\] must be an int"),
     ({"difficulty": True}, r"options\['difficulty'\] must be an int"),
     ({"seed": 3}, r"unknown keys \['seed'\]"),
@@ -297,7 +317,7 @@ def test_bad_actions_raise_value_error(env_id, action, match):
         ({"reward_type": "shaped"}, "reward_type"),
         ({"max_step": 0.0}, "max_step"),
         ({"success_threshold": -1.0}, "success_threshold"),
-        ({"difficulty": 9}, "difficulty"),
+        ({"difficulty": 11}, "difficulty"),
         ({"render_mode": "ansi"}, "render_mode"),
         ({"params": {"length": 1.0}}, "params"),
     ],

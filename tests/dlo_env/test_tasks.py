@@ -101,8 +101,8 @@ def test_make_task_from_a_given_start_keeps_that_start():
 
 
 def test_make_task_rejects_bad_difficulty_grasp_and_start():
-    with pytest.raises(ValueError, match="difficulty must be an int from 1 to 5"):
-        make_task(0, 6)
+    with pytest.raises(ValueError, match="difficulty must be an int from 1 to 10"):
+        make_task(0, 11)
     with pytest.raises(ValueError, match="grasp"):
         make_task(0, 1, "elbow")
     with pytest.raises(ValueError, match="start must"):
