@@ -538,6 +538,12 @@ def run_benchmark(config: BenchmarkConfig, out_dir: str | os.PathLike, *,
             todo.append((len(rows), name, env_id, difficulty, threshold, agent, key))
             rows.append({})
 
+    # Cell by cell, every agent of a cell one after the other: an interrupted run leaves whole
+    # cells, and the agents of a cell are timed in one run (their time ratio is comparable).
+    order = {cell: i for i, cell in enumerate(config.cells())}
+    ranks = {name: i for i, name in enumerate(config.agents)}
+    todo.sort(key=lambda item: (order[(item[2], item[3], item[4])], ranks[item[1]]))
+
     def finish(k: int, result: Evaluation, seconds: float) -> None:
         slot, name, env_id, difficulty, threshold, agent, key = todo[k]
         cell = cell_name(name, env_id, difficulty, threshold)

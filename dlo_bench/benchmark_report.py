@@ -22,13 +22,17 @@ from dlo_env.atomic import file_digest, write_text_atomic
 
 @dataclass(frozen=True)
 class TimeRatio:
-    """Total planning seconds of one agent over another's on the same episodes.
+    """Total planning seconds of one agent over another's on the same episodes, over the cells
+    whose two timings come from one run (the same machine and load: the ratio measures the
+    agents rather than the day they ran).
 
     Attributes:
         slow, fast: The two agents.
-        cells: Cell label (``endpoint d1``...) -> the ratio in that cell, for the cells both ran.
-        overall: The ratio of the totals over those cells.
-        runs: The runs (``run`` of the rows, "" when not recorded) that timed those cells.
+        cells: Cell label (``endpoint d1 @ 1 cm``...) -> the ratio in that cell, for the cells
+            both agents ran in one recorded run.
+        overall: The ratio of the totals over those cells (NaN without any).
+        runs: The runs that timed those cells.
+        mixed: The cells both ran, but in different runs (or runs not recorded): no ratio.
     """
 
     slow: str
@@ -36,12 +40,12 @@ class TimeRatio:
     cells: dict[str, float]
     overall: float
     runs: tuple[str, ...]
+    mixed: tuple[str, ...] = ()
 
     @property
     def comparable(self) -> bool:
-        """Whether every cell of both agents was timed in one recorded run: the same machine
-        and load, so the ratio measures the agents rather than the day they ran."""
-        return len(self.runs) == 1 and bool(self.runs[0])
+        """Whether some cell of both agents was timed in one recorded run."""
+        return bool(self.cells)
 
 
 def _cell(row: dict[str, Any]) -> str:
@@ -60,21 +64,26 @@ def planning_time_ratios(rows: list[dict[str, Any]], slow: str = "physics-mpc",
         runs that timed them; None when they share no cell.
     """
     by = {(r["agent"], _cell(r)): r for r in rows if r["status"] == "ok"}
-    cells, runs, slow_total, fast_total = {}, set(), 0.0, 0.0
+    cells, mixed, runs, slow_total, fast_total = {}, [], set(), 0.0, 0.0
     for r in rows:
         if r["agent"] != slow or r["status"] != "ok":
             continue
         other = by.get((fast, _cell(r)))
         if other is None or other["episodes"] != r["episodes"]:
             continue
+        run = r.get("run") or ""
+        if not run or run != (other.get("run") or ""):
+            mixed.append(_cell(r))
+            continue
         if other["total_seconds"] > 0:
             cells[_cell(r)] = r["total_seconds"] / other["total_seconds"]
         slow_total += r["total_seconds"]
         fast_total += other["total_seconds"]
-        runs |= {r.get("run") or "", other.get("run") or ""}
-    if not cells or fast_total <= 0:
+        runs.add(run)
+    if not cells and not mixed:
         return None
-    return TimeRatio(slow, fast, cells, slow_total / fast_total, tuple(sorted(runs)))
+    overall = slow_total / fast_total if fast_total > 0 else math.nan
+    return TimeRatio(slow, fast, cells, overall, tuple(sorted(runs)), tuple(mixed))
 
 
 #: The planning-time ratios the report states: physics-mpc over each cheaper planner.
@@ -94,14 +103,20 @@ def ratio_lines(rows: list[dict[str, Any]]) -> list[str]:
         head = f"Planning time {slow} / {fast} on the same episodes"
         if ratio.comparable:
             parts = ", ".join(f"{k} {_ratio(v)}" for k, v in ratio.cells.items())
-            lines.append(f"{head}, timed in one run ({ratio.runs[0]}): "
-                         f"{_ratio(ratio.overall)} overall ({parts}).")
+            where = (f"timed in one run ({ratio.runs[0]})" if len(ratio.runs) == 1 else
+                     f"each cell timed in one run ({', '.join(ratio.runs)})")
+            line = f"{head}, {where}: {_ratio(ratio.overall)} overall ({parts})."
+            if ratio.mixed:
+                line += (f" Not comparable, timed in different runs: "
+                         f"{', '.join(ratio.mixed)}.")
+            lines.append(line)
             continue
         commits = sorted({r.get("commit") or "unknown" for r in rows
                           if r["agent"] in (slow, fast) and r["status"] == "ok"})
-        runs = [run or "not recorded" for run in ratio.runs]
+        timed = sorted({r.get("run") or "not recorded" for r in rows
+                        if r["agent"] in (slow, fast) and r["status"] == "ok"})
         lines.append(f"{head}: not comparable, its cells were timed in different runs "
-                     f"({', '.join(runs)}; commits {', '.join(commits)}); run both agents in "
+                     f"({', '.join(timed)}; commits {', '.join(commits)}); run both agents in "
                      "one invocation to measure it.")
     return lines
 

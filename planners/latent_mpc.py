@@ -25,7 +25,7 @@ from planners.cem import CEMConfig, CEMPolicy
 class LatentMPCConfig(CEMConfig):
     """CEM budget of latent-mpc (the model is cheap: many more samples than physics-mpc) and
     how it uses the model. The defaults were chosen on the train splits of linear-1 to
-    linear-5 (``benchmarks/tune_latent_mpc.py``; the sweep is in docs/history.md): one network
+    linear-5 (``benchmarks/tune_planner.py``; the sweep is in docs/history.md): one network
     scores as well as five at a fifth of the cost, a horizon of 3 moves beats 2, and stopping
     once a plan is predicted within half the success threshold (1 cm of 2 cm) halves the time
     for the same success.

@@ -133,6 +133,19 @@ def test_a_ratio_that_would_mix_runs_is_not_comparable_not_a_number(runs):
     assert ("R1, R2" in line) if runs[0] else ("not recorded" in line)
 
 
+def test_a_ratio_pairs_cells_run_by_run_and_names_the_mixed_ones():
+    # An interrupted benchmark resumed later: each cell's two agents ran in one run.
+    rows = [_row("physics-mpc", 1, 100.0, "R1"), _row("latent-mpc", 1, 1.0, "R1"),
+            _row("physics-mpc", 2, 300.0, "R2"), _row("latent-mpc", 2, 6.0, "R2"),
+            _row("physics-mpc", 3, 500.0, "R2"), _row("latent-mpc", 3, 1.0, "R3")]
+    ratio = planning_time_ratios(rows, "physics-mpc", "latent-mpc")
+    assert ratio.comparable and ratio.runs == ("R1", "R2") and ratio.mixed == ("endpoint d3",)
+    assert ratio.overall == pytest.approx(400.0 / 7.0)
+    (line,) = ratio_lines(rows)
+    assert "each cell timed in one run (R1, R2): 57x overall" in line
+    assert line.endswith("Not comparable, timed in different runs: endpoint d3.")
+
+
 def test_run_ids_differ_and_sort_by_their_start():
     first, second = new_run_id(), new_run_id()
     assert first != second and first[:16] <= second[:16]

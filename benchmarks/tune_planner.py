@@ -1,0 +1,148 @@
+"""Tune a CEM planner's budget (latent-mpc or physics-mpc) on the train splits, per threshold.
+
+Every configuration of a grid runs on the first ``--episodes`` train tasks of each suite, at
+each success threshold (judged at rest, the planner's stopping rule taken from it), on one
+torch thread per process. For each it prints and writes (``OUT/sweep-AGENT-ENV.csv``,
+resumable: finished rows are kept) the success rate, the median error at rest and the mean
+planning seconds per episode. The chosen values become the planner's defaults by hand
+(``LatentMPCConfig``; ``PhysicsMPCConfig`` per threshold, ``planners.physics_mpc.TUNED``),
+with the sweep quoted in ``docs/history.md``. Test splits are never run.
+
+    python benchmarks/tune_planner.py --agent latent-mpc --episodes 40
+    python benchmarks/tune_planner.py --agent physics-mpc --threshold 0.01 0.005 \\
+        --grid '{"replan_every": [8, null], "samples": [32, 64]}' --jobs 2
+
+``--grid`` is a JSON object of config fields to lists of values (``null`` is None; the other
+fields keep their defaults, elites a tenth of the samples when samples are swept);
+``--model`` tunes latent-mpc for another transition model file; ``--jobs`` runs that many
+(configuration, suite, threshold) cells at once in worker processes.
+"""
+
+from __future__ import annotations
+
+import argparse
+import csv
+import itertools
+import json
+import time
+from concurrent.futures import ProcessPoolExecutor, as_completed
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+#: The default grid of each agent (every combination runs).
+GRIDS = {
+    "latent-mpc": {"members": (1, 5), "samples": (64, 256), "iterations": (3, 5),
+                   "moves": (2, 3), "stop_fraction": (0.0, 0.5)},
+    "physics-mpc": {"replan_every": (8, None), "samples": (32, 64), "moves": (2, 3)},
+}
+SUITES = ("linear-1", "linear-2", "linear-3", "linear-4", "linear-5")
+ENVS = {"endpoint": "dlo_env/DLOEndpoint-v0", "dual": "dlo_env/DLODualEndpoint-v0"}
+
+
+def _config(agent: str, setting: dict[str, Any]) -> Any:
+    from planners.latent_mpc import LatentMPCConfig
+    from planners.physics_mpc import PhysicsMPCConfig
+
+    kind = LatentMPCConfig if agent == "latent-mpc" else PhysicsMPCConfig
+    if "samples" in setting and "elites" not in setting:
+        setting = {**setting, "elites": max(2, setting["samples"] // 10)}
+    return kind(**setting)
+
+
+def run_cell(agent: str, env_id: str, setting: dict[str, Any], suite: str, threshold: float,
+             episodes: int, model: str | None) -> dict[str, Any]:
+    """One (configuration, suite, threshold) on the train split: its row of the sweep."""
+    import gymnasium as gym
+    import torch
+
+    import dlo_env  # noqa: F401  (registers the environments)
+    from dlo_bench.evaluation import evaluate
+
+    torch.set_num_threads(1)
+    env = gym.make(env_id, success_threshold=threshold)
+    config = _config(agent, setting)
+    if agent == "latent-mpc":
+        from latent_model import TransitionModel
+        from planners.latent_mpc import LatentMPCPolicy
+
+        policy = LatentMPCPolicy.for_env(
+            env, config, model=TransitionModel.load_or_pretrained(model, device="cpu"))
+    else:
+        from planners.physics_mpc import PhysicsMPCPolicy
+
+        policy = PhysicsMPCPolicy.for_env(env, config)
+    t0 = time.perf_counter()
+    result = evaluate(policy, env_id, suite=suite, episodes=episodes, split="train",
+                      agent=agent, fidelity=False, env_kwargs={"success_threshold": threshold})
+    s = result.summary
+    return {**{k: json.dumps(v) for k, v in setting.items()}, "suite": suite,
+            "threshold": threshold, "episodes": episodes,
+            "success": f"{s['success_rate']:.3f}",
+            "median_rest_error_cm": f"{100 * s['median_rest_error']:.2f}",
+            "seconds_per_episode": f"{np.mean([r.planning_seconds for r in result.records]):.4f}",
+            "wall_seconds": f"{time.perf_counter() - t0:.0f}"}
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--agent", choices=list(GRIDS), default="latent-mpc")
+    parser.add_argument("--env", choices=list(ENVS), default="endpoint")
+    parser.add_argument("--episodes", type=int, default=40,
+                        help="first train tasks of each suite per configuration")
+    parser.add_argument("--suite", nargs="+", default=list(SUITES),
+                        help="suites whose train splits are run")
+    parser.add_argument("--threshold", nargs="+", type=float, default=[0.02],
+                        help="success thresholds, metres")
+    parser.add_argument("--grid", default=None,
+                        help="JSON object of config fields to lists of values")
+    parser.add_argument("--model", default=None,
+                        help="latent-mpc's transition model file (default: the shipped one)")
+    parser.add_argument("--jobs", type=int, default=1, help="worker processes")
+    parser.add_argument("--out", default="runs/tune-planner", help="output folder")
+    args = parser.parse_args()
+    grid = GRIDS[args.agent]
+    if args.grid is not None:
+        try:
+            grid = {k: tuple(v) for k, v in json.loads(args.grid).items()}
+            _config(args.agent, {k: v[0] for k, v in grid.items()})
+        except (ValueError, TypeError, AttributeError) as exc:
+            raise SystemExit(f"--grid must be a JSON object of {args.agent} config fields to "
+                             f"lists, got {args.grid!r} ({exc})") from None
+
+    from dlo_env.atomic import write_text_atomic
+
+    out = Path(args.out)
+    out.mkdir(parents=True, exist_ok=True)
+    path = out / f"sweep-{args.agent}-{args.env}.csv"
+    keys = list(grid)
+    ident = [*keys, "suite", "threshold", "episodes"]
+    columns = [*ident, "success", "median_rest_error_cm", "seconds_per_episode", "wall_seconds"]
+    rows = list(csv.DictReader(path.open())) if path.is_file() else []
+    seen = {tuple(r.get(k, "") for k in ident) for r in rows}
+    todo = []
+    for values in itertools.product(*grid.values()):
+        setting = dict(zip(keys, values))
+        for threshold in args.threshold:
+            for suite in args.suite:
+                tag = tuple(json.dumps(setting[k]) for k in keys) + (
+                    suite, str(threshold), str(args.episodes))
+                if tag not in seen:
+                    todo.append((args.agent, ENVS[args.env], setting, suite, threshold,
+                                 args.episodes, args.model))
+    print(f"{len(todo)} cells to run ({len(rows)} done) -> {path}", flush=True)
+    with ProcessPoolExecutor(max_workers=max(1, args.jobs)) as pool:
+        futures = [pool.submit(run_cell, *cell) for cell in todo]
+        for future in as_completed(futures):
+            row = future.result()
+            rows.append(row)
+            lines = [",".join(columns)] + [",".join(str(r.get(c, "")) for c in columns)
+                                           for r in rows]
+            write_text_atomic(path, "\n".join(lines) + "\n")
+            print(" ".join(f"{k}={v}" for k, v in row.items()), flush=True)
+    print(f"wrote {path}")
+
+
+if __name__ == "__main__":
+    main()
