@@ -540,7 +540,9 @@ def run_benchmark(config: BenchmarkConfig, out_dir: str | os.PathLike, *,
 
     # Cell by cell, every agent of a cell one after the other: an interrupted run leaves whole
     # cells, and the agents of a cell are timed in one run (their time ratio is comparable).
-    order = {cell: i for i, cell in enumerate(config.cells())}
+    # The headline threshold's cells first.
+    cells = config.cells()
+    order = {cell: (cell[2] != HEADLINE_THRESHOLD, i) for i, cell in enumerate(cells)}
     ranks = {name: i for i, name in enumerate(config.agents)}
     todo.sort(key=lambda item: (order[(item[2], item[3], item[4])], ranks[item[1]]))
 

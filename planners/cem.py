@@ -35,6 +35,10 @@ class CEMConfig:
         elites: Best candidates the next sampling distribution is fitted to.
         iterations: CEM iterations per planning call (at most).
         init_std: Initial standard deviation of every displacement coordinate, metres.
+        focus: Sampling focused near the goal: a plan's initial standard deviation is
+            ``focus`` times the cord's current error, between ``min_std`` and ``init_std``
+            (0: always ``init_std``).
+        min_std: The smallest initial standard deviation with ``focus``, metres.
         max_move: Largest displacement of one move, metres (per end).
         stop_fraction: Stop iterating once the best predicted error is at most this fraction
             of the policy's ``success_threshold`` (the environment's; 0: always run every
@@ -47,6 +51,8 @@ class CEMConfig:
     elites: int = 6
     iterations: int = 3
     init_std: float = 0.08
+    focus: float = 0.0
+    min_std: float = 0.005
     max_move: float = 0.4
     stop_fraction: float = 0.0
     seed: int = 0
@@ -54,8 +60,8 @@ class CEMConfig:
     def __post_init__(self) -> None:
         name = type(self).__name__
         positive_ints(self, "moves", "samples", "elites", "iterations")
-        positive(self, "init_std", "max_move")
-        non_negative(self, "stop_fraction")
+        positive(self, "init_std", "max_move", "min_std")
+        non_negative(self, "stop_fraction", "focus")
         if self.elites > self.samples:
             raise ValueError(f"{name}.elites must be <= samples ({self.samples}), "
                              f"got {self.elites}")
@@ -147,6 +153,9 @@ class CEMPolicy(EpisodicPolicy):
         else:
             mean = self._mean
         std = np.full(dims, cfg.init_std)
+        if cfg.focus > 0:
+            near = cfg.focus * float(error(shape, goal))
+            std[:] = min(cfg.init_std, max(cfg.min_std, near))
         best_plan, best_err = mean.copy(), math.inf
         for _ in range(cfg.iterations):
             candidates = mean + std * self._rng.standard_normal((cfg.samples,) + dims)

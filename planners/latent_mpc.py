@@ -46,8 +46,9 @@ class LatentMPCConfig(CEMConfig):
     moves: int = 3
     samples: int = 256
     elites: int = 25
-    iterations: int = 3
+    iterations: int = 5
     init_std: float = 0.08
+    focus: float = 2.0
     max_move: float = 0.35
     stop_fraction: float = 0.5
     members: int | None = None

@@ -1,0 +1,60 @@
+"""The CEM planner shared by physics-mpc and latent-mpc: its sampling and stopping rules."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from planners.cem import CEMConfig, CEMPolicy
+
+
+class Recording(CEMPolicy):
+    """Scores every candidate by its distance from zero displacement; records what it sampled."""
+
+    def __init__(self, config: CEMConfig, success_threshold: float = 0.02) -> None:
+        super().__init__(None, "head", 0.02, success_threshold, config)
+        self.batches: list[np.ndarray] = []
+
+    def _score(self, shape, goal, candidates):
+        self.batches.append(candidates.copy())
+        return np.linalg.norm(candidates.reshape(len(candidates), -1), axis=1) + 1.0
+
+    def _execute(self, plan):
+        return self._actions(plan)
+
+
+def _shapes(offset: float) -> tuple[np.ndarray, np.ndarray]:
+    goal = np.stack([np.linspace(-0.5, 0.5, 20), np.zeros(20)], axis=1)
+    return goal + np.array([0.0, offset]), goal
+
+
+@pytest.mark.parametrize(("focus", "offset", "expected"), [
+    (0.0, 0.01, 0.08),     # off: always init_std
+    (2.0, 0.01, 0.02),     # twice the current error (1 cm)
+    (2.0, 0.001, 0.005),   # never below min_std
+    (2.0, 0.30, 0.08),     # never above init_std
+])
+def test_focus_scales_the_first_sampling_spread_with_the_current_error(focus, offset, expected):
+    config = CEMConfig(samples=4000, elites=10, iterations=1, focus=focus, max_move=10.0)
+    policy = Recording(config)
+    policy.plan(*_shapes(offset))
+    first = policy.batches[0][1:]  # candidate 0 is the mean itself
+    spread = (first - first.mean(axis=0)).std()
+    assert spread == pytest.approx(expected, rel=0.05)
+
+
+def test_stop_fraction_is_a_fraction_of_the_threshold():
+    # Every candidate scores 1.0 or more: no early stop below the threshold's fraction...
+    policy = Recording(CEMConfig(iterations=4, stop_fraction=0.5), success_threshold=0.02)
+    policy.plan(*_shapes(0.05))
+    assert len(policy.batches) == 4
+    # ...and a threshold whose half is above every score stops after the first iteration.
+    policy = Recording(CEMConfig(iterations=4, stop_fraction=0.5), success_threshold=100.0)
+    policy.plan(*_shapes(0.05))
+    assert len(policy.batches) == 1
+
+
+@pytest.mark.parametrize("field", ["focus", "stop_fraction"])
+def test_negative_fields_are_refused(field):
+    with pytest.raises(ValueError, match=field):
+        CEMConfig(**{field: -1.0})
