@@ -18,12 +18,13 @@ from dlo_cli.flags import (
     add_seed,
     add_transition_model,
     backend_of,
+    number_in,
 )
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     """Flags of ``dlo evaluate``."""
-    from dlo_env.tasks import SPLIT_SIZES, SUITES
+    from dlo_env.tasks import SPLIT_SIZES, SUCCESS_THRESHOLD, SUITES
 
     add_agent(parser, default=None)
     which = parser.add_mutually_exclusive_group()
@@ -38,6 +39,11 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                              f"{n} {split}" for split, n in SPLIT_SIZES.items()) + " tasks)")
     add_seed(parser, "the tasks (episode i of random tasks resets with SEED+i) and planners")
     add_env(parser, "dlo_env/DLOEndpoint-v0", "the environment", dest="env_id", alias=True)
+    parser.add_argument("--threshold", type=number_in(float, 1e-4, 1.0, expected="a number of "
+                                                     "metres in [0.0001, 1]"),
+                        default=SUCCESS_THRESHOLD, metavar="METRES",
+                        help="the environment's success_threshold, judged on the cord at rest "
+                             "(the planners take their stopping rules from it)")
     add_model(parser)
     add_transition_model(parser)
     add_planner_flags(parser)
@@ -71,7 +77,8 @@ def evaluate_row(agent: str, difficulty: int | None, suite: str | None,
         torch.set_num_threads(settings["threads"])
     if model is None and agent_spec(agent).shape_model:
         model = load_shape_model(settings["model"])
-    with gym.make(settings["env_id"]) as env:
+    env_kwargs = {"success_threshold": settings["threshold"]}
+    with gym.make(settings["env_id"], **env_kwargs) as env:
         policy = build_agent(agent, env, model=model, seed=settings["seed"],
                              transition_model=settings["transition_model"],
                              replan_every=settings["replan_every"],
@@ -79,7 +86,8 @@ def evaluate_row(agent: str, difficulty: int | None, suite: str | None,
     return evaluate(policy, settings["env_id"], difficulty=difficulty, suite=suite,
                     episodes=settings["episodes"], seed=settings["seed"],
                     split=settings["split"], agent=agent,
-                    fidelity=not settings["no_fidelity"], progress=settings["progress"])
+                    fidelity=not settings["no_fidelity"], progress=settings["progress"],
+                    env_kwargs=env_kwargs)
 
 
 def run(args: argparse.Namespace) -> int:

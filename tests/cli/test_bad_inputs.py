@@ -44,6 +44,8 @@ CASES = [
     ("baseline --algo ppo --difficulty 11 --out OUT", "--difficulty", ("'11'", "from 1 to 10")),
     ("benchmark --difficulty 7 --out OUT", "--difficulty", ("'7'", "one of 1 2 3 4 5 8 10")),
     ("benchmark --threshold 0 --out OUT", "--threshold", ("'0'", "metres")),
+    ("evaluate --agent straight-line --threshold -1 --out OUT", "--threshold",
+     ("'-1'", "metres")),
     # A planning budget is a number of seconds > 0.
     ("evaluate --agent straight-line --max-seconds -1 --out OUT", "--max-seconds", ("'-1'",)),
     ("evaluate --agent straight-line --max-seconds 0 --out OUT", "--max-seconds", ("'0'",)),
