@@ -5,8 +5,8 @@ each success threshold (judged at rest, the planner's stopping rule taken from i
 torch thread per process. For each it prints and writes (``OUT/sweep-AGENT-ENV.csv``,
 resumable: finished rows are kept) the success rate, the median error at rest and the mean
 planning seconds per episode. The chosen values become the planner's defaults by hand
-(``LatentMPCConfig``; ``PhysicsMPCConfig`` per threshold, ``planners.physics_mpc.TUNED``),
-with the sweep quoted in ``docs/history.md``. Test splits are never run.
+(``LatentMPCConfig``, ``PhysicsMPCConfig``: one setting for every threshold), with the sweep
+quoted in ``docs/history.md``. Test splits are never run.
 
     python benchmarks/tune_planner.py --agent latent-mpc --episodes 40
     python benchmarks/tune_planner.py --agent physics-mpc --threshold 0.01 0.005 \\

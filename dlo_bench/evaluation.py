@@ -52,7 +52,8 @@ class EpisodeRecord:
         final_error: ``error(cord, goal)`` at the last step.
         final_max_error: Largest per-point distance at the last step.
         rest_error: ``error`` of the shape the cord comes to rest in after the last step
-            (the environment's ``settled_metrics()``; ``final_error`` when it ended solved).
+            (the environment's ``settled_metrics()``; ``final_error`` when it ended solved on
+            a cord judged at rest).
         rest_direction_free_error: The same for ``direction_free_error``.
         steps: Environment steps taken.
         seconds: Wall time of all ``predict`` calls (planning and inference).
@@ -312,9 +313,9 @@ def evaluate(
         policy: A ``planners.interfaces.Policy`` (SB3's ``predict``).
         env: A ``dlo_env`` goal environment, or its id (as ``build_agent`` takes an
             environment): an environment given is used as it is and left open; one made from
-            an id (with ``env_kwargs``; with a ``suite``, episodes of
-            ``dlo_env.tasks.suite_max_steps`` steps unless ``env_kwargs`` says otherwise) is
-            closed at the end.
+            an id (with ``env_kwargs``; with a ``suite`` or ``difficulty``, episodes of
+            ``dlo_env.tasks.suite_max_steps`` or ``difficulty_max_steps`` steps unless
+            ``env_kwargs`` says otherwise) is closed at the end.
         difficulty: Straight moves per task (the environment's default if None).
         suite: A named suite (``linear-1``, ...) instead of ``difficulty``: its fixed tasks.
         episodes: Number of episodes.
@@ -347,11 +348,13 @@ def evaluate(
         env = env_id
     owned = isinstance(env, str)
     if owned:
+        from dlo_env.tasks import difficulty_max_steps, suite_max_steps
+
         kwargs = dict(env_kwargs or {})
         if suite is not None:
-            from dlo_env.tasks import suite_max_steps
-
             kwargs.setdefault("max_episode_steps", suite_max_steps(suite))
+        elif difficulty is not None:
+            kwargs.setdefault("max_episode_steps", difficulty_max_steps(difficulty))
         env = gym.make(env, **kwargs)
     elif not isinstance(env, gym.Env):
         raise ValueError(f"env must be a dlo_env environment or its id, got "

@@ -20,7 +20,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help="step the environments in subprocesses (needs a free core each)")
     add_seed(parser, "the agent and the environments")
     add_difficulty(parser, list(BaselineConfig.difficulties),
-                   "training draws one per episode")
+                   "training draws one per episode (1 to 5: episodes of 100 steps)", maximum=5)
     parser.add_argument("--reward-type", choices=("dense", "sparse"),
                         default=BaselineConfig.reward_type, help="the environment's reward")
     add_env(parser, BaselineConfig.env_id, "the environment it trains in", dest="env_id",

@@ -106,6 +106,9 @@ def run(args: argparse.Namespace) -> int:
     """Run the benchmark, print the table and the speed ratio, write the results."""
     import time
 
+    if len(set(args.threshold)) < len(args.threshold):
+        raise ValueError(f"--threshold must not repeat a value, got "
+                         f"{' '.join(map(str, args.threshold))}")
     check_committed(args.allow_dirty)  # before anything is built or written
 
     import torch

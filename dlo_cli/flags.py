@@ -186,14 +186,15 @@ def add_agent(parser: argparse.ArgumentParser, default: list[str] | None,
                         help=f"one or several agents. {names}{folder}")
 
 
-def difficulty_type(suites: bool = False) -> Callable[[str], int]:
-    """An argparse type: a task difficulty, 1 to ``dlo_env.tasks.MAX_DIFFICULTY`` (with
-    ``suites``, one that has a named suite ``linear-K``)."""
+def difficulty_type(suites: bool = False, maximum: int | None = None) -> Callable[[str], int]:
+    """An argparse type: a task difficulty, 1 to ``maximum`` (default
+    ``dlo_env.tasks.MAX_DIFFICULTY``; with ``suites``, one that has a named suite
+    ``linear-K``)."""
     from dlo_env.tasks import MAX_DIFFICULTY, SUITES
 
     if not suites:
-        return number_in(int, 1, MAX_DIFFICULTY,
-                         expected=f"an integer from 1 to {MAX_DIFFICULTY}")
+        top = maximum or MAX_DIFFICULTY
+        return number_in(int, 1, top, expected=f"an integer from 1 to {top}")
     known = sorted(SUITES.values())
     any_int = number_in(int, expected="")
     expected = f"one of {' '.join(map(str, known))} (the suites linear-K)"
@@ -211,10 +212,11 @@ def difficulty_type(suites: bool = False) -> Callable[[str], int]:
 
 
 def add_difficulty(parser: argparse.ArgumentParser | argparse._MutuallyExclusiveGroup,
-                   default: list[int] | None, what: str, *, suites: bool = False) -> None:
+                   default: list[int] | None, what: str, *, suites: bool = False,
+                   maximum: int | None = None) -> None:
     """``--difficulty``: one or several task difficulties (straight moves from start to goal);
-    with ``suites``, only those of the named suites."""
-    parser.add_argument("--difficulty", type=difficulty_type(suites), nargs="+",
+    with ``suites``, only those of the named suites; at most ``maximum``."""
+    parser.add_argument("--difficulty", type=difficulty_type(suites, maximum), nargs="+",
                         default=default, metavar="K",
                         help=f"difficulty, one or several: K straight moves from start to goal; "
                              f"{what}")

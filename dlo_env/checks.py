@@ -29,6 +29,12 @@ def positive_ints(config: object, *names: str) -> None:
                  and v >= 1, "an int >= 1")
 
 
+def non_negative_ints(config: object, *names: str) -> None:
+    """Each field is an int >= 0."""
+    check_fields(config, names, lambda v: isinstance(v, Integral) and not isinstance(v, bool)
+                 and v >= 0, "an int >= 0")
+
+
 def positive(config: object, *names: str) -> None:
     """Each field is a number > 0."""
     check_fields(config, names, lambda v: _number(v) and v > 0, "> 0")

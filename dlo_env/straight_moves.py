@@ -65,4 +65,6 @@ class StraightMoves(gym.Wrapper, gym.utils.RecordConstructorArgs):
                     break
         finally:
             base.judge_at_rest = judge
-        return obs, float(reward), bool(info["is_success"]), bool(truncated), info
+        # Cut off by the time limit during the move, the cord was judged moving: not solved.
+        solved = bool(info["is_success"]) and (bool(info["at_rest"]) or not judge)
+        return obs, float(reward), solved, bool(truncated), info

@@ -52,7 +52,7 @@ MAX_SETTLE_ACTIONS = 10
 #: The environments test whether a moving cord would come to rest within the success threshold
 #: when its error is at most the threshold plus this, metres. A cord moves less than this while
 #: coming to rest after any action (at most 0.7 cm in mean point distance after full-speed random
-#: actions, ``tests/env/test_judged_at_rest.py``); a larger margin only costs time.
+#: actions, ``tests/dlo_env/test_judged_at_rest.py``); a larger margin only costs time.
 REST_CHECK_MARGIN = 0.01
 #: Move targets keep this distance from the table edge, metres (the cord is not pressed on it).
 TARGET_MARGIN = 0.1
@@ -358,11 +358,17 @@ def make_task(
     raise RuntimeError(f"no goal farther than min_error={min_error} m from the start")
 
 
+def difficulty_max_steps(difficulty: int) -> int:
+    """The episode length for tasks of ``difficulty`` straight moves:
+    ``max(100, STEPS_PER_MOVE * K)`` (the registered 100 up to difficulty 5)."""
+    return max(100, STEPS_PER_MOVE * check_difficulty(difficulty))
+
+
 def suite_max_steps(name: str) -> int:
-    """The episode length for a named suite's tasks: ``max(100, STEPS_PER_MOVE * K)``."""
+    """The episode length for a named suite's tasks (``difficulty_max_steps`` of its K)."""
     if name not in SUITES:
         raise ValueError(f"suite name must be one of {tuple(SUITES)}, got {name!r}")
-    return max(100, STEPS_PER_MOVE * SUITES[name])
+    return difficulty_max_steps(SUITES[name])
 
 
 def suite_seeds(name: str, split: str) -> np.ndarray:

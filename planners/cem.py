@@ -16,7 +16,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from dlo_env.checks import non_negative, positive, positive_ints
+from dlo_env.checks import fractions, non_negative, positive, positive_ints
 from dlo_env.cord import CordParams
 from dlo_env.shapes import error
 from dlo_env.tasks import GRASP_ENDS, split_move
@@ -61,7 +61,11 @@ class CEMConfig:
         name = type(self).__name__
         positive_ints(self, "moves", "samples", "elites", "iterations")
         positive(self, "init_std", "max_move", "min_std")
-        non_negative(self, "stop_fraction", "focus")
+        non_negative(self, "focus")
+        fractions(self, "stop_fraction", closed_low=True)
+        if self.min_std > self.init_std:
+            raise ValueError(f"{name}.min_std must be <= init_std ({self.init_std}), "
+                             f"got {self.min_std}")
         if self.elites > self.samples:
             raise ValueError(f"{name}.elites must be <= samples ({self.samples}), "
                              f"got {self.elites}")
@@ -109,6 +113,16 @@ class CEMPolicy(EpisodicPolicy):
         self.config = config
         self.n_points = self.params.n_points
         self.reset()
+
+    def _check_threshold(self, base: object) -> None:
+        """Raise ``ValueError`` unless the environment's ``success_threshold`` is the policy's
+        (it holds still within it and stops planning at a fraction of it)."""
+        threshold = float(getattr(base, "success_threshold", self.success_threshold))
+        if abs(threshold - self.success_threshold) > 1e-12:
+            raise ValueError(
+                f"the policy was built for success_threshold={self.success_threshold} m, but "
+                f"the environment has success_threshold={threshold} m: build it with "
+                f"{type(self).__name__}.for_env(env)")
 
     def episode_stats(self) -> EpisodeStats:
         """Planning calls and seconds of this episode (it never fails to return a plan)."""

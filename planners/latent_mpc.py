@@ -16,7 +16,7 @@ from typing import Any
 
 import numpy as np
 
-from dlo_env.checks import non_negative, positive_ints
+from dlo_env.checks import non_negative, non_negative_ints, positive_ints
 from dlo_env.shapes import error
 from planners.cem import CEMConfig, CEMPolicy
 
@@ -58,7 +58,8 @@ class LatentMPCConfig(CEMConfig):
 
     def __post_init__(self) -> None:
         super().__post_init__()
-        non_negative(self, "spread_weight", "settle_actions")
+        non_negative(self, "spread_weight")
+        non_negative_ints(self, "settle_actions")
         if self.members is not None:
             positive_ints(self, "members")
         if self.spread_weight > 0 and self.members == 1:
@@ -125,6 +126,7 @@ class LatentMPCPolicy(CEMPolicy):
         if base.cord.grasp != self.grasp:
             raise ValueError(f"the policy moves grasp {self.grasp!r} but the environment holds "
                              f"{base.cord.grasp!r}")
+        self._check_threshold(base)
 
     def _score(self, shape: np.ndarray, goal: np.ndarray, candidates: np.ndarray) -> np.ndarray:
         cfg = self.config

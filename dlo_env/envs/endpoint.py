@@ -91,7 +91,8 @@ class DLOEndpointEnv(CordGoalEnv):
     rest length raise `ValueError` naming the option, as do unknown options.
 
     The reset `info` also holds `reference_actions` (`(T, 2)` float32: replayed through `step`
-    from the reset state they reach the goal exactly, bitwise), `moves` (`(difficulty, 2)`
+    from the reset state they solve the task; with `judge_at_rest=False` they reach the goal
+    exactly, bitwise), `moves` (`(difficulty, 2)`
     displacements, metres), `difficulty` and `task_seed` (0 and -1 when the goal was given).
 
     ## Episode End

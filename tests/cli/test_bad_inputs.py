@@ -41,9 +41,10 @@ CASES = [
     ("evaluate --agent straight-line --difficulty 11 --out OUT", "--difficulty",
      ("'11'", "from 1 to 10")),
     ("evaluate --agent straight-line --difficulty 1 0 --out OUT", "--difficulty", ("'0'",)),
-    ("baseline --algo ppo --difficulty 11 --out OUT", "--difficulty", ("'11'", "from 1 to 10")),
+    ("baseline --algo ppo --difficulty 7 --out OUT", "--difficulty", ("'7'", "from 1 to 5")),
     ("benchmark --difficulty 7 --out OUT", "--difficulty", ("'7'", "one of 1 2 3 4 5 8 10")),
     ("benchmark --threshold 0 --out OUT", "--threshold", ("'0'", "metres")),
+    ("benchmark --threshold 0.01 0.01 --out OUT", "--threshold", ("repeat",)),
     ("evaluate --agent straight-line --threshold -1 --out OUT", "--threshold",
      ("'-1'", "metres")),
     # A planning budget is a number of seconds > 0.

@@ -70,6 +70,20 @@ def test_evaluate_records_an_idle_policy_as_failing_at_the_time_limit():
     assert result.summary["episodes"] == 2
 
 
+def test_long_horizons_get_their_episode_length_and_the_rest_error_is_recorded():
+    # linear-8 episodes last 160 steps; random tasks of difficulty 9, 180.
+    suite = evaluate(ZeroPolicy(), ENV_ID, suite="linear-8", episodes=1, fidelity=False)
+    random = evaluate(ZeroPolicy(), ENV_ID, difficulty=9, episodes=1, fidelity=False)
+    assert suite.records[0].steps == 160 and random.records[0].steps == 180
+    for record in (*suite.records, *random.records):
+        # The idle cord is at rest where it started: its rest error is its error.
+        assert record.rest_error == pytest.approx(record.final_error, abs=1e-6)
+    # A given environment keeps its own limit.
+    given = evaluate(ZeroPolicy(), gym.make(ENV_ID), suite="linear-8", episodes=1,
+                     fidelity=False)
+    assert given.records[0].steps == 100
+
+
 def test_evaluate_records_a_scripted_replay_of_the_reference_moves_as_solved():
     references = _reference_actions([0, 1, 2], difficulty=2)
     result = evaluate(ReplayPolicy(references), ENV_ID, difficulty=2, episodes=3, seed=0)

@@ -36,7 +36,6 @@ def test_success_comes_only_with_the_cord_at_rest_within_the_threshold(env_id, t
                              obs["desired_goal"].reshape(-1, 2)) == info["error"]
                 successes += 1
                 break
-            assert info["settle_actions"] == 0
     assert successes >= 2  # the reference actions reach the goal (at rest) in most tasks
 
 
@@ -143,3 +142,31 @@ def test_settled_metrics_before_reset_is_one_line():
     env = DLOEndpointEnv()
     with pytest.raises(RuntimeError, match="call reset"):
         env.settled_metrics()
+
+
+def test_straight_moves_cut_off_during_a_move_is_not_solved():
+    # The goal is the cord part-way through a move; the time limit stops the episode there,
+    # before the move ends: the cord still moves, so the macro step is not solved.
+    from dlo_env.straight_moves import StraightMoves
+    from dlo_env.tasks import make_task
+
+    task = make_task(3, 1)
+    probe = gym.make(ENDPOINT, judge_at_rest=False)
+    probe.reset(options={"task": task})
+    for a in task.reference_actions[:3]:
+        obs, *_ = probe.unwrapped.step(a)
+    env = StraightMoves(gym.make(ENDPOINT, max_episode_steps=3))
+    env.reset(options={"start": task.start, "goal": obs["achieved_goal"]})
+    _, _, terminated, truncated, info = env.step(task.moves[0].astype(np.float32))
+    assert truncated and not info["at_rest"] and not terminated
+
+
+def test_straight_moves_judge_the_cord_at_rest_after_the_move():
+    from dlo_env.straight_moves import StraightMoves
+    from dlo_env.tasks import make_task
+
+    task = make_task(4, 1)
+    env = StraightMoves(gym.make(ENDPOINT))
+    env.reset(options={"task": task})
+    _, _, terminated, truncated, info = env.step(task.moves[0].astype(np.float32))
+    assert terminated and not truncated and info["at_rest"] and info["error"] <= 0.02

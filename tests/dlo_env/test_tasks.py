@@ -194,3 +194,20 @@ def test_loading_a_newer_format_version_raises(tmp_path):
     np.savez(path, **arrays)
     with pytest.raises(ValueError, match="format version 99"):
         load_tasks(path)
+
+
+def test_long_horizon_suites_and_their_episode_lengths():
+    from dlo_env.tasks import SUITES, difficulty_max_steps, suite_max_steps
+
+    assert {"linear-8": 8, "linear-10": 10}.items() <= SUITES.items()
+    assert [suite_max_steps(s) for s in ("linear-1", "linear-5", "linear-8", "linear-10")] == [
+        100, 100, 160, 200]
+    assert difficulty_max_steps(3) == 100 and difficulty_max_steps(9) == 180
+    with pytest.raises(ValueError, match="suite name"):
+        suite_max_steps("linear-9")
+    with pytest.raises(ValueError, match="difficulty"):
+        difficulty_max_steps(11)
+    (task,) = load_suite("linear-10", "test", grasp="both", limit=1)
+    assert task.difficulty == 10 and len(task.moves) == 10
+    # Its oracle fits the episode (the registered 100 steps would not always hold it).
+    assert len(task.reference_actions) <= suite_max_steps("linear-10")

@@ -58,3 +58,32 @@ def test_stop_fraction_is_a_fraction_of_the_threshold():
 def test_negative_fields_are_refused(field):
     with pytest.raises(ValueError, match=field):
         CEMConfig(**{field: -1.0})
+
+
+@pytest.mark.parametrize(("kwargs", "field"), [
+    ({"min_std": 0.1}, "min_std"),           # above init_std (0.08)
+    ({"stop_fraction": 1.5}, "stop_fraction"),
+])
+def test_inconsistent_fields_are_refused(kwargs, field):
+    with pytest.raises(ValueError, match=field):
+        CEMConfig(**kwargs)
+
+
+def test_settle_actions_must_be_a_whole_number():
+    from planners.latent_mpc import LatentMPCConfig
+    from planners.physics_mpc import PhysicsMPCConfig
+
+    for kind in (LatentMPCConfig, PhysicsMPCConfig):
+        with pytest.raises(ValueError, match="settle_actions must be an int >= 0"):
+            kind(settle_actions=2.5)
+
+
+def test_a_policy_built_for_another_threshold_is_refused():
+    import gymnasium as gym
+
+    import dlo_env  # noqa: F401
+    from planners.physics_mpc import PhysicsMPCPolicy
+
+    policy = PhysicsMPCPolicy.for_env(gym.make("dlo_env/DLOEndpoint-v0"))
+    with pytest.raises(ValueError, match="success_threshold"):
+        policy.check_env(gym.make("dlo_env/DLOEndpoint-v0", success_threshold=0.005))
