@@ -262,7 +262,8 @@ def _run_episode(
         travel = plan.path_length
         start_inv = float(plan.stats.get("start_inversion_error", math.nan))
         if fidelity:
-            result = transition_fidelity(plan, start, params=base.params, max_step=base.max_step)
+            result = transition_fidelity(plan, start, params=base.cord.params,
+                                         max_step=base.max_step)
             fid, plan_final, fid_max = result.mean_error, result.final_error, result.max_error
             profile = FidelityProfile(index, result.errors, result.travel, result.move)
     record = EpisodeRecord(

@@ -8,7 +8,7 @@ from __future__ import annotations
 
 from gymnasium.envs.registration import register, registry
 
-from dlo_env import goals
+from dlo_env import goals, randomize
 from dlo_env.cord import Cord, CordParams
 from dlo_env.shapes import (
     COSINE_THRESHOLD,
@@ -36,6 +36,7 @@ __all__ = [
     "is_cord_like",
     "max_error",
     "random_cord_shape",
+    "randomize",
     "validate_shape",
     "wavy_cord_shape",
     "wide_cord_shape",

@@ -82,7 +82,8 @@ class DLOEndpointEnv(CordGoalEnv):
     | `difficulty` | int 1-10               | straight moves from start to goal           |
     | `start`      | `(20, 2)` or `(40,)`   | start there (not settled); goal made from it |
     | `goal`       | `(20, 2)` or `(40,)`   | this goal; random start; no reference moves |
-    | `task`       | `dlo_env.tasks.Task`   | the task's start and goal (not combinable)  |
+    | `task`       | `dlo_env.tasks.Task`   | its start and goal (combines with `params`)  |
+    | `params`     | `dlo_env.CordParams`   | this episode's cord (same `n_points`)       |
 
     `difficulty` applies to this episode only (the constructor sets the default). A given
     `start` is used as is, its segments re-projected to rest length.
@@ -113,6 +114,7 @@ class DLOEndpointEnv(CordGoalEnv):
         success_threshold=0.02,  # metres
         judge_at_rest=True,      # success judged on the cord at rest
         difficulty=1,            # default number of straight moves, 1-10
+        randomize=None,          # e.g. {"bending_stiffness": (0.003, 0.03)}: a cord per episode
         render_mode=None,        # or "rgb_array", "human"
     )
     ```

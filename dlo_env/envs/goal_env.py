@@ -16,6 +16,7 @@ import numpy as np
 from gymnasium import spaces
 
 from dlo_env.cord import Cord, CordParams, Grasp
+from dlo_env.randomize import check_params, check_randomize, draw_params
 from dlo_env.shapes import (
     TABLE_HALF,
     bead_share,
@@ -38,7 +39,7 @@ from dlo_env.tasks import (
     wait_for_rest,
 )
 
-_OPTIONS = ("difficulty", "start", "goal", "task")
+_OPTIONS = ("difficulty", "start", "goal", "task", "params")
 _REWARD_TYPES = ("dense", "sparse")
 
 
@@ -48,7 +49,8 @@ class CordGoalEnv(gym.Env[dict[str, np.ndarray], np.ndarray]):
     See :class:`dlo_env.envs.endpoint.DLOEndpointEnv` for the full documentation.
 
     Args:
-        params: Cord parameters (the default cord if None).
+        params: Cord parameters (the default cord if None): every episode's cord unless
+            ``randomize`` or ``options["params"]`` says otherwise.
         max_step: Gripper displacement of an action of 1.0 on one axis, metres.
         reward_type: ``"dense"`` (``-error``) or ``"sparse"`` (0 on success, else -1).
         success_threshold: Success when ``error(cord, goal)`` is at most this, metres.
@@ -57,6 +59,8 @@ class CordGoalEnv(gym.Env[dict[str, np.ndarray], np.ndarray]):
             step then lets it come to rest. False: the earlier rule, the moving cord within
             ``success_threshold``.
         difficulty: Straight moves between start and goal when ``reset`` draws a task (1-10).
+        randomize: Cord parameter -> ``(low, high)``: each episode's cord is ``params`` with
+            these drawn from the environment's ``np_random`` (``dlo_env.randomize``).
         render_mode: ``None``, ``"rgb_array"`` or ``"human"``.
     """
 
@@ -73,6 +77,7 @@ class CordGoalEnv(gym.Env[dict[str, np.ndarray], np.ndarray]):
         success_threshold: float = SUCCESS_THRESHOLD,
         judge_at_rest: bool = True,
         difficulty: int = 1,
+        randomize: dict[str, tuple[float, float]] | None = None,
         render_mode: str | None = None,
     ) -> None:
         if params is not None and not isinstance(params, CordParams):
@@ -96,6 +101,8 @@ class CordGoalEnv(gym.Env[dict[str, np.ndarray], np.ndarray]):
         self.success_threshold = float(success_threshold)
         self.judge_at_rest = bool(judge_at_rest)
         self.difficulty = check_difficulty(difficulty)
+        #: Cord parameter -> (low, high) drawn every episode (empty: always ``params``).
+        self.randomize = check_randomize(randomize) if randomize is not None else {}
         self.render_mode = render_mode
 
         self.cord = Cord(self.params, grasp=self.grasp)
@@ -177,6 +184,7 @@ class CordGoalEnv(gym.Env[dict[str, np.ndarray], np.ndarray]):
         self.cord.reset(start)
         obs, info = self._observe()
         info["settle_actions"] = 0
+        info["params"] = self.cord.params
         # Tuples, not (T, dim) arrays: their length varies per episode, and Gymnasium's vector
         # envs stack equal-shape arrays but keep other objects as they are.
         info["task"] = task
@@ -211,6 +219,7 @@ class CordGoalEnv(gym.Env[dict[str, np.ndarray], np.ndarray]):
         settle = self._settle_if_solved(*state) if self.judge_at_rest else 0
         obs, info = self._observe(None if settle else state)
         info["settle_actions"] = settle
+        info["params"] = self.cord.params
         reward = float(self.compute_reward(obs["achieved_goal"], obs["desired_goal"], info))
         if self.render_mode == "human":
             self.render()
@@ -291,7 +300,7 @@ class CordGoalEnv(gym.Env[dict[str, np.ndarray], np.ndarray]):
 
     # ----------------------------------------------------------------- options
     def _shape_option(self, options: dict, name: str) -> np.ndarray:
-        p = self.params
+        p = self.cord.params
         shape = validate_shape(options[name], n_points=p.n_points, length=p.length, name=name)
         if self.grasp == "both":
             span = float(np.linalg.norm(shape[-1] - shape[0]))
@@ -306,16 +315,25 @@ class CordGoalEnv(gym.Env[dict[str, np.ndarray], np.ndarray]):
         unknown = sorted(set(options) - set(_OPTIONS))
         if unknown:
             raise ValueError(f"options has unknown keys {unknown}; expected some of {_OPTIONS}")
+        # The episode's cord first (a draw from np_random only when randomising), then its task.
+        if "params" in options:
+            params = check_params(options.pop("params"), self.params)
+        elif self.randomize:
+            params = draw_params(self.params, self.randomize, self.np_random)
+        else:
+            params = self.params
+        if params != self.cord.params:
+            self.cord = Cord(params, grasp=self.grasp)
         difficulty = self.difficulty
         if "difficulty" in options:
             difficulty = check_difficulty(options["difficulty"], name="options['difficulty']")
         if "task" in options:
             if len(options) > 1:
-                raise ValueError("options['task'] cannot be combined with other options, got "
+                raise ValueError("options['task'] combines only with options['params'], got "
                                  f"{sorted(options)}")
             task = self._check_task(options["task"])
             return task.start, task.goal, task
-        p = self.params
+        p = self.cord.params
         start = self._shape_option(options, "start") if "start" in options else None
         goal = self._shape_option(options, "goal") if "goal" in options else None
         if goal is not None and "difficulty" in options:
@@ -339,7 +357,7 @@ class CordGoalEnv(gym.Env[dict[str, np.ndarray], np.ndarray]):
         if task.max_step != self.max_step:
             raise ValueError(f"options['task'] was made with max_step {task.max_step}, "
                              f"this environment uses {self.max_step}")
-        p = self.params
+        p = self.cord.params
         for name in ("start", "goal"):
             validate_shape(getattr(task, name), n_points=p.n_points, length=p.length,
                            name=f"options['task'].{name}")

@@ -9,6 +9,7 @@ import numpy as np
 import pytest
 
 import dlo_env  # noqa: F401  (registers the environments)
+from dlo_env.cord import CordParams
 from dlo_env.envs import DLODualEndpointEnv, DLOEndpointEnv
 from dlo_env.shapes import TABLE_HALF, bead_share, direction_free_error, error, max_error
 from dlo_env.tasks import SUCCESS_THRESHOLD, load_suite, make_task
@@ -280,8 +281,11 @@ def test_bad_reset_options_raise_naming_the_option(options, match):
 
 def test_a_task_cannot_be_combined_or_used_with_the_wrong_env():
     task = make_task(0, 1, "head")
-    with pytest.raises(ValueError, match="cannot be combined"):
+    with pytest.raises(ValueError, match=r"combines only with options\['params'\]"):
         gym.make(ENDPOINT).reset(options={"task": task, "difficulty": 1})
+    # A task made on the default cord does not fit a cord of another length.
+    with pytest.raises(ValueError, match=r"options\['task'\].start"):
+        gym.make(ENDPOINT).reset(options={"task": task, "params": CordParams(length=0.8)})
     with pytest.raises(ValueError, match="grasp 'both'"):
         gym.make(DUAL).reset(options={"task": task})
     with pytest.raises(ValueError, match="max_step"):
