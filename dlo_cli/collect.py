@@ -25,7 +25,18 @@ _weight = number_in(float, 0.0, None, expected="a number >= 0")
 
 #: Flags of ``--kind transitions`` only: fields of ``TransitionCollectConfig`` of the same name.
 TRANSITION_FLAGS = ("wide_fraction", "wavy_fraction", "grasp_weights", "rim_fraction",
-                    "push_fraction")
+                    "push_fraction", "randomize")
+
+
+def _range(text: str) -> tuple[str, tuple[float, float]]:
+    """``NAME=LOW:HIGH`` (a cord parameter's range), or ``default`` for the issue's ranges."""
+    name, _, bounds = text.partition("=")
+    low, _, high = bounds.partition(":")
+    try:
+        return name, (float(low), float(high))
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected NAME=LOW:HIGH (e.g. friction=0.2:0.6), "
+                                         f"got {text!r}") from None
 
 
 def _npz_path(text: str) -> str:
@@ -78,6 +89,11 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                              "which push it onto itself and, with both ends held, compress and "
                              f"buckle it (default {TransitionCollectConfig.push_fraction:g}; with "
                              "--rim-fraction at most 1)")
+    parser.add_argument("--randomize", type=_range, nargs="+", default=None,
+                        metavar="NAME=LOW:HIGH",
+                        help="--kind transitions: draw every episode's cord, NAME one of length, "
+                             "bending_stiffness, friction, mass (dlo_env.randomize; each "
+                             "transition records its cord)")
     parser.add_argument("--resume", action="store_true",
                         help="continue an interrupted run from OUT.parts/")
     add_backend(parser)

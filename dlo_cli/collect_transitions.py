@@ -39,8 +39,18 @@ def run(args: argparse.Namespace) -> int:
         raise ValueError("--wide-fraction and --wavy-fraction must have a sum <= 1, got "
                          f"{args.wide_fraction:g} and {args.wavy_fraction:g}")
     given = {k: getattr(args, k) for k in TRANSITION_FLAGS if getattr(args, k) is not None}
-    config = TransitionCollectConfig(seed=args.seed, **{
-        k: tuple(v) if isinstance(v, list) else v for k, v in given.items()})
+    if "randomize" in given:
+        names = [name for name, _ in given["randomize"]]
+        if len(set(names)) < len(names):
+            raise ValueError(f"--randomize names a parameter twice: {' '.join(names)}")
+        given["randomize"] = dict(given["randomize"])
+    try:
+        config = TransitionCollectConfig(seed=args.seed, **{
+            k: tuple(v) if isinstance(v, list) else v for k, v in given.items()})
+    except ValueError as exc:
+        if "randomize" not in str(exc):
+            raise
+        raise ValueError(f"--{exc}") from None
     result = run_chunked(
         args, lambda progress: collect_transitions(
             args.out, args.num_transitions, config, workers=args.workers, resume=args.resume,

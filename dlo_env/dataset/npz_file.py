@@ -65,16 +65,19 @@ def save_npz(path: str | os.PathLike[str], arrays: dict[str, np.ndarray],
     return path
 
 
-def load_npz(path: str | os.PathLike[str], *, format_name: str, format_version: int,
-             names: tuple[str, ...], what: str, missing_hint: str
+def load_npz(path: str | os.PathLike[str], *, format_name: str,
+             format_version: int | tuple[int, ...],
+             names: tuple[str, ...], what: str, missing_hint: str,
+             optional: tuple[str, ...] = ()
              ) -> tuple[dict[str, np.ndarray], dict[str, Any]]:
     """Read the arrays ``names`` and the metadata of a ``format_name`` file.
 
     Args:
         path: The ``.npz`` file.
         format_name: The ``format`` its metadata must name.
-        format_version: The version this code reads.
+        format_version: The version (or versions) this code reads.
         names: Arrays that must be present.
+        optional: Arrays read when present (an earlier version's files lack them).
         what: What the file is, for messages ("shape dataset").
         missing_hint: What to do when there is no file (a command that makes one).
 
@@ -100,13 +103,15 @@ def load_npz(path: str | os.PathLike[str], *, format_name: str, format_version: 
                 raise ValueError(f"{where} is not a {what}: metadata 'format' is not "
                                  f"{format_name!r}")
             version = meta.get("format_version")
-            if version != format_version:
+            readable = (format_version,) if isinstance(format_version, int) else format_version
+            if version not in readable:
+                shown = " or ".join(map(str, readable))
                 raise ValueError(f"{where} has format_version {version!r}; this version of dlo "
-                                 f"reads format_version {format_version} (collect it again)")
+                                 f"reads format_version {shown} (collect it again)")
             missing = [name for name in names if name not in present]
             if missing:
                 raise ValueError(f"{where} lacks the array(s) {', '.join(missing)}")
-            arrays = {name: npz[name] for name in names}
+            arrays = {name: npz[name] for name in (*names, *optional) if name in present}
     except (OSError, zipfile.BadZipFile, json.JSONDecodeError, EOFError) as exc:
         raise ValueError(f"{where} is not a readable .npz {what}: {exc}") from exc
     except ValueError as exc:

@@ -27,6 +27,8 @@ array            dtype, shape   meaning
 ``step``         i8 (T,)        earlier moves in the episode (0: from a random start)
 ``settle``       i1 (T,)        zero actions it took to come to rest
 ``at_rest``      ?  (T,)        whether ``next`` is at rest (else ``MAX_SETTLE_ACTIONS`` ran out)
+``params``       f4 (T, 4)      the cord of the move: ``PARAM_COLUMNS`` (length m, bending
+                                stiffness N m^2, friction, mass kg); version 2 on
 ``metadata``     str ()         JSON: format, version, cord, settings, counts, times
 ================ ============== ==============================================================
 
@@ -64,6 +66,7 @@ from dlo_env.dataset.chunks import (
     run_chunks,
 )
 from dlo_env.dataset.npz_file import check_arrays, load_npz, save_npz
+from dlo_env.randomize import check_randomize, draw_params
 from dlo_env.shapes import TABLE_HALF, random_cord_shape, wavy_cord_shape, wide_cord_shape
 from dlo_env.tasks import (
     DEFAULT_MAX_STEP,
@@ -77,8 +80,13 @@ from dlo_env.tasks import (
 
 #: Name stored in every file's metadata.
 FORMAT_NAME = "dlo-transitions"
-#: Version of the file layout; bumped on any incompatible change.
-FORMAT_VERSION = 1
+#: Version of the file layout; bumped on any incompatible change. Version 2 added ``params``
+#: (cords that differ); version 1 files still load, their cord from their metadata.
+FORMAT_VERSION = 2
+#: The versions ``load_transitions`` reads.
+READABLE_VERSIONS = (1, 2)
+#: The cord parameters of every transition, the columns of ``params``.
+PARAM_COLUMNS = ("length", "bending_stiffness", "friction", "mass")
 #: Names of the grasp codes in ``grasp``.
 GRASP_NAMES = ("head", "tail", "both")
 
@@ -92,6 +100,7 @@ _ARRAYS = {
     "step": (np.dtype(np.int64), ("T",)),
     "settle": (np.dtype(np.int8), ("T",)),
     "at_rest": (np.dtype(np.bool_), ("T",)),
+    "params": (np.dtype(np.float32), ("T", 4)),
 }
 ARRAY_NAMES = tuple(_ARRAYS)
 
@@ -121,6 +130,8 @@ class TransitionCollectConfig:
         max_step: Gripper displacement of an action of 1.0 (the environments' ``max_step``).
         chunk_size: Transitions per chunk (the unit of parallel work, saving and resuming).
         cord: The cord simulated.
+        randomize: Cord parameter -> ``[low, high]``: every episode's cord is ``cord`` with
+            these drawn (``dlo_env.randomize``; empty: always ``cord``).
     """
 
     seed: int = 0
@@ -136,8 +147,11 @@ class TransitionCollectConfig:
     max_step: float = DEFAULT_MAX_STEP
     chunk_size: int = 500
     cord: CordParams = field(default_factory=CordParams)
+    randomize: dict[str, list[float]] = field(default_factory=dict)
 
     def __post_init__(self) -> None:
+        ranges = check_randomize(self.randomize)
+        object.__setattr__(self, "randomize", {k: list(v) for k, v in ranges.items()})
         if not isinstance(self.seed, (int, np.integer)) or self.seed < 0:
             raise ValueError(f"seed must be an integer >= 0, got {self.seed!r}")
         positive_ints(self, "moves_per_episode", "chunk_size")
@@ -177,9 +191,17 @@ class TransitionDataset:
     step: np.ndarray
     settle: np.ndarray
     at_rest: np.ndarray
+    params: np.ndarray | None = None
     metadata: dict[str, Any] = field(default_factory=dict)
 
     def __post_init__(self) -> None:
+        if self.params is None:  # a version-1 file, or arrays made without: the file's cord
+            if not isinstance(self.metadata, dict):
+                raise ValueError(f"metadata must be a dict, got {type(self.metadata).__name__}")
+            cord = CordParams(**self.metadata["cord"]) if "cord" in self.metadata \
+                else CordParams()
+            row = np.array([getattr(cord, k) for k in PARAM_COLUMNS], dtype=np.float32)
+            object.__setattr__(self, "params", np.tile(row, (len(self.grasp), 1)))
         check_arrays(_ARRAYS, self.arrays())
         if len(self.grasp) and (self.grasp.min() < 0 or self.grasp.max() > 2):
             raise ValueError("grasp must hold codes 0 (head), 1 (tail), 2 (both)")
@@ -312,7 +334,11 @@ def collect_transition_chunk(config: TransitionCollectConfig, index: int, size: 
     while len(rows["grasp"]) < size:
         episode += 1
         grasp = int(rng.choice(3, p=weights))
-        cord = Cord(config.cord, grasp=GRASP_NAMES[grasp])
+        # A draw only when randomising: files collected before stay reproducible.
+        params = draw_params(config.cord, config.randomize, rng) if config.randomize \
+            else config.cord
+        cord = Cord(params, grasp=GRASP_NAMES[grasp])
+        row = [getattr(params, k) for k in PARAM_COLUMNS]
         draw = _start_family(rng, config)
         cord.reset(random_start(rng, cord=cord, draw=draw))  # fresh, as an environment's reset
         start = cord.shape
@@ -324,7 +350,7 @@ def collect_transition_chunk(config: TransitionCollectConfig, index: int, size: 
             for name, value in (("start", start), ("next", nxt), ("grasp", grasp),
                                 ("displacement", commanded), ("moved", moved),
                                 ("episode", episode), ("step", step), ("settle", settle),
-                                ("at_rest", settle < MAX_SETTLE_ACTIONS)):
+                                ("at_rest", settle < MAX_SETTLE_ACTIONS), ("params", row)):
                 rows[name].append(value)
             start = nxt
             if progress is not None:
@@ -350,7 +376,8 @@ def load_transitions(path: str | os.PathLike[str]) -> TransitionDataset:
         ValueError: One line: not a transition dataset, another version, a bad array.
     """
     arrays, meta = load_npz(
-        path, format_name=FORMAT_NAME, format_version=FORMAT_VERSION, names=ARRAY_NAMES,
+        path, format_name=FORMAT_NAME, format_version=READABLE_VERSIONS,
+        names=tuple(n for n in ARRAY_NAMES if n != "params"), optional=("params",),
         what="transition dataset",
         missing_hint=("make one with `dlo collect --kind transitions --num-transitions N "
                       f"--out {Path(path).name}`"))

@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 import json
-from dataclasses import replace
+from dataclasses import asdict, replace
 
 import numpy as np
 import pytest
@@ -309,3 +309,53 @@ def test_the_start_family_takes_one_draw_and_none_without_the_options(wide, wavy
     shares = [np.mean([p is f for p in picked]) for f in (
         transitions.wide_cord_shape, transitions.wavy_cord_shape, transitions.random_cord_shape)]
     np.testing.assert_allclose(shares, [wide, wavy, 1 - wide - wavy], atol=0.03)
+
+
+# ---------------------------------------------------------------- cords that differ
+RANGES = {"bending_stiffness": (0.003, 0.03), "friction": (0.2, 0.6), "length": (0.8, 1.2)}
+
+
+def test_collecting_over_cords_records_each_episodes_cord():
+    config = TransitionCollectConfig(seed=3, randomize=RANGES, chunk_size=30)
+    data = collect_transition_chunk(config, 0, 30)
+    again = collect_transition_chunk(config, 0, 30)
+    assert np.array_equal(data.params, again.params) and np.array_equal(data.next, again.next)
+    columns = dict(zip(transitions.PARAM_COLUMNS, data.params.T))
+    for name, (low, high) in RANGES.items():
+        assert (columns[name] >= np.float32(low)).all() and (columns[name] <= high).all()
+    assert (columns["mass"] == np.float32(CordParams().mass)).all()  # not randomised
+    for episode in np.unique(data.episode):
+        rows = data.params[data.episode == episode]
+        assert (rows == rows[0]).all()  # one cord per episode
+    assert len(np.unique(data.params[:, 0])) == len(np.unique(data.episode)) > 1
+    # Each start has the length of its own cord.
+    lengths = np.linalg.norm(np.diff(data.start, axis=1), axis=-1).sum(axis=1)
+    np.testing.assert_allclose(lengths, columns["length"], rtol=0.02)
+
+
+def test_a_version_1_file_loads_with_the_cord_of_its_metadata(tmp_path, chunk):
+    from dlo_env.dataset.npz_file import save_npz
+
+    heavy = CordParams(mass=0.2)
+    arrays = {k: v for k, v in chunk.arrays().items() if k != "params"}
+    path = save_npz(tmp_path / "v1.npz", arrays, {"cord": asdict(heavy)}, "dlo-transitions", 1)
+    data = load_transitions(path)
+    assert data.params.shape == (len(chunk), 4)
+    assert np.allclose(data.params[:, transitions.PARAM_COLUMNS.index("mass")], 0.2)
+
+
+def test_a_transition_model_refuses_data_of_several_cords(tmp_path):
+    from latent_model.transition_training import train_transition_model
+
+    data = collect_transition_chunk(TransitionCollectConfig(seed=1, randomize=RANGES), 0, 12)
+    with pytest.raises(ValueError, match="several cords"):
+        train_transition_model(data, tmp_path / "model")
+
+
+@pytest.mark.parametrize(("randomize", "match"), [
+    ({"mass": (0.01, 0.3)}, r"must lie within"),
+    ({"colour": (0.1, 0.2)}, r"keys must be some of"),
+])
+def test_bad_ranges_of_a_collection_are_one_line_errors(randomize, match):
+    with pytest.raises(ValueError, match=match):
+        TransitionCollectConfig(randomize=randomize)
