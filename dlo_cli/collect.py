@@ -29,7 +29,7 @@ TRANSITION_FLAGS = ("wide_fraction", "wavy_fraction", "grasp_weights", "rim_frac
 
 
 def _range(text: str) -> tuple[str, tuple[float, float]]:
-    """``NAME=LOW:HIGH`` (a cord parameter's range), or ``default`` for the issue's ranges."""
+    """``NAME=LOW:HIGH``: a cord parameter's range."""
     name, _, bounds = text.partition("=")
     low, _, high = bounds.partition(":")
     try:

@@ -86,7 +86,8 @@ def run(args: argparse.Namespace) -> int:
     policy = build_agent(GIF_AGENT, env, model=model, transition_model=transition_model,
                          seed=args.seed)
     suite, index, frames, info = _hardest_solved(policy, env)
-    gif = save_episode_gif(frames, out / "episode.gif", fps=round(1.0 / env.unwrapped.params.dt))
+    fps = round(1.0 / env.unwrapped.cord.params.dt)
+    gif = save_episode_gif(frames, out / "episode.gif", fps=fps)
     print(f"episode.gif: {GIF_AGENT} on {suite} test task {index + 1}, {len(frames) - 1} steps, "
           f"{'solved' if info['is_success'] else 'not solved'}, final error "
           f"{100 * info['error']:.1f} cm, {info['plans']} plans")
@@ -97,7 +98,7 @@ def run(args: argparse.Namespace) -> int:
     start, goal = obs["achieved_goal"].reshape(n, 2), obs["desired_goal"].reshape(n, 2)
     shapes = interpolate(model, start, goal, steps=8)
     plan = LatentTreePlanner(model, seed=args.seed).plan(start, goal)
-    fidelity = transition_fidelity(plan, start, params=env.unwrapped.params,
+    fidelity = transition_fidelity(plan, start, params=env.unwrapped.cord.params,
                                    max_step=env.unwrapped.max_step)
     env.close()
     png = save_interpolation_png(

@@ -43,6 +43,8 @@ def run(args: argparse.Namespace) -> int:
         raise ValueError(f"--data: {exc}") from exc
     if args.heldout is not None:
         heldout = load_transitions(args.heldout)
+        if heldout.one_cord("--heldout") != data.one_cord("--data"):
+            raise ValueError("--heldout was collected with another cord than --data")
     else:
         print("no --heldout file: holding out 5% of --data's episodes for the report")
         data, heldout = split_transitions(data, 0.05, seed=args.seed)

@@ -58,7 +58,7 @@ if __name__ == "__main__":
     print(f"{len(plan.moves)} straight head moves (m): {plan.moves.round(3).tolist()}")
 
     # The environment is the judge: execute the head path and compare shapes on the way.
-    fidelity = transition_fidelity(plan, start, params=env.unwrapped.params,
+    fidelity = transition_fidelity(plan, start, params=env.unwrapped.cord.params,
                                    max_step=env.unwrapped.max_step)
     print(f"transition fidelity {100 * fidelity.mean_error:.2f} cm (mean over "
           f"{len(plan.shapes)} planned shapes), worst {100 * fidelity.max_error:.2f} cm")

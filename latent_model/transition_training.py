@@ -310,9 +310,7 @@ def train_transition_model(
     if checkpoint.exists() and not resume:
         raise ValueError(f"out {str(out)!r} holds a training checkpoint; pass resume=True "
                          "(--resume) to continue it, or choose another folder")
-    if len(data) and (data.params != data.params[0]).any():
-        raise ValueError("data holds transitions of several cords (collected with randomize); "
-                         "this transition model is for one cord: train on one cord's data")
+    data.one_cord("data")  # one cord, the one its metadata names
     cord = data.metadata.get("cord", {})
     mc = model_config if model_config is not None else TransitionModelConfig()
     mc = TransitionModelConfig(**{**asdict(mc), "n_points": int(data.start.shape[1]),

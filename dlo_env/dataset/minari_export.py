@@ -37,6 +37,7 @@ from typing import Any
 import gymnasium as gym
 import numpy as np
 
+from dlo_env.cord import CordParams
 from dlo_env.dataset.transitions import GRASP_NAMES, load_transitions
 from dlo_env.envs import ENVIRONMENTS
 from dlo_env.shapes import error
@@ -229,6 +230,9 @@ def export_transitions(
             the file (another cord or simulator version): one line naming the largest error.
     """
     data = load_transitions(path)
+    if data.one_cord(f"path {str(path)!r}") != CordParams():
+        raise ValueError(f"path {str(path)!r} was collected on another cord than the "
+                         "environments' default; only default-cord transitions are exported")
     written = []
     for env_id, (grasp, _) in ENVIRONMENTS.items():
         mine = data.subset(data.grasp == GRASP_NAMES.index(grasp))

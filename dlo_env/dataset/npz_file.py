@@ -54,7 +54,7 @@ def save_npz(path: str | os.PathLike[str], arrays: dict[str, np.ndarray],
     The zip entries carry a fixed timestamp, so equal datasets give byte-identical files.
     """
     path = Path(path)
-    meta = {"format": format_name, "format_version": format_version, **metadata}
+    meta = {**metadata, "format": format_name, "format_version": format_version}
     entries = {**arrays, "metadata": np.array(json.dumps(meta, sort_keys=True))}
     with atomic_path(path) as tmp:
         with zipfile.ZipFile(tmp, "w", compression=zipfile.ZIP_STORED, allowZip64=True) as zf:

@@ -13,7 +13,8 @@ cord's middle (``push_fraction``: pushes buckle the cord and fold it onto itself
 nearest table edge (``rim_fraction``: moves that press the cord on the rim); half the lengths
 are drawn log-uniformly so short corrective moves are well represented.
 
-The ``.npz`` layout (format ``dlo-transitions``, version 1; no pickles):
+The ``.npz`` layout (format ``dlo-transitions``, version 2; no pickles; version 1 lacked
+``params``):
 
 ================ ============== ==============================================================
 array            dtype, shape   meaning
@@ -198,8 +199,8 @@ class TransitionDataset:
         if self.params is None:  # a version-1 file, or arrays made without: the file's cord
             if not isinstance(self.metadata, dict):
                 raise ValueError(f"metadata must be a dict, got {type(self.metadata).__name__}")
-            cord = CordParams(**self.metadata["cord"]) if "cord" in self.metadata \
-                else CordParams()
+            recorded = self.metadata.get("cord") or self.metadata.get("collect", {}).get("cord")
+            cord = CordParams(**recorded) if recorded else CordParams()
             row = np.array([getattr(cord, k) for k in PARAM_COLUMNS], dtype=np.float32)
             object.__setattr__(self, "params", np.tile(row, (len(self.grasp), 1)))
         check_arrays(_ARRAYS, self.arrays())
@@ -210,6 +211,23 @@ class TransitionDataset:
 
     def __len__(self) -> int:
         return len(self.grasp)
+
+    def one_cord(self, name: str = "data") -> CordParams:
+        """The single cord of these transitions, or a one-line ``ValueError`` when they hold
+        several (collected with ``randomize``) or differ from their metadata's cord."""
+        if len(self) and (self.params != self.params[0]).any():
+            raise ValueError(f"{name} holds transitions of several cords (collected with "
+                             "randomize); this transition model is for one cord: use one "
+                             "cord's data")
+        recorded = self.metadata.get("cord") or self.metadata.get("collect", {}).get("cord")
+        cord = CordParams(**recorded) if recorded else CordParams()
+        if len(self):
+            row = np.array([getattr(cord, k) for k in PARAM_COLUMNS], dtype=np.float32)
+            if (self.params[0] != row).any():
+                raise ValueError(f"{name} holds transitions of another cord than its metadata "
+                                 f"says ({dict(zip(PARAM_COLUMNS, self.params[0].tolist()))}): "
+                                 "a part of a randomised collection; use one cord's data")
+        return cord
 
     def arrays(self) -> dict[str, np.ndarray]:
         """The arrays by file name (without ``metadata``)."""
@@ -381,6 +399,8 @@ def load_transitions(path: str | os.PathLike[str]) -> TransitionDataset:
         what="transition dataset",
         missing_hint=("make one with `dlo collect --kind transitions --num-transitions N "
                       f"--out {Path(path).name}`"))
+    if meta.get("format_version", FORMAT_VERSION) >= 2 and "params" not in arrays:
+        raise ValueError(f"{str(path)!r} lacks the array params (format_version 2)")
     try:
         return TransitionDataset(**arrays, metadata=meta)
     except ValueError as exc:

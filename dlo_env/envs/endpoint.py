@@ -61,11 +61,12 @@ class DLOEndpointEnv(CordGoalEnv):
     within the threshold.
 
     `info` always holds `is_success` (bool), `at_rest` (every point slower than 1 mm/s),
-    `settle_actions`, and the errors of the returned shape: `error`, `max_error` (largest
-    per-point distance), `direction_free_error` (the smaller of the errors to the goal and to
-    the reversed goal) and `bead_share` (share of points within 1.75 cm of the goal polyline),
-    metres. `env.unwrapped.settled_metrics()` gives the same errors for the shape the cord
-    would come to rest in now, without changing the episode.
+    `settle_actions`, `params` (the episode's `CordParams`), and the errors of the returned
+    shape: `error`, `max_error` (largest per-point distance), `direction_free_error` (the
+    smaller of the errors to the goal and to the reversed goal) and `bead_share` (share of
+    points within 1.75 cm of the goal polyline), metres. `env.unwrapped.settled_metrics()` gives
+    the same errors for the shape the cord would come to rest in now, without changing the
+    episode.
 
     ## Starting State
 
@@ -92,8 +93,8 @@ class DLOEndpointEnv(CordGoalEnv):
     rest length raise `ValueError` naming the option, as do unknown options.
 
     The reset `info` also holds `reference_actions` (`(T, 2)` float32: replayed through `step`
-    from the reset state they solve the task; with `judge_at_rest=False` they reach the goal
-    exactly, bitwise), `moves` (`(difficulty, 2)`
+    from the reset state they solve the task on the cord that made it; with
+    `judge_at_rest=False` they reach the goal exactly, bitwise), `moves` (`(difficulty, 2)`
     displacements, metres), `difficulty` and `task_seed` (0 and -1 when the goal was given).
 
     ## Episode End

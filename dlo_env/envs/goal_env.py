@@ -9,6 +9,7 @@ choose the grasp and carry the documentation.
 from __future__ import annotations
 
 import copy
+from dataclasses import replace
 from typing import Any, ClassVar
 
 import gymnasium as gym
@@ -177,7 +178,9 @@ class CordGoalEnv(gym.Env[dict[str, np.ndarray], np.ndarray]):
     ) -> tuple[dict[str, np.ndarray], dict[str, Any]]:
         """Start an episode; see the class documentation for ``options``."""
         super().reset(seed=seed)
-        start, goal, task = self._episode(dict(options or {}))
+        start, goal, task, params = self._episode(dict(options or {}))
+        if params != self.cord.params:
+            self.cord = Cord(params, grasp=self.grasp)
         self.task = task
         self.goal = goal
         self._goal_flat = goal.reshape(-1)
@@ -299,8 +302,7 @@ class CordGoalEnv(gym.Env[dict[str, np.ndarray], np.ndarray]):
         return obs, info
 
     # ----------------------------------------------------------------- options
-    def _shape_option(self, options: dict, name: str) -> np.ndarray:
-        p = self.cord.params
+    def _shape_option(self, options: dict, name: str, p: CordParams) -> np.ndarray:
         shape = validate_shape(options[name], n_points=p.n_points, length=p.length, name=name)
         if self.grasp == "both":
             span = float(np.linalg.norm(shape[-1] - shape[0]))
@@ -311,19 +313,33 @@ class CordGoalEnv(gym.Env[dict[str, np.ndarray], np.ndarray]):
                 )
         return shape
 
-    def _episode(self, options: dict) -> tuple[np.ndarray, np.ndarray, Task | None]:
+    def _episode_params(self, options: dict) -> CordParams:
+        """The episode's cord: ``options["params"]``, a draw (only when randomising), or the
+        environment's. A given task, start or goal keeps its own length."""
+        if "params" in options:
+            return check_params(options.pop("params"), self.params)
+        if not self.randomize:
+            return self.params
+        params = draw_params(self.params, self.randomize, self.np_random)
+        given = [options[k] for k in ("task", "start", "goal") if k in options]
+        if "length" in self.randomize and given:
+            shape = given[0].start if isinstance(given[0], Task) else given[0]
+            try:
+                points = np.asarray(shape, dtype=np.float64).reshape(-1, 2)
+                length = float(np.linalg.norm(np.diff(points, axis=0), axis=1).sum())
+                params = replace(params, length=length)
+            except (TypeError, ValueError):
+                pass  # the shape's own check says what is wrong with it
+        return params
+
+    def _episode(self, options: dict
+                 ) -> tuple[np.ndarray, np.ndarray, Task | None, CordParams]:
         unknown = sorted(set(options) - set(_OPTIONS))
         if unknown:
             raise ValueError(f"options has unknown keys {unknown}; expected some of {_OPTIONS}")
-        # The episode's cord first (a draw from np_random only when randomising), then its task.
-        if "params" in options:
-            params = check_params(options.pop("params"), self.params)
-        elif self.randomize:
-            params = draw_params(self.params, self.randomize, self.np_random)
-        else:
-            params = self.params
-        if params != self.cord.params:
-            self.cord = Cord(params, grasp=self.grasp)
+        # The episode's cord first, then its task; the env's cord changes only once every
+        # option has passed (a refused reset leaves the environment as it was).
+        p = self._episode_params(options)
         difficulty = self.difficulty
         if "difficulty" in options:
             difficulty = check_difficulty(options["difficulty"], name="options['difficulty']")
@@ -331,23 +347,22 @@ class CordGoalEnv(gym.Env[dict[str, np.ndarray], np.ndarray]):
             if len(options) > 1:
                 raise ValueError("options['task'] combines only with options['params'], got "
                                  f"{sorted(options)}")
-            task = self._check_task(options["task"])
-            return task.start, task.goal, task
-        p = self.cord.params
-        start = self._shape_option(options, "start") if "start" in options else None
-        goal = self._shape_option(options, "goal") if "goal" in options else None
+            task = self._check_task(options["task"], p)
+            return task.start, task.goal, task, p
+        start = self._shape_option(options, "start", p) if "start" in options else None
+        goal = self._shape_option(options, "goal", p) if "goal" in options else None
         if goal is not None and "difficulty" in options:
             raise ValueError("options['difficulty'] has no effect when options['goal'] is given")
         if goal is not None and start is not None:
-            return start, goal, None
+            return start, goal, None, p
         seed = int(self.np_random.integers(2**31 - 1))
         if goal is not None:
-            return random_start(seed, self.grasp, params=p), goal, None
+            return random_start(seed, self.grasp, params=p), goal, None, p
         task = make_task(seed, difficulty, self.grasp, params=p, max_step=self.max_step,
                          start=start, min_error=self.success_threshold)
-        return task.start, task.goal, task
+        return task.start, task.goal, task, p
 
-    def _check_task(self, task: object) -> Task:
+    def _check_task(self, task: object, p: CordParams) -> Task:
         if not isinstance(task, Task):
             raise ValueError(f"options['task'] must be a dlo_env.tasks.Task, got "
                              f"{type(task).__name__}")
@@ -357,7 +372,6 @@ class CordGoalEnv(gym.Env[dict[str, np.ndarray], np.ndarray]):
         if task.max_step != self.max_step:
             raise ValueError(f"options['task'] was made with max_step {task.max_step}, "
                              f"this environment uses {self.max_step}")
-        p = self.cord.params
         for name in ("start", "goal"):
             validate_shape(getattr(task, name), n_points=p.n_points, length=p.length,
                            name=f"options['task'].{name}")
@@ -379,7 +393,7 @@ class CordGoalEnv(gym.Env[dict[str, np.ndarray], np.ndarray]):
         if self._renderer is None:
             from dlo_env.rendering import CordRenderer
 
-            self._renderer = CordRenderer(self.render_mode, fps=round(1.0 / self.params.dt))
+            self._renderer = CordRenderer(self.render_mode, fps=round(1.0 / self.cord.params.dt))
         grippers = [self.cord.grippers[e].position for e in self._ends] if self.cord.space else []
         shape = self.cord.shape if self.cord.space is not None else None
         return self._renderer.draw(shape, self.goal, grippers)

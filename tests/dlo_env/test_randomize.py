@@ -34,7 +34,7 @@ def test_every_corner_of_the_supported_ranges_is_stable_at_full_speed(corner):
             shape = cord.shape
             assert np.isfinite(shape).all() and np.abs(shape).max() <= TABLE_HALF
             stretch = np.linalg.norm(np.diff(shape, axis=0), axis=1) / params.segment - 1
-            assert np.abs(stretch).max() < 0.05
+            assert np.abs(stretch).max() < 0.04
         wait_for_rest(cord)
         assert at_rest(cord)
 
@@ -119,3 +119,24 @@ def test_gymnasium_check_env_passes_on_a_randomised_env(env_id):
         warnings.simplefilter("always")
         gymnasium_check_env(env, skip_render_check=True)
     assert [str(w.message) for w in caught] == []
+
+
+def test_a_refused_reset_leaves_the_environment_as_it_was():
+    from dlo_env.tasks import make_task
+
+    env = gym.make(ENDPOINT)
+    obs, _ = env.reset(seed=0)
+    with pytest.raises(ValueError, match=r"options\['task'\].start"):
+        env.reset(options={"task": make_task(0, 1), "params": CordParams(length=0.8)})
+    assert env.unwrapped.cord.params == CordParams()
+    _, _, _, _, info = env.step(np.zeros(2, dtype=np.float32))  # the episode goes on
+    assert info["params"] == CordParams()
+
+
+def test_a_given_task_keeps_its_length_when_lengths_are_drawn():
+    from dlo_env.tasks import make_task
+
+    env = gym.make(ENDPOINT, randomize={"length": (0.7, 1.3), "friction": (0.2, 0.6)})
+    _, info = env.reset(seed=0, options={"task": make_task(0, 1)})
+    assert info["params"].length == pytest.approx(1.0, abs=1e-6)
+    assert 0.2 <= info["params"].friction <= 0.6

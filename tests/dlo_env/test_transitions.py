@@ -359,3 +359,24 @@ def test_a_transition_model_refuses_data_of_several_cords(tmp_path):
 def test_bad_ranges_of_a_collection_are_one_line_errors(randomize, match):
     with pytest.raises(ValueError, match=match):
         TransitionCollectConfig(randomize=randomize)
+
+
+def test_resaving_a_version_1_file_writes_version_2(tmp_path, chunk):
+    from dlo_env.dataset.npz_file import save_npz
+
+    arrays = {k: v for k, v in chunk.arrays().items() if k != "params"}
+    old = save_npz(tmp_path / "v1.npz", arrays, {"cord": asdict(CordParams())},
+                   "dlo-transitions", 1)
+    again = load_transitions(save_transitions(tmp_path / "v2.npz", load_transitions(old)))
+    assert again.metadata["format_version"] == 2 and again.params.shape == (len(chunk), 4)
+
+
+def test_one_cord_refuses_several_cords_and_a_part_of_a_randomised_file():
+    data = collect_transition_chunk(TransitionCollectConfig(seed=2, randomize=RANGES), 0, 20)
+    with pytest.raises(ValueError, match="several cords"):
+        data.one_cord()
+    part = data.subset(data.episode == data.episode[0])
+    with pytest.raises(ValueError, match="another cord than its metadata"):
+        part.one_cord()
+    plain = collect_transition_chunk(SMALL, 0, 5)
+    assert plain.one_cord() == CordParams()
