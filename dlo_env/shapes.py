@@ -84,6 +84,10 @@ def direction_free_error(a: np.ndarray, b: np.ndarray) -> np.ndarray | float:
     return float(out) if np.ndim(out) == 0 else out
 
 
+#: The distances an environment can judge success by (``success_metric``): the ordered error,
+#: or the error ignoring which end is which (designed goals).
+SUCCESS_METRICS = {"error": error, "direction_free_error": direction_free_error}
+
 #: Distance from the goal curve within which a point counts as on it, metres: the bead
 #: threshold of DeformableRavens' cable-shape tasks.
 BEAD_TOLERANCE = 0.0175

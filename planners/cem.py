@@ -18,7 +18,7 @@ import numpy as np
 
 from dlo_env.checks import fractions, non_negative, positive, positive_ints
 from dlo_env.cord import CordParams
-from dlo_env.shapes import error
+from dlo_env.shapes import SUCCESS_METRICS
 from dlo_env.tasks import GRASP_ENDS, split_move
 from planners.episodes import EpisodicPolicy
 from planners.interfaces import EpisodeStats
@@ -97,10 +97,18 @@ class CEMPolicy(EpisodicPolicy):
         success_threshold: The environment's success threshold, metres: the policy holds still
             within it, and stops a plan's iterations at ``config.stop_fraction`` of it.
         config: CEM budget.
+        success_metric: The environment's ``success_metric``: ``"error"``, or
+            ``"direction_free_error"`` (plans are scored against the goal in either order).
     """
 
     def __init__(self, params: CordParams | None, grasp: str, max_step: float,
-                 success_threshold: float, config: CEMConfig) -> None:
+                 success_threshold: float, config: CEMConfig, *,
+                 success_metric: str = "error") -> None:
+        if success_metric not in SUCCESS_METRICS:
+            raise ValueError(f"success_metric must be one of {tuple(SUCCESS_METRICS)}, got "
+                             f"{success_metric!r}")
+        self.success_metric = success_metric
+        self._distance = SUCCESS_METRICS[success_metric]
         if grasp not in GRASP_ENDS:
             raise ValueError(f"grasp must be one of {tuple(GRASP_ENDS)}, got {grasp!r}")
         if not max_step > 0:
@@ -118,10 +126,12 @@ class CEMPolicy(EpisodicPolicy):
         """Raise ``ValueError`` unless the environment's ``success_threshold`` is the policy's
         (it holds still within it and stops planning at a fraction of it)."""
         threshold = float(getattr(base, "success_threshold", self.success_threshold))
-        if abs(threshold - self.success_threshold) > 1e-12:
+        metric = getattr(base, "success_metric", self.success_metric)
+        if abs(threshold - self.success_threshold) > 1e-12 or metric != self.success_metric:
             raise ValueError(
-                f"the policy was built for success_threshold={self.success_threshold} m, but "
-                f"the environment has success_threshold={threshold} m: build it with "
+                f"the policy was built for success_threshold={self.success_threshold} m and "
+                f"success_metric={self.success_metric!r}, but the environment has "
+                f"success_threshold={threshold} m and success_metric={metric!r}: build it with "
                 f"{type(self).__name__}.for_env(env)")
 
     def episode_stats(self) -> EpisodeStats:
@@ -168,7 +178,7 @@ class CEMPolicy(EpisodicPolicy):
             mean = self._mean
         std = np.full(dims, cfg.init_std)
         if cfg.focus > 0:
-            near = cfg.focus * float(error(shape, goal))
+            near = cfg.focus * float(self._distance(shape, goal))
             std[:] = min(cfg.init_std, max(cfg.min_std, near))
         best_plan, best_err = mean.copy(), math.inf
         for _ in range(cfg.iterations):
@@ -203,7 +213,7 @@ class CEMPolicy(EpisodicPolicy):
         shape = obs.shape.astype(np.float64)
         goal = obs.goal.astype(np.float64)
         action_dim = 2 * len(self.ends)
-        if error(shape, goal) <= self.success_threshold:
+        if self._distance(shape, goal) <= self.success_threshold:
             return np.zeros(action_dim, dtype=np.float32)
         if not self._queue:
             plan, _ = self.plan(shape, goal)

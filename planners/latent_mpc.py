@@ -17,7 +17,6 @@ from typing import Any
 import numpy as np
 
 from dlo_env.checks import non_negative, non_negative_ints, positive_ints
-from dlo_env.shapes import error
 from planners.cem import CEMConfig, CEMPolicy
 
 
@@ -82,7 +81,8 @@ class LatentMPCPolicy(CEMPolicy):
     """
 
     def __init__(self, model: Any, grasp: str = "head", success_threshold: float = 0.02,
-                 config: LatentMPCConfig | None = None) -> None:
+                 config: LatentMPCConfig | None = None, *,
+                 success_metric: str = "error") -> None:
         self.model = model
         config = config if config is not None else LatentMPCConfig()
         total = model.config.members
@@ -90,7 +90,7 @@ class LatentMPCPolicy(CEMPolicy):
             raise ValueError(f"LatentMPCConfig.members must be <= the model's {total} members, "
                              f"got {config.members}")
         super().__init__(model.cord_params, grasp, model.config.max_step, success_threshold,
-                         config)
+                         config, success_metric=success_metric)
         #: ``predict``'s ``members``: None runs the mean network, or the whole ensemble.
         self.members = config.members
         if config.members is None and getattr(model, "mean_net", None) is None:
@@ -106,7 +106,7 @@ class LatentMPCPolicy(CEMPolicy):
             model = TransitionModel.load_or_pretrained(device="cpu")
         base = getattr(env, "unwrapped", env)
         policy = cls(model, grasp=base.cord.grasp, success_threshold=base.success_threshold,
-                     config=config)
+                     config=config, success_metric=base.success_metric)
         policy.check_env(env)
         return policy
 
@@ -141,7 +141,7 @@ class LatentMPCPolicy(CEMPolicy):
             else:
                 shapes = self.model.predict(shapes, self.grasp, moves, members=self.members,
                                             inextensible=cfg.inextensible)
-        return error(shapes, goal) + cfg.spread_weight * spread
+        return self._distance(shapes, goal) + cfg.spread_weight * spread
 
     def _execute(self, plan: np.ndarray) -> list[np.ndarray]:
         """The first move, then zero actions while the cord comes to rest."""

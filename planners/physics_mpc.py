@@ -18,7 +18,6 @@ import numpy as np
 
 from dlo_env.checks import non_negative_ints, positive_ints
 from dlo_env.cord import Cord, CordParams
-from dlo_env.shapes import error
 from planners.cem import CEMConfig, CEMPolicy
 
 
@@ -72,9 +71,12 @@ class PhysicsMPCPolicy(CEMPolicy):
         max_step: float = 0.02,
         success_threshold: float = 0.02,
         config: PhysicsMPCConfig | None = None,
+        *,
+        success_metric: str = "error",
     ) -> None:
         super().__init__(params, grasp, max_step, success_threshold,
-                         config if config is not None else PhysicsMPCConfig())
+                         config if config is not None else PhysicsMPCConfig(),
+                         success_metric=success_metric)
         self._cord = Cord(self.params, grasp=grasp)  # the model: reset for every candidate
 
     @classmethod
@@ -87,6 +89,7 @@ class PhysicsMPCPolicy(CEMPolicy):
             max_step=base.max_step,
             success_threshold=base.success_threshold,
             config=config,
+            success_metric=base.success_metric,
         )
 
     def check_env(self, env: object) -> None:
@@ -113,7 +116,7 @@ class PhysicsMPCPolicy(CEMPolicy):
 
     def _score(self, shape: np.ndarray, goal: np.ndarray, candidates: np.ndarray) -> np.ndarray:
         """Each candidate simulated on a fresh copy of the cord."""
-        return np.array([error(self._rollout(shape, c), goal) for c in candidates])
+        return np.array([self._distance(self._rollout(shape, c), goal) for c in candidates])
 
     def _execute(self, plan: np.ndarray) -> list[np.ndarray]:
         """The actions run before the next planning call: ``replan_every`` steps of the plan,

@@ -113,6 +113,7 @@ class DLOEndpointEnv(CordGoalEnv):
         max_step=0.02,           # metres per unit action
         reward_type="dense",     # or "sparse"
         success_threshold=0.02,  # metres
+        success_metric="error",  # or "direction_free_error" (ends may swap)
         judge_at_rest=True,      # success judged on the cord at rest
         difficulty=1,            # default number of straight moves, 1-10
         randomize=None,          # e.g. {"bending_stiffness": (0.003, 0.03)}: a cord per episode

@@ -19,6 +19,7 @@ from gymnasium import spaces
 from dlo_env.cord import Cord, CordParams, Grasp
 from dlo_env.randomize import check_params, check_randomize, draw_params
 from dlo_env.shapes import (
+    SUCCESS_METRICS,
     TABLE_HALF,
     bead_share,
     error,
@@ -44,6 +45,7 @@ _OPTIONS = ("difficulty", "start", "goal", "task", "params")
 _REWARD_TYPES = ("dense", "sparse")
 
 
+
 class CordGoalEnv(gym.Env[dict[str, np.ndarray], np.ndarray]):
     """Move the grasped end(s) of a cord on a table until its shape matches a goal shape.
 
@@ -55,6 +57,8 @@ class CordGoalEnv(gym.Env[dict[str, np.ndarray], np.ndarray]):
         max_step: Gripper displacement of an action of 1.0 on one axis, metres.
         reward_type: ``"dense"`` (``-error``) or ``"sparse"`` (0 on success, else -1).
         success_threshold: Success when ``error(cord, goal)`` is at most this, metres.
+        success_metric: ``"error"`` (default) or ``"direction_free_error"`` (a designed goal
+            whose ends may swap): what success and the reward measure.
         judge_at_rest: Judge success on the cord at rest (default): a step succeeds when the
             cord, if the grippers stopped now, comes to rest within ``success_threshold``; the
             step then lets it come to rest. False: the earlier rule, the moving cord within
@@ -76,6 +80,7 @@ class CordGoalEnv(gym.Env[dict[str, np.ndarray], np.ndarray]):
         max_step: float = DEFAULT_MAX_STEP,
         reward_type: str = "dense",
         success_threshold: float = SUCCESS_THRESHOLD,
+        success_metric: str = "error",
         judge_at_rest: bool = True,
         difficulty: int = 1,
         randomize: dict[str, tuple[float, float]] | None = None,
@@ -89,6 +94,9 @@ class CordGoalEnv(gym.Env[dict[str, np.ndarray], np.ndarray]):
             raise ValueError(f"reward_type must be one of {_REWARD_TYPES}, got {reward_type!r}")
         if not (isinstance(success_threshold, (int, float)) and success_threshold > 0):
             raise ValueError(f"success_threshold must be a number > 0, got {success_threshold!r}")
+        if success_metric not in SUCCESS_METRICS:
+            raise ValueError(f"success_metric must be one of {tuple(SUCCESS_METRICS)}, got "
+                             f"{success_metric!r}")
         if not isinstance(judge_at_rest, (bool, np.bool_)):
             raise ValueError(f"judge_at_rest must be True or False, got {judge_at_rest!r}")
         if render_mode is not None and render_mode not in self.metadata["render_modes"]:
@@ -101,6 +109,8 @@ class CordGoalEnv(gym.Env[dict[str, np.ndarray], np.ndarray]):
         self.reward_type = reward_type
         self.success_threshold = float(success_threshold)
         self.judge_at_rest = bool(judge_at_rest)
+        self.success_metric = success_metric
+        self._distance = SUCCESS_METRICS[success_metric]
         self.difficulty = check_difficulty(difficulty)
         #: Cord parameter -> (low, high) drawn every episode (empty: always ``params``).
         self.randomize = check_randomize(randomize) if randomize is not None else {}
@@ -151,7 +161,7 @@ class CordGoalEnv(gym.Env[dict[str, np.ndarray], np.ndarray]):
             ``-error`` (dense) or ``-1.0``/``0.0`` (sparse), a float for one pair and an array
             of the leading shape for a batch.
         """
-        dist = np.asarray(error(*self._pairs(achieved_goal, desired_goal)))
+        dist = np.asarray(self._distance(*self._pairs(achieved_goal, desired_goal)))
         if self.reward_type == "dense":
             reward = -dist
         else:
@@ -162,7 +172,8 @@ class CordGoalEnv(gym.Env[dict[str, np.ndarray], np.ndarray]):
         self, achieved_goal: np.ndarray, desired_goal: np.ndarray, info: Any
     ) -> np.ndarray | bool:
         """Whether ``achieved_goal`` solves ``desired_goal`` (batched like ``compute_reward``)."""
-        ok = np.asarray(error(*self._pairs(achieved_goal, desired_goal))) <= self.success_threshold
+        pairs = self._pairs(achieved_goal, desired_goal)
+        ok = np.asarray(self._distance(*pairs)) <= self.success_threshold
         return bool(ok) if ok.ndim == 0 else ok
 
     def compute_truncated(
@@ -239,11 +250,11 @@ class CordGoalEnv(gym.Env[dict[str, np.ndarray], np.ndarray]):
         goal = self._goal_flat.reshape(-1, 2)
         if speed < REST_SPEED:
             return 0
-        if error(shape, goal) > self.success_threshold + REST_CHECK_MARGIN:
+        if self._distance(shape, goal) > self.success_threshold + REST_CHECK_MARGIN:
             return 0
         trial = copy.deepcopy(self.cord)
         wait_for_rest(trial, self.max_step)
-        if not (at_rest(trial) and error(trial.shape, goal) <= self.success_threshold):
+        if not (at_rest(trial) and self._distance(trial.shape, goal) <= self.success_threshold):
             return 0
         return wait_for_rest(self.cord, self.max_step)
 
@@ -292,7 +303,7 @@ class CordGoalEnv(gym.Env[dict[str, np.ndarray], np.ndarray]):
         goal_points = goal.reshape(-1, 2)
         metrics = self._metrics(shape, goal_points)
         resting = speed < REST_SPEED
-        solved = metrics["error"] <= self.success_threshold
+        solved = metrics[self.success_metric] <= self.success_threshold
         info = {
             "is_success": solved and (resting or not self.judge_at_rest),
             "at_rest": resting,

@@ -170,3 +170,28 @@ def test_straight_moves_judge_the_cord_at_rest_after_the_move():
     env.reset(options={"task": task})
     _, _, terminated, truncated, info = env.step(task.moves[0].astype(np.float32))
     assert terminated and not truncated and info["at_rest"] and info["error"] <= 0.02
+
+
+def test_a_direction_free_env_solves_a_goal_given_in_reverse():
+    from dlo_env.tasks import make_task
+
+    task = make_task(5, 1)
+    reverse = task.goal[::-1].copy()
+    for metric, solved in (("direction_free_error", True), ("error", False)):
+        env = gym.make(ENDPOINT, success_metric=metric)
+        env.reset(options={"start": task.start, "goal": reverse})
+        for a in task.reference_actions:
+            obs, reward, terminated, _, info = env.step(a)
+            if terminated:
+                break
+        assert terminated == solved
+        if solved:
+            assert info["direction_free_error"] <= 0.02 < info["error"]
+            assert reward == pytest.approx(-info["direction_free_error"])
+            assert env.unwrapped.compute_reward(obs["achieved_goal"], obs["desired_goal"],
+                                                None) == reward
+
+
+def test_success_metric_must_be_known():
+    with pytest.raises(ValueError, match="success_metric must be one of"):
+        gym.make(ENDPOINT, success_metric="chamfer")

@@ -87,3 +87,15 @@ def test_a_policy_built_for_another_threshold_is_refused():
     policy = PhysicsMPCPolicy.for_env(gym.make("dlo_env/DLOEndpoint-v0"))
     with pytest.raises(ValueError, match="success_threshold"):
         policy.check_env(gym.make("dlo_env/DLOEndpoint-v0", success_threshold=0.005))
+
+
+def test_a_policy_built_for_another_success_metric_is_refused():
+    import gymnasium as gym
+
+    import dlo_env  # noqa: F401
+    from planners.physics_mpc import PhysicsMPCPolicy
+
+    env = gym.make("dlo_env/DLOEndpoint-v0", success_metric="direction_free_error")
+    assert PhysicsMPCPolicy.for_env(env).success_metric == "direction_free_error"
+    with pytest.raises(ValueError, match="success_metric"):
+        PhysicsMPCPolicy.for_env(gym.make("dlo_env/DLOEndpoint-v0")).check_env(env)
