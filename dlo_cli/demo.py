@@ -3,8 +3,8 @@
 Runs latent-mpc (CEM on the learned transition model, the best agent), the paper's latent-tree
 planner (open and closed loop) and the straight-line reference on a handful of random tasks
 (10 of each difficulty 1-3), prints the results table, and writes into the output folder: the
-table as JSON and CSV, ``episode.gif`` (latent-mpc on a test task of the hardest named suite,
-linear-5: the real cord, the gripper and the goal in green) and ``interpolation.png`` (the
+table as JSON and CSV, ``episode.gif`` (latent-mpc on a test task of linear-5, five straight
+moves: the real cord, the gripper and the goal in green) and ``interpolation.png`` (the
 paper's Fig. 2: a latent interpolation, next to a plan against the real cord).
 """
 
