@@ -21,13 +21,19 @@ from dlo_cli.flags import (
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     """Flags of ``dlo benchmark``; defaults are ``BenchmarkConfig``'s (the published table)."""
-    from dlo_bench.benchmark import DEFAULT_DIFFICULTIES, QUICK_EPISODES, BenchmarkConfig
+    from dlo_bench.benchmark import (
+        DEFAULT_DIFFICULTIES,
+        HEADLINE_THRESHOLD,
+        QUICK_EPISODES,
+        BenchmarkConfig,
+    )
     from dlo_env.tasks import SPLIT_SIZES
 
     size = SPLIT_SIZES["test"]
     parser.add_argument("--quick", action="store_true",
-                        help=f"{QUICK_EPISODES} episodes of each cell: a smoke test of every "
-                             "agent (about 2 minutes on two cores)")
+                        help=f"{QUICK_EPISODES} episodes of each cell at {HEADLINE_THRESHOLD} m "
+                             "only (unless --threshold says otherwise): a smoke test of every "
+                             "agent")
     parser.add_argument("--episodes", default=None, type=number_in(
                             int, 1, size, expected=f"an integer from 1 to {size} (the tasks of "
                                                    "a test split)"),
@@ -42,12 +48,13 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                          for e, d in DEFAULT_DIFFICULTIES.items())
     add_difficulty(parser, None, "each runs the test split of suite linear-K in every "
                                  f"--env (None: {defaults})", suites=True)
-    parser.add_argument("--threshold", nargs="+", metavar="METRES",
-                        default=list(BenchmarkConfig.thresholds),
+    parser.add_argument("--threshold", nargs="+", metavar="METRES", default=None,
                         type=number_in(float, 1e-4, 1.0, expected="a number of metres in "
                                                                   "[0.0001, 1]"),
                         help="success thresholds, metres: every cell runs once at each, judged "
-                             "on the cord at rest (default: 0.02 0.01 0.005)")
+                             "on the cord at rest (default: " + " ".join(
+                                 map(str, BenchmarkConfig.thresholds)) + f"; {HEADLINE_THRESHOLD} "
+                             "with --quick)")
     parser.add_argument("--baselines", default=BenchmarkConfig.baselines,
                         help="folder with one `dlo baseline` output folder per RL agent and "
                              "environment (BASELINES/ppo, BASELINES/sac-her, BASELINES/bc; "
@@ -106,9 +113,14 @@ def run(args: argparse.Namespace) -> int:
     """Run the benchmark, print the table and the speed ratio, write the results."""
     import time
 
-    if len(set(args.threshold)) < len(args.threshold):
+    from dlo_bench.benchmark import HEADLINE_THRESHOLD, BenchmarkConfig
+
+    thresholds = args.threshold
+    if thresholds is None:
+        thresholds = [HEADLINE_THRESHOLD] if args.quick else list(BenchmarkConfig.thresholds)
+    if len(set(thresholds)) < len(thresholds):
         raise ValueError(f"--threshold must not repeat a value, got "
-                         f"{' '.join(map(str, args.threshold))}")
+                         f"{' '.join(map(str, thresholds))}")
     check_committed(args.allow_dirty)  # before anything is built or written
 
     import torch
@@ -123,7 +135,7 @@ def run(args: argparse.Namespace) -> int:
     config = BenchmarkConfig(
         agents=tuple(args.agent), envs=tuple(args.env),
         difficulties=tuple(args.difficulty) if args.difficulty else None,
-        thresholds=tuple(args.threshold), episodes=episodes,
+        thresholds=tuple(thresholds), episodes=episodes,
         seed=args.seed, baselines=args.baselines, model=args.model,
         transition_model=args.transition_model,
         replan_every=args.replan_every, max_seconds=args.max_seconds,

@@ -119,3 +119,12 @@ def test_resume_reuses_finished_cells(tmp_path, capsys):
 def test_benchmark_rejects_an_unknown_agent(tmp_path, capsys):
     assert main(["benchmark", "--agent", "teleport", "--out", str(tmp_path)]) == 2
     assert "argument --agent: agent name must be one of" in capsys.readouterr().err
+
+
+def test_quick_runs_the_headline_threshold_only(tmp_path):
+    out = tmp_path / "bench"
+    assert main(["benchmark", "--quick", "--agent", "straight-line", "--difficulty", "1",
+                 "--env", "dlo_env/DLOEndpoint-v0", "--allow-dirty", "--out", str(out)]) == 0
+    rows = json.loads((out / "results.json").read_text())
+    assert [r["threshold"] for r in rows] == [0.01]
+    assert "--threshold" not in (out / "results.md").read_text()
