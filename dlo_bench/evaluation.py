@@ -213,8 +213,15 @@ def _episode_options(
     difficulty: int | None, suite: str | None, split: str, episodes: int, grasp: str
 ) -> list[dict[str, Any] | None]:
     if suite is not None:
+        from dlo_env.designed_suites import DESIGNED_SUITES, load_designed_suite
         from dlo_env.tasks import load_suite
 
+        if suite in DESIGNED_SUITES:
+            designed = load_designed_suite(suite, split, grasp=grasp, limit=episodes)
+            if len(designed) < episodes:
+                raise ValueError(f"episodes must be at most the {len(designed)} tasks of suite "
+                                 f"{suite!r} split {split!r}, got {episodes}")
+            return [t.options() for t in designed]
         tasks = load_suite(suite, split, grasp=grasp, limit=episodes)
         if len(tasks) < episodes:
             raise ValueError(
@@ -318,7 +325,9 @@ def evaluate(
             ``dlo_env.tasks.suite_max_steps`` or ``difficulty_max_steps`` steps unless
             ``env_kwargs`` says otherwise) is closed at the end.
         difficulty: Straight moves per task (the environment's default if None).
-        suite: A named suite (``linear-1``, ...) instead of ``difficulty``: its fixed tasks.
+        suite: A named suite (``linear-1``, ..., or a designed one such as ``shapes-curves``,
+            scored direction-free in an environment made from an id) instead of
+            ``difficulty``: its fixed tasks.
         episodes: Number of episodes.
         seed: Episode ``i`` resets with seed ``seed + i`` (random tasks).
         split: The suite's split, ``"test"`` or ``"train"``.
@@ -349,10 +358,14 @@ def evaluate(
         env = env_id
     owned = isinstance(env, str)
     if owned:
+        from dlo_env.designed_suites import DESIGNED_MAX_STEPS, DESIGNED_SUITES
         from dlo_env.tasks import difficulty_max_steps, suite_max_steps
 
         kwargs = dict(env_kwargs or {})
-        if suite is not None:
+        if suite in DESIGNED_SUITES:  # drawn goals: scored direction-free, longer episodes
+            kwargs.setdefault("max_episode_steps", DESIGNED_MAX_STEPS)
+            kwargs.setdefault("success_metric", "direction_free_error")
+        elif suite is not None:
             kwargs.setdefault("max_episode_steps", suite_max_steps(suite))
         elif difficulty is not None:
             kwargs.setdefault("max_episode_steps", difficulty_max_steps(difficulty))

@@ -28,12 +28,14 @@ TABLE_COLUMNS = (
     ("success_rate", "success", "{:.0%}"),
     ("median_rest_error", "median err at rest (cm)", "{:.2f}"),
     ("mean_rest_error", "mean err at rest (cm)", "{:.2f}"),
+    ("median_rest_direction_free_error", "direction-free (cm)", "{:.2f}"),
     ("mean_steps", "steps", "{:.1f}"),
     ("median_planning_seconds", "plan s (median)", "{:.3f}"),
     ("planning_failures", "plan fails", "{}"),
     ("mean_fidelity", "fidelity (cm)", "{:.2f}"),
 )
-_CENTIMETRES = {"median_rest_error", "mean_rest_error", "mean_fidelity"}
+_CENTIMETRES = {"median_rest_error", "mean_rest_error", "median_rest_direction_free_error",
+                "mean_fidelity"}
 def aligned(rows: list[list[str]]) -> str:
     """Rows of cells as right-aligned text columns, the first row a header underlined."""
     widths = [max(len(r[c]) for r in rows) for c in range(len(rows[0]))]

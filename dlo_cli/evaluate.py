@@ -24,14 +24,17 @@ from dlo_cli.flags import (
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     """Flags of ``dlo evaluate``."""
+    from dlo_env.designed_suites import DESIGNED_SUITES
     from dlo_env.tasks import SPLIT_SIZES, SUCCESS_THRESHOLD, SUITES
 
     add_agent(parser, default=None)
     which = parser.add_mutually_exclusive_group()
     add_difficulty(which, [1], "random tasks (reset seeds SEED, SEED+1, ...); several give "
                                "several rows")
-    which.add_argument("--suite", nargs="+", metavar="NAME", choices=list(SUITES),
-                       help=f"named task suites instead of random tasks: {', '.join(SUITES)}")
+    suites = [*SUITES, *DESIGNED_SUITES]
+    which.add_argument("--suite", nargs="+", metavar="NAME", choices=suites,
+                       help=f"named task suites instead of random tasks: {', '.join(suites)} "
+                            "(designed goals are scored direction-free)")
     parser.add_argument("--split", default="test", choices=tuple(SPLIT_SIZES),
                         help="split of the suites")
     add_episodes(parser, f"episodes per row (default {DEFAULT_EPISODES}: a quick look; a "
@@ -77,7 +80,11 @@ def evaluate_row(agent: str, difficulty: int | None, suite: str | None,
         torch.set_num_threads(settings["threads"])
     if model is None and agent_spec(agent).shape_model:
         model = load_shape_model(settings["model"])
+    from dlo_env.designed_suites import DESIGNED_SUITES
+
     env_kwargs = {"success_threshold": settings["threshold"]}
+    if suite in DESIGNED_SUITES:  # the agent is built for the environment evaluate makes
+        env_kwargs["success_metric"] = "direction_free_error"
     with gym.make(settings["env_id"], **env_kwargs) as env:
         policy = build_agent(agent, env, model=model, seed=settings["seed"],
                              transition_model=settings["transition_model"],
