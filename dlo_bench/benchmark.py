@@ -5,10 +5,13 @@ split of the suites ``linear-1`` to ``linear-5`` in ``DLOEndpoint-v0`` and ``lin
 ``linear-3`` in ``DLODualEndpoint-v0``, and the long horizons ``linear-8`` and ``linear-10`` in
 both (fixed tasks, so every agent sees the same episodes) with
 :func:`dlo_bench.evaluation.evaluate`, once at each success threshold (2, 1 and 0.5 cm, judged
-on the cord at rest; the planners take their stopping rules from it). An agent that does not act
+on the cord at rest; the planners take their stopping rules from it). The designed suites
+(``shapes-curves``: drawn goals, scored direction-free) run once, at the headline threshold,
+in every environment; their rows add the errors per curve family beside the reference errors
+of :mod:`dlo_bench.reference`. An agent that does not act
 in an environment, or whose model is missing, gets a row that says so, never silently none.
 Every row states the agent's sample cost: the data its model or policy was trained on. Every
-finished (agent, environment, difficulty, threshold) cell is written at once, so an interrupted
+finished (agent, environment, suite, threshold) cell is written at once, so an interrupted
 run resumes; :func:`dlo_bench.benchmark_report.write_results` then writes the table (Markdown),
 the rows (JSON) and a bar chart (PNG), all atomically.
 
@@ -46,6 +49,7 @@ from dlo_bench.paths import (
 )
 from dlo_bench.report import json_ready, threshold_label, write_evaluation
 from dlo_env.atomic import file_digest
+from dlo_env.designed_suites import DESIGNED_SUITES
 from dlo_env.envs import ENVIRONMENTS
 from dlo_env.tasks import SPLIT_SIZES, SUITES
 from planners.interfaces import Policy, ShapeSurrogate
@@ -57,8 +61,10 @@ SUITE_OF_DIFFICULTY = {difficulty: name for name, difficulty in SUITES.items()}
 DEFAULT_DIFFICULTIES = {ENDPOINT: (1, 2, 3, 4, 5, 8, 10), DUAL_ENDPOINT: (1, 2, 3, 8, 10)}
 #: Success thresholds every cell runs at, metres (judged at rest): one evaluation each.
 THRESHOLDS = (0.02, 0.01, 0.005)
-#: The threshold the report's first table shows.
+#: The threshold the report's first table shows (and the designed cells run at).
 HEADLINE_THRESHOLD = 0.01
+#: The designed suites the benchmark runs in every environment.
+DEFAULT_DESIGNED = ("shapes-curves",)
 #: Episodes of every cell in ``--quick`` runs.
 QUICK_EPISODES = 2
 #: Subfolder of the output folder holding one CSV/JSON of episodes per cell.
@@ -74,8 +80,10 @@ class BenchmarkConfig:
         envs: Environment ids, in table order.
         difficulties: Difficulties of every environment, each the test split of its suite
             ``linear-K``; None: ``DEFAULT_DIFFICULTIES`` of each environment.
-        thresholds: Success thresholds, metres: every cell runs once at each (the
+        thresholds: Success thresholds, metres: every linear cell runs once at each (the
             environment's ``success_threshold``).
+        designed: Designed suites (``dlo_env.designed_suites``) run in every environment,
+            once, at the headline threshold (or the first of ``thresholds`` without it).
         episodes: Episodes per cell (the first tasks of the split; the split has 50).
         seed: Seed of the planners' sampling.
         baselines: Folder with one ``dlo baseline`` output folder per RL agent and environment
@@ -93,6 +101,7 @@ class BenchmarkConfig:
     envs: tuple[str, ...] = tuple(DEFAULT_DIFFICULTIES)
     difficulties: tuple[int, ...] | None = None
     thresholds: tuple[float, ...] = THRESHOLDS
+    designed: tuple[str, ...] = DEFAULT_DESIGNED
     episodes: int = SPLIT_SIZES["test"]
     seed: int = 0
     baselines: str | None = None
@@ -120,15 +129,26 @@ class BenchmarkConfig:
         if not self.thresholds or not all(ok) or len(set(self.thresholds)) < len(ok):
             raise ValueError(f"thresholds must be distinct numbers > 0 (metres), "
                              f"got {self.thresholds!r}")
+        if any(d not in DESIGNED_SUITES for d in self.designed):
+            raise ValueError(f"designed must be some of {tuple(DESIGNED_SUITES)}, "
+                             f"got {self.designed!r}")
         size = SPLIT_SIZES["test"]
         if not (isinstance(self.episodes, int) and 1 <= self.episodes <= size):
             raise ValueError(f"episodes must be an int in 1..{size} (the test split), "
                              f"got {self.episodes!r}")
 
-    def cells(self) -> list[tuple[str, int, float]]:
-        """``(env_id, difficulty, threshold)`` of every cell, in table order."""
-        return [(env, d, t) for t in self.thresholds for env in self.envs
-                for d in (self.difficulties or DEFAULT_DIFFICULTIES.get(env, (1, 2, 3)))]
+    def cells(self) -> list[tuple[str, str, float]]:
+        """``(env_id, suite, threshold)`` of every cell, in table order: the linear suites at
+        every threshold, then the designed ones at the headline threshold."""
+        linear = [(env, SUITE_OF_DIFFICULTY[d], t) for t in self.thresholds for env in self.envs
+                  for d in (self.difficulties or DEFAULT_DIFFICULTIES.get(env, (1, 2, 3)))]
+        return linear + [(env, suite, self.designed_threshold) for suite in self.designed
+                         for env in self.envs]
+
+    @property
+    def designed_threshold(self) -> float:
+        """The threshold the designed cells run at."""
+        return HEADLINE_THRESHOLD if HEADLINE_THRESHOLD in self.thresholds else self.thresholds[0]
 
 
 def env_label(env_id: str) -> str:
@@ -136,9 +156,16 @@ def env_label(env_id: str) -> str:
     return ENVIRONMENTS[env_id][1]
 
 
-def cell_name(agent: str, env_id: str, difficulty: int, threshold: float) -> str:
-    """A cell's file name: ``latent-mpc-endpoint-d3-1cm``."""
-    return f"{agent}-{env_label(env_id)}-d{difficulty}-{threshold_label(threshold, '')}"
+def suite_label(suite: str) -> str:
+    """A suite's short name in tables and file names: ``d3`` for ``linear-3``, designed suites
+    by name."""
+    return f"d{SUITES[suite]}" if suite in SUITES else suite
+
+
+def cell_name(agent: str, env_id: str, suite: str, threshold: float) -> str:
+    """A cell's file name: ``latent-mpc-endpoint-d3-1cm``, ``physics-mpc-dual-endpoint-
+    shapes-curves-1cm``."""
+    return f"{agent}-{env_label(env_id)}-{suite_label(suite)}-{threshold_label(threshold, '')}"
 
 
 @dataclass(frozen=True)
@@ -272,27 +299,34 @@ def load_shape_model(path: str | None) -> tuple[ShapeSurrogate | None, str]:
 
 
 def cell_key(config: BenchmarkConfig, agent: LoadedAgent, env_id: str,
-             difficulty: int, threshold: float) -> dict[str, Any]:
+             suite: str, threshold: float) -> dict[str, Any]:
     """What a cell's result depends on; a saved cell is reused only when its key matches."""
     key = asdict(config)
-    for name in ("agents", "envs", "difficulties", "thresholds"):
+    for name in ("agents", "envs", "difficulties", "thresholds", "designed"):
         key.pop(name)
-    return {**key, "agent": agent.name, "env_id": env_id, "difficulty": difficulty,
-            "threshold": threshold,
+    where = {"difficulty": SUITES[suite]} if suite in SUITES else {"suite": suite}
+    return {**key, "agent": agent.name, "env_id": env_id, **where, "threshold": threshold,
             "model_digest": "+".join(file_digest(m) for m in agent.models),
             "settings": agent.settings}
 
 
-def row_of(agent: LoadedAgent, env_id: str, difficulty: int, threshold: float,
+def row_of(agent: LoadedAgent, env_id: str, suite: str, threshold: float,
            evaluation: Evaluation | None, episodes: int) -> dict[str, Any]:
-    """One row of the results: the summary of a cell, or a row saying the agent is missing."""
+    """One row of the results: the summary of a cell, or a row saying the agent is missing.
+
+    A designed suite's row scores the cord at rest direction-free (``median_rest_error``) and
+    adds ``designed``: per curve family and over all, the agent's median error, the
+    reference's, and the shares within 1 and 2 cm and within ``NEAR_REFERENCE`` of the
+    reference (:func:`designed_summary`).
+    """
     row: dict[str, Any] = {
         "agent": agent.name,
         "env": env_label(env_id),
         "env_id": env_id,
-        "difficulty": difficulty,
+        "difficulty": SUITES.get(suite),
+        "cell": suite_label(suite),
         "threshold": threshold,
-        "suite": f"{SUITE_OF_DIFFICULTY[difficulty]}/test",
+        "suite": f"{suite}/test",
         "status": "ok" if not agent.missing else "missing",
         "note": agent.missing,
         "episodes": episodes if evaluation is not None else 0,
@@ -328,7 +362,59 @@ def row_of(agent: LoadedAgent, env_id: str, difficulty: int, threshold: float,
             planning_failures=s["planning_failures"],
             mean_fidelity=s["mean_fidelity"],
         )
+        if suite in DESIGNED_SUITES:
+            row["median_rest_error"] = s["median_rest_direction_free_error"]
+            row["designed"] = designed_summary(suite, env_id, records)
     return row
+
+
+#: An agent is near the reference on a designed task when its error at rest is within this
+#: many metres of the reference error (the issue's 0.5 cm).
+NEAR_REFERENCE = 0.005
+
+
+def designed_summary(suite: str, env_id: str, records: list[EpisodeRecord]
+                     ) -> dict[str, dict[str, Any]]:
+    """Per curve family (and ``"all"``) of a designed cell: ``episodes``, the agent's
+    ``median_error`` (direction-free, at rest), the shares ``within_1cm``, ``within_2cm`` and
+    ``near_reference``, and the reference's ``reference_median``, ``reference_within_1cm``
+    and ``reference_within_2cm`` (None without a reference file).
+
+    Episode ``i`` is the ``i``-th test task of the suite (``evaluate``'s order)."""
+    from dlo_bench.reference import load_references
+    from dlo_env.designed_suites import load_designed_suite
+    from dlo_env.envs import ENVIRONMENTS
+
+    grasp = "both" if ENVIRONMENTS[env_id][1] == "dual-endpoint" else "head"
+    tasks = load_designed_suite(suite, "test", grasp=grasp, limit=len(records))
+    references = load_references(suite, env_id)
+    groups: dict[str, list[tuple[float, float | None]]] = {"all": []}
+    for task, record in zip(tasks, records):
+        ref = references.get(task.seed)
+        pair = (record.rest_direction_free_error, None if ref is None else ref["error"])
+        groups.setdefault(task.family, []).append(pair)
+        groups["all"].append(pair)
+
+    def share(values: np.ndarray, limit: float) -> float:
+        return float(np.mean(values <= limit))
+
+    out: dict[str, dict[str, Any]] = {}
+    for family, pairs in groups.items():
+        errors = np.array([p[0] for p in pairs], dtype=float)
+        entry: dict[str, Any] = {"episodes": len(pairs),
+                                 "median_error": float(np.nanmedian(errors)),
+                                 "within_1cm": share(errors, 0.01),
+                                 "within_2cm": share(errors, 0.02),
+                                 "near_reference": None, "reference_median": None,
+                                 "reference_within_1cm": None, "reference_within_2cm": None}
+        if all(p[1] is not None for p in pairs):
+            refs = np.array([p[1] for p in pairs], dtype=float)
+            entry.update(near_reference=float(np.mean(errors <= refs + NEAR_REFERENCE)),
+                         reference_median=float(np.median(refs)),
+                         reference_within_1cm=share(refs, 0.01),
+                         reference_within_2cm=share(refs, 0.02))
+        out[family] = entry
+    return out
 
 
 def _load_cell(path: Path, key: dict[str, Any]) -> tuple[Evaluation, dict[str, Any]] | None:
@@ -430,7 +516,7 @@ def _warm_up(policy: Policy, env: Any) -> None:
     policy.predict(obs, episode_start=np.array([True]), deterministic=True)
 
 
-def run_cell(name: str, env_id: str, difficulty: int, config: BenchmarkConfig, *,
+def run_cell(name: str, env_id: str, suite: str | int, config: BenchmarkConfig, *,
              threshold: float = THRESHOLDS[0], shape_model: ShapeSurrogate | None = None,
              threads: int | None = None, progress: bool = False) -> tuple[Evaluation, float]:
     """Evaluate one cell with an agent built for it (and warmed up) from scratch.
@@ -440,7 +526,7 @@ def run_cell(name: str, env_id: str, difficulty: int, config: BenchmarkConfig, *
     cells on Ray.
 
     Args:
-        name, env_id, difficulty: The cell.
+        name, env_id, suite: The cell (a suite's name, or the difficulty K of ``linear-K``).
         threshold: The environment's success threshold, metres (the agent is built for it).
         config: The benchmark (models, seed, episodes...).
         shape_model: The loaded shape model of the latent-tree agents (None: loaded here).
@@ -468,7 +554,9 @@ def run_cell(name: str, env_id: str, difficulty: int, config: BenchmarkConfig, *
             raise ValueError(f"agent {name!r} is missing in {env_id}: {agent.missing}")
         _warm_up(agent.policy, env)
     t0 = time.perf_counter()
-    result = evaluate(agent.policy, env_id, suite=SUITE_OF_DIFFICULTY[difficulty],
+    if not isinstance(suite, str):
+        suite = SUITE_OF_DIFFICULTY[suite]
+    result = evaluate(agent.policy, env_id, suite=suite,
                       episodes=config.episodes, seed=config.seed, split="test", agent=name,
                       fidelity=config.fidelity, progress=progress,
                       env_kwargs={"success_threshold": threshold})
@@ -478,12 +566,12 @@ def run_cell(name: str, env_id: str, difficulty: int, config: BenchmarkConfig, *
 def run_benchmark(config: BenchmarkConfig, out_dir: str | os.PathLike, *,
                   resume: bool = False, progress: bool = True,
                   backend: Any = None, run_id: str | None = None) -> list[dict[str, Any]]:
-    """Evaluate every agent on every cell (environment, difficulty); write each as it finishes.
+    """Evaluate every agent on every cell (environment, suite); write each as it finishes.
 
     Args:
         config: What to run.
         out_dir: Output folder; cells go to
-            ``out_dir/results_episodes/<agent>-<env>-d<K>-<threshold>.csv/.json``.
+            ``out_dir/results_episodes/<agent>-<env>-<d<K> or suite>-<threshold>.csv/.json``.
         resume: Reuse cells already written by a run with the same settings.
         progress: Show progress bars.
         backend: None runs the cells one after the other in this process; a
@@ -508,7 +596,7 @@ def run_benchmark(config: BenchmarkConfig, out_dir: str | os.PathLike, *,
     if any(AGENTS[a].shape_model for a in config.agents):
         shape_model, why = load_shape_model(config.model)
     rows: list[dict[str, Any]] = []
-    todo: list[tuple[int, str, str, int, float, LoadedAgent, dict[str, Any]]] = []
+    todo: list[tuple[int, str, str, str, float, LoadedAgent, dict[str, Any]]] = []
     for name in config.agents:
         agents: dict[str, LoadedAgent] = {}
         for env_id in config.envs:
@@ -517,25 +605,25 @@ def run_benchmark(config: BenchmarkConfig, out_dir: str | os.PathLike, *,
             if agent.missing.startswith("no shape model") and why:
                 agent = LoadedAgent(name, None, missing=f"no shape model: {why}")
             agents[env_id] = agent
-        for env_id, difficulty, threshold in config.cells():
+        for env_id, suite, threshold in config.cells():
             agent = agents[env_id]
-            cell = cell_name(name, env_id, difficulty, threshold)
+            cell = cell_name(name, env_id, suite, threshold)
             if agent.policy is None:
-                rows.append(row_of(agent, env_id, difficulty, threshold, None, 0))
+                rows.append(row_of(agent, env_id, suite, threshold, None, 0))
                 if progress:
                     print(f"{cell}: missing ({agent.missing})", flush=True)
                 continue
-            key = cell_key(config, agent, env_id, difficulty, threshold)
+            key = cell_key(config, agent, env_id, suite, threshold)
             path = folder / f"{cell}.json"
             loaded = _load_cell(path, key) if resume else None
             if loaded is not None:
                 result, facts = loaded
-                rows.append({**row_of(agent, env_id, difficulty, threshold, result,
+                rows.append({**row_of(agent, env_id, suite, threshold, result,
                                       config.episodes), **facts})
                 if progress:
                     print(f"{cell}: reused {path}", flush=True)
                 continue
-            todo.append((len(rows), name, env_id, difficulty, threshold, agent, key))
+            todo.append((len(rows), name, env_id, suite, threshold, agent, key))
             rows.append({})
 
     # Cell by cell, every agent of a cell one after the other: an interrupted run leaves whole
@@ -547,28 +635,28 @@ def run_benchmark(config: BenchmarkConfig, out_dir: str | os.PathLike, *,
     todo.sort(key=lambda item: (order[(item[2], item[3], item[4])], ranks[item[1]]))
 
     def finish(k: int, result: Evaluation, seconds: float) -> None:
-        slot, name, env_id, difficulty, threshold, agent, key = todo[k]
-        cell = cell_name(name, env_id, difficulty, threshold)
+        slot, name, env_id, suite, threshold, agent, key = todo[k]
+        cell = cell_name(name, env_id, suite, threshold)
         facts = {"wall_seconds": seconds, "commit": version, "run": run_id}
         write_evaluation(result, folder, cell, extra={"benchmark_key": key, **facts})
-        rows[slot] = {**row_of(agent, env_id, difficulty, threshold, result, config.episodes),
+        rows[slot] = {**row_of(agent, env_id, suite, threshold, result, config.episodes),
                       **facts}
 
     if backend is None:
-        for k, (_, name, env_id, difficulty, threshold, _, _) in enumerate(todo):
-            result, seconds = run_cell(name, env_id, difficulty, config, threshold=threshold,
+        for k, (_, name, env_id, suite, threshold, _, _) in enumerate(todo):
+            result, seconds = run_cell(name, env_id, suite, config, threshold=threshold,
                                        shape_model=shape_model, progress=progress)
             finish(k, result, seconds)
     else:
         threads = _torch_threads()
         config = absolute_paths(config)  # the tasks may run in another folder or node
-        calls = [(name, env_id, difficulty, threshold, config, None, threads)
-                 for _, name, env_id, difficulty, threshold, _, _ in todo]
+        calls = [(name, env_id, suite, threshold, config, None, threads)
+                 for _, name, env_id, suite, threshold, _, _ in todo]
         for done, (k, (result, seconds)) in enumerate(backend.map(_run_cell_task, calls), 1):
             finish(k, result, seconds)
             if progress:
-                _, name, env_id, difficulty, threshold, _, _ = todo[k]
-                print(f"{cell_name(name, env_id, difficulty, threshold)}: success "
+                _, name, env_id, suite, threshold, _, _ = todo[k]
+                print(f"{cell_name(name, env_id, suite, threshold)}: success "
                       f"{result.summary['success_rate']:.0%} ({done}/{len(todo)} cells)",
                       flush=True)
     return rows
@@ -583,11 +671,11 @@ def absolute_paths(config: BenchmarkConfig) -> BenchmarkConfig:
                               if getattr(config, f)})
 
 
-def _run_cell_task(name: str, env_id: str, difficulty: int, threshold: float,
+def _run_cell_task(name: str, env_id: str, suite: str, threshold: float,
                    config: BenchmarkConfig, shape_model: ShapeSurrogate | None,
                    threads: int | None) -> tuple[Evaluation, float]:
     """``run_cell`` with positional arguments, as a Ray task calls it."""
-    return run_cell(name, env_id, difficulty, config, threshold=threshold,
+    return run_cell(name, env_id, suite, config, threshold=threshold,
                     shape_model=shape_model, threads=threads)
 
 

@@ -168,6 +168,55 @@ def success_table(rows: list[dict[str, Any]], threshold: float | None = None) ->
     return lines
 
 
+def _suite(row: dict[str, Any]) -> str:
+    """The suite of a row without its split: ``linear-3``, ``shapes-curves``."""
+    return str(row.get("suite", f"linear-{row['difficulty']}")).split("/")[0]
+
+
+def designed_section(rows: list[dict[str, Any]]) -> list[str]:
+    """Markdown: per designed suite and environment, each agent's median direction-free error
+    at rest per curve family, its shares within 1 and 2 cm and near the reference, under a
+    first row for the reference search; [] without designed rows."""
+    designed = [r for r in rows if r.get("designed")]
+    if not designed:
+        return []
+    from dlo_bench.benchmark import NEAR_REFERENCE
+
+    near = threshold_label(NEAR_REFERENCE)
+    lines = [
+        "## Designed shapes",
+        "",
+        "Drawn goals from a random start (`dlo_env.designed_suites`), scored direction-free on "
+        "the cord at rest after the last step: median error (cm) per curve family, and the "
+        f"shares of goals within 1 and 2 cm and within {near} of the reference. The "
+        "*reference* row is the best a long-budget physics search reached on the same tasks "
+        "(`dlo reference`; blank without its file).",
+        "",
+    ]
+    for key in dict.fromkeys((_suite(r), r["env"]) for r in designed):
+        group = [r for r in designed if (_suite(r), r["env"]) == key]
+        families = [f for f in dict.fromkeys(f for r in group for f in r["designed"])
+                    if f != "all"] + ["all"]
+        lines += [f"**{key[0]}, {key[1]}**", "",
+                  "| agent | " + " | ".join(families) + " | within 1 cm | within 2 cm | "
+                  "near reference |", "|---|" + "---|" * (len(families) + 3)]
+        first = group[0]["designed"]
+        if first["all"]["reference_median"] is not None:
+            lines.append("| reference | " + " | ".join(
+                _fmt(first.get(f, {}).get("reference_median"), "{:.2f}", 100) for f in families)
+                + f" | {_fmt(first['all']['reference_within_1cm'], '{:.0%}')} | "
+                  f"{_fmt(first['all']['reference_within_2cm'], '{:.0%}')} | – |")
+        for r in group:
+            d = r["designed"]
+            lines.append(f"| {r['agent']} | " + " | ".join(
+                _fmt(d.get(f, {}).get("median_error"), "{:.2f}", 100) for f in families)
+                + f" | {_fmt(d['all']['within_1cm'], '{:.0%}')} | "
+                  f"{_fmt(d['all']['within_2cm'], '{:.0%}')} | "
+                  f"{_fmt(d['all']['near_reference'], '{:.0%}')} |")
+        lines.append("")
+    return lines
+
+
 def machine_description() -> dict[str, Any]:
     """The machine the numbers were measured on."""
     import torch
@@ -206,6 +255,7 @@ def results_markdown(rows: list[dict[str, Any]], machine: dict[str, Any], comman
         "# Benchmark results",
         "",
         f"Every agent on the first {episodes} tasks of the test split of the suites `linear-K` "
+        "and of the designed suites (below) "
         "(fixed tasks: every agent sees the same episodes) in `dlo_env/DLOEndpoint-v0` "
         "(*endpoint*) and `dlo_env/DLODualEndpoint-v0` (*dual-endpoint*); *dK* is difficulty "
         "K (K straight moves from start to goal). Success means the cord at rest within the "
@@ -224,7 +274,7 @@ def results_markdown(rows: list[dict[str, Any]], machine: dict[str, Any], comman
         "last step. *seconds/episode* is planning (planners) or policy inference (RL) time, "
         "mean over episodes; the simulator's own stepping is not counted.",
         "",
-        "| agent | environment | difficulty | threshold | episodes | success "
+        "| agent | environment | suite | threshold | episodes | success "
         "| median rest error (cm) | seconds/episode | fidelity (cm) |",
         "|---|---|---|---|---|---|---|---|---|",
     ]
@@ -233,17 +283,18 @@ def results_markdown(rows: list[dict[str, Any]], machine: dict[str, Any], comman
         t = r.get("threshold")
         tl = "–" if t is None else threshold_label(t)
         if r["status"] != "ok":
-            lines.append(f"| {r['agent']} | {env} | {r['difficulty']} | {tl} | – | missing | – "
+            lines.append(f"| {r['agent']} | {env} | {_suite(r)} | {tl} | – | missing | – "
                          "| – | – |")
             continue
         lines.append(
-            f"| {r['agent']} | {env} | {r['difficulty']} | {tl} | {r['episodes']} | "
+            f"| {r['agent']} | {env} | {_suite(r)} | {tl} | {r['episodes']} | "
             f"{_fmt(r['success_rate'], '{:.0%}')} | "
             f"{_fmt(r.get('median_rest_error'), '{:.2f}', 100)} | "
             f"{_fmt(r['seconds_per_episode'], '{:.3f}')} | "
             f"{_fmt(r['mean_fidelity'], '{:.2f}', 100)} |"
         )
     lines.append("")
+    lines += designed_section(rows)
     ratios = ratio_lines(rows)
     lines += ratios if ratios else ["Planning time ratios: not measured (physics-mpc did not "
                                     "run with a cheaper planner)."]

@@ -149,8 +149,9 @@ def write_evaluation(
 
 
 def cell_label(row: dict[str, Any]) -> str:
-    """A benchmark cell's short name in tables and charts: ``endpoint d3``, ``dual-endpoint d1``."""
-    return f"{row.get('env', 'endpoint')} d{row['difficulty']}"
+    """A benchmark cell's short name in tables and charts: ``endpoint d3``, ``dual-endpoint d1``,
+    ``endpoint shapes-curves``."""
+    return f"{row.get('env', 'endpoint')} {row.get('cell') or 'd' + str(row['difficulty'])}"
 
 
 def threshold_label(threshold: float, space: str = " ") -> str:

@@ -55,6 +55,14 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                              "on the cord at rest (default: " + " ".join(
                                  map(str, BenchmarkConfig.thresholds)) + f"; {HEADLINE_THRESHOLD} "
                              "with --quick)")
+    from dlo_env.designed_suites import DESIGNED_SUITES
+
+    parser.add_argument("--designed", nargs="*", metavar="SUITE", default=None,
+                        choices=tuple(DESIGNED_SUITES),
+                        help="designed suites run in every --env at the headline threshold, "
+                             "scored direction-free (default: " + " ".join(
+                                 BenchmarkConfig.designed) + "; none with --quick or "
+                             "--difficulty; `--designed` alone: none)")
     parser.add_argument("--baselines", default=BenchmarkConfig.baselines,
                         help="folder with one `dlo baseline` output folder per RL agent and "
                              "environment (BASELINES/ppo, BASELINES/sac-her, BASELINES/bc; "
@@ -125,17 +133,27 @@ def run(args: argparse.Namespace) -> int:
 
     import torch
 
-    from dlo_bench.benchmark import QUICK_EPISODES, BenchmarkConfig, new_run_id, run_benchmark
+    from dlo_bench.benchmark import (
+        QUICK_EPISODES,
+        BenchmarkConfig,
+        new_run_id,
+        run_benchmark,
+        suite_label,
+    )
     from dlo_bench.benchmark_report import ratio_lines, write_results
     from dlo_bench.report import threshold_label
 
     torch.set_num_threads(args.threads)
+    designed = args.designed
+    if designed is None:
+        designed = [] if args.quick or args.difficulty else list(BenchmarkConfig.designed)
     episodes = args.episodes if args.episodes is not None else (
         QUICK_EPISODES if args.quick else BenchmarkConfig.episodes)
     config = BenchmarkConfig(
         agents=tuple(args.agent), envs=tuple(args.env),
         difficulties=tuple(args.difficulty) if args.difficulty else None,
-        thresholds=tuple(thresholds), episodes=episodes,
+        thresholds=tuple(thresholds), designed=tuple(dict.fromkeys(designed)),
+        episodes=episodes,
         seed=args.seed, baselines=args.baselines, model=args.model,
         transition_model=args.transition_model,
         replan_every=args.replan_every, max_seconds=args.max_seconds,
@@ -143,7 +161,8 @@ def run(args: argparse.Namespace) -> int:
     )
     backend = backend_of(args)
     run_id = new_run_id()
-    cells = ", ".join(dict.fromkeys(f"{e.split('/')[-1]} d{d}" for e, d, _ in config.cells()))
+    cells = ", ".join(dict.fromkeys(f"{e.split('/')[-1]} {suite_label(s)}"
+                                    for e, s, _ in config.cells()))
     at = ", ".join(threshold_label(t) for t in config.thresholds)
     print(f"benchmark run {run_id}: {len(config.agents)} agents x ({cells}) x ({at}) x "
           f"{config.episodes} episodes -> {args.out}", flush=True)

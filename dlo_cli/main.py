@@ -37,6 +37,8 @@ COMMANDS: dict[str, tuple[str, str]] = {
     "evaluate": ("dlo_cli.evaluate", "score agents on random tasks or named suites"),
     "baseline": ("dlo_cli.baseline", "train a Stable-Baselines3 baseline"),
     "benchmark": ("dlo_cli.benchmark", "run every agent on the test suites, one table"),
+    "reference": ("dlo_cli.reference", "the reference errors of a designed suite's test "
+                                       "tasks, by a long-budget physics search"),
     "export-minari": ("dlo_cli.export_minari",
                       "write the oracle demonstrations and transition data as Minari datasets"),
 }

@@ -68,7 +68,7 @@ def test_quick_benchmark_writes_every_agent_and_difficulty(models, tmp_path, cap
     assert "env steps" in costs["latent-mpc"] and "simulated shapes" in costs["latent-tree"]
     assert costs["physics-mpc"].startswith("none")
     table = (out / "results.md").read_text()
-    assert "| physics-mpc | endpoint | 1 | 2 cm | 1 |" in table and "Machine:" in table
+    assert "| physics-mpc | endpoint | linear-1 | 2 cm | 1 |" in table and "Machine:" in table
     assert "## Success at 2 cm\n\n| agent | endpoint d1 | sample cost |" in table
     assert "Command: `dlo benchmark --quick --episodes 1" in table
     assert (out / "results.png").stat().st_size > 0
@@ -97,7 +97,7 @@ def test_agents_without_a_model_are_reported_not_dropped(tmp_path, capsys):
         else:
             assert r["note"].startswith(f"no trained model for {r['env_id']}")
     table = (out / "results.md").read_text()
-    assert "| ppo | dual-endpoint | 2 | 1 cm | – | missing |" in table
+    assert "| ppo | dual-endpoint | linear-2 | 1 cm | – | missing |" in table
     assert table.index("## Success at 1 cm") < table.index("## Success at 2 cm")
     assert "| ppo | – | – | – | – |" in table  # the success table
     assert "with missing cells (reported in the table): latent-tree, ppo, sac-her" in \

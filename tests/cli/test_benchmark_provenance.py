@@ -160,7 +160,7 @@ def test_every_cell_of_a_run_records_the_code_read_before_its_first_cell(tmp_pat
     versions = iter(["abc1234", "abc1234+dirty", "abc1234+dirty"])
     monkeypatch.setattr(benchmark, "code_version", lambda: next(versions))
     config = BenchmarkConfig(agents=("straight-line",), envs=("dlo_env/DLOEndpoint-v0",),
-                             difficulties=(1, 2), thresholds=(0.02,), episodes=1,
+                             difficulties=(1, 2), thresholds=(0.02,), designed=(), episodes=1,
                              fidelity=False)
     rows = run_benchmark(config, tmp_path, progress=False)
     assert [row["commit"] for row in rows] == ["abc1234", "abc1234"]

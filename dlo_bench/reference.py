@@ -1,0 +1,167 @@
+"""Reference errors of designed tasks: the best that a long-budget physics search reaches.
+
+Whether a cord can be shaped into a drawn goal at all is unknown (no moves made the goal), so
+the success of an agent on a designed suite (``dlo_env.designed_suites``) is read beside a
+*reference*: for every test task, the smallest direction-free error at rest that physics-mpc
+reached with a long budget (:data:`REFERENCE_CONFIG`, planning on the true simulator, ``max
+steps`` :data:`REFERENCE_MAX_STEPS`, 1.5 times an agent's episode). After every step, the shape
+the cord would rest in if the grippers stopped (``settled_metrics``) is scored, and the best
+is kept: each is a shape the cord reaches at rest from the start.
+
+``dlo reference`` makes the files (one JSON per suite and environment) with worker processes,
+resuming from the tasks a folder already holds; the shipped ones live in
+``dlo_bench/references/`` and are refreshed with ``dlo reference --out dlo_bench/references``.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import time
+from dataclasses import asdict
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from dlo_env.atomic import write_text_atomic
+from dlo_env.designed_suites import designed_suite_seeds, designed_task
+from planners.physics_mpc import PhysicsMPCConfig
+
+#: The search's budget: twice physics-mpc's samples, more elites and iterations (2.7 times its
+#: simulations per plan), sampling focused near the goal, so it refines where the agents'
+#: budget stops.
+REFERENCE_CONFIG = PhysicsMPCConfig(samples=64, elites=6, iterations=4, focus=2.0)
+#: Steps of a search episode (an agent's designed episode has ``DESIGNED_MAX_STEPS``).
+REFERENCE_MAX_STEPS = 300
+#: The search stops once a shape at rest is this close (metres, direction-free).
+REFERENCE_STOP = 0.002
+#: Folder of the shipped reference files.
+SHIPPED_REFERENCES = Path(__file__).resolve().parent / "references"
+
+
+def reference_file(folder: str | Path, suite: str, env_id: str) -> Path:
+    """``folder/<suite>-<env>.json`` (``shapes-curves-endpoint.json``)."""
+    from dlo_env.envs import ENVIRONMENTS
+
+    return Path(folder) / f"{suite}-{ENVIRONMENTS[env_id][1]}.json"
+
+
+def search_task(env_id: str, suite: str, seed: int, *, config: PhysicsMPCConfig = REFERENCE_CONFIG,
+                max_steps: int = REFERENCE_MAX_STEPS, stop: float = REFERENCE_STOP
+                ) -> dict[str, Any]:
+    """Run the reference search on the designed task ``seed`` of ``suite``.
+
+    Returns:
+        ``seed``, ``family``, ``error`` (the best direction-free error at rest, metres),
+        ``step`` (the step after which the cord reached it), ``steps`` run and ``seconds``.
+    """
+    import gymnasium as gym
+
+    import dlo_env  # noqa: F401  (registers the environments)
+    from planners.physics_mpc import PhysicsMPCPolicy
+
+    t0 = time.perf_counter()
+    with gym.make(env_id, success_threshold=stop, success_metric="direction_free_error",
+                  max_episode_steps=max_steps) as env:
+        task = designed_task(suite, seed, env.unwrapped.cord.grasp)
+        obs, _ = env.reset(options=task.options())
+        policy = PhysicsMPCPolicy.for_env(env, config)
+        best = env.unwrapped.settled_metrics()["direction_free_error"]
+        best_step, steps, start = 0, 0, True
+        done = False
+        while not done:
+            action, _ = policy.predict(obs, episode_start=np.array([start]), deterministic=True)
+            start = False
+            obs, _, terminated, truncated, _ = env.step(action)
+            steps += 1
+            done = terminated or truncated
+            rest = env.unwrapped.settled_metrics()["direction_free_error"]
+            if rest < best:
+                best, best_step = rest, steps
+    return {"seed": int(seed), "family": task.family, "error": float(best),
+            "step": best_step, "steps": steps, "seconds": time.perf_counter() - t0}
+
+
+def _search(args: tuple[str, str, int, PhysicsMPCConfig, int, float]) -> dict[str, Any]:
+    env_id, suite, seed, config, max_steps, stop = args
+    return search_task(env_id, suite, seed, config=config, max_steps=max_steps, stop=stop)
+
+
+def make_references(suite: str, env_id: str, out: str | Path, *, split: str = "test",
+                    limit: int | None = None, jobs: int = 1, progress: bool = False,
+                    config: PhysicsMPCConfig = REFERENCE_CONFIG,
+                    max_steps: int = REFERENCE_MAX_STEPS, stop: float = REFERENCE_STOP) -> Path:
+    """Search every task of a designed suite's split; write ``out/<suite>-<env>.json``.
+
+    The file is rewritten (atomically) after every task, so an interrupted run resumes from
+    it: tasks it holds are not searched again.
+
+    Raises:
+        ValueError: For an unknown suite or environment, or when ``out`` holds a file made
+            by another search.
+
+    Args:
+        suite, env_id, split: The tasks.
+        out: Output folder.
+        limit: Only the first ``limit`` tasks.
+        jobs: Worker processes.
+        progress: Print a line per task.
+        config, max_steps, stop: The search (the defaults make the shipped files).
+    """
+    from dlo_env.designed_suites import DESIGNED_SUITES
+    from dlo_env.envs import ENVIRONMENTS
+
+    if suite not in DESIGNED_SUITES:
+        raise ValueError(f"suite must be one of {tuple(DESIGNED_SUITES)}, got {suite!r}")
+    if env_id not in ENVIRONMENTS:
+        raise ValueError(f"env must be one of {tuple(ENVIRONMENTS)}, got {env_id!r}")
+    if not (isinstance(jobs, int) and jobs >= 1):
+        raise ValueError(f"jobs must be an int >= 1, got {jobs!r}")
+    seeds = [int(s) for s in designed_suite_seeds(suite, split)]
+    if limit is not None:
+        seeds = seeds[:limit]
+    path = reference_file(out, suite, env_id)
+    settings = {"config": asdict(config), "max_steps": max_steps, "stop": stop}
+    data: dict[str, Any] = {"suite": suite, "env_id": env_id, "split": split,
+                            "settings": settings, "tasks": []}
+    if path.is_file():  # resume what the same search made; never overwrite another's
+        old = json.loads(path.read_text())
+        same = {k: old.get(k) for k in ("suite", "env_id", "split", "settings")}
+        if same != json.loads(json.dumps({k: data[k] for k in same})):
+            raise ValueError(f"out holds {path}, made by another search (settings or split "
+                             "differ): pass another --out, or remove the file to redo it")
+        data["tasks"] = old["tasks"]
+    done = {t["seed"] for t in data["tasks"]}
+    todo = [(env_id, suite, s, config, max_steps, stop) for s in seeds if s not in done]
+    path.parent.mkdir(parents=True, exist_ok=True)
+
+    def save(row: dict[str, Any]) -> None:
+        data["tasks"].append(row)
+        data["tasks"].sort(key=lambda t: t["seed"])
+        write_text_atomic(path, json.dumps(data, indent=1) + "\n")
+        if progress:
+            print(f"{suite} {env_id} seed {row['seed']} ({row['family']}): "
+                  f"{100 * row['error']:.2f} cm after {row['step']} steps, "
+                  f"{row['seconds']:.0f} s", flush=True)
+
+    if jobs == 1:
+        for args in todo:
+            save(_search(args))
+    else:
+        from multiprocessing import get_context
+
+        with get_context("spawn").Pool(jobs) as pool:
+            for row in pool.imap_unordered(_search, todo):
+                save(row)
+    return path
+
+
+def load_references(suite: str, env_id: str, folder: str | Path | None = None
+                    ) -> dict[int, dict[str, Any]]:
+    """Seed -> reference row of a designed suite's test tasks ({} without a file)."""
+    path = reference_file(folder or SHIPPED_REFERENCES, suite, env_id)
+    if not path.is_file():
+        return {}
+    return {int(t["seed"]): t for t in json.loads(path.read_text())["tasks"]
+            if math.isfinite(t["error"])}

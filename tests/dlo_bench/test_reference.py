@@ -1,0 +1,87 @@
+"""Reference errors of designed tasks, and the designed cells of the benchmark."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+
+from dlo_bench import reference
+from dlo_bench.benchmark import BenchmarkConfig, run_benchmark
+from dlo_bench.benchmark_report import results_markdown
+from dlo_bench.reference import load_references, make_references, reference_file
+from dlo_env.designed_suites import designed_suite_seeds, designed_task
+from dlo_env.shapes import error
+from planners.physics_mpc import PhysicsMPCConfig
+
+ENDPOINT = "dlo_env/DLOEndpoint-v0"
+TINY = {"config": PhysicsMPCConfig(samples=4, elites=2, iterations=1, moves=1),
+        "max_steps": 4}
+
+
+def test_the_reference_is_a_rest_shape_no_worse_than_the_start_and_resumes(tmp_path,
+                                                                           monkeypatch):
+    path = make_references("shapes-curves", ENDPOINT, tmp_path, limit=2, **TINY)
+    assert path == reference_file(tmp_path, "shapes-curves", ENDPOINT)
+    rows = json.loads(path.read_text())["tasks"]
+    seeds = [int(s) for s in designed_suite_seeds("shapes-curves", "test")[:2]]
+    assert [r["seed"] for r in rows] == seeds
+    for row in rows:
+        task = designed_task("shapes-curves", row["seed"], "head")
+        start = min(error(task.start, task.goal), error(task.start, task.goal[::-1]))
+        assert 0 < row["error"] <= start + 1e-6
+        assert row["family"] == task.family and 0 <= row["step"] <= row["steps"] <= 4
+
+    def fail(*args, **kwargs):
+        raise AssertionError("a task the file holds was searched again")
+
+    monkeypatch.setattr(reference, "search_task", fail)
+    assert make_references("shapes-curves", ENDPOINT, tmp_path, limit=2, **TINY) == path
+    with pytest.raises(ValueError, match="made by another search"):
+        make_references("shapes-curves", ENDPOINT, tmp_path, limit=2,
+                        config=PhysicsMPCConfig(samples=5, elites=2, iterations=1, moves=1),
+                        max_steps=4)
+    assert json.loads(path.read_text())["tasks"] == rows  # nothing lost
+    assert set(load_references("shapes-curves", ENDPOINT, tmp_path)) == set(seeds)
+    assert load_references("shapes-curves", ENDPOINT, tmp_path / "none") == {}
+
+
+def test_bad_arguments_are_one_line_errors(tmp_path):
+    with pytest.raises(ValueError, match="suite must be one of"):
+        make_references("shapes-nope", ENDPOINT, tmp_path)
+    with pytest.raises(ValueError, match="jobs must be"):
+        make_references("shapes-curves", ENDPOINT, tmp_path, jobs=0)
+
+
+def test_designed_cells_report_families_beside_the_reference(tmp_path, monkeypatch):
+    make_references("shapes-curves", ENDPOINT, tmp_path / "refs", limit=2, **TINY)
+    monkeypatch.setattr(reference, "SHIPPED_REFERENCES", tmp_path / "refs")
+    config = BenchmarkConfig(agents=("straight-line",), envs=(ENDPOINT,), difficulties=(1,),
+                             thresholds=(0.01,), designed=("shapes-curves",), episodes=2,
+                             fidelity=False)
+    assert config.cells()[-1] == (ENDPOINT, "shapes-curves", 0.01)
+    rows = run_benchmark(config, tmp_path / "out", progress=False)
+    designed = [r for r in rows if r["cell"] == "shapes-curves"]
+    assert len(designed) == 1 and designed[0]["difficulty"] is None
+    row = designed[0]
+    assert (tmp_path / "out" / "results_episodes" /
+            "straight-line-endpoint-shapes-curves-1cm.json").is_file()
+    records = json.loads((tmp_path / "out" / "results_episodes" /
+                          "straight-line-endpoint-shapes-curves-1cm.json").read_text())["records"]
+    errors = [r["rest_direction_free_error"] for r in records]
+    summary = row["designed"]["all"]
+    assert summary["episodes"] == 2
+    assert summary["median_error"] == pytest.approx(np.median(errors))
+    assert row["median_rest_error"] == pytest.approx(np.median(errors))
+    refs = load_references("shapes-curves", ENDPOINT, tmp_path / "refs")
+    ref_errors = [refs[s]["error"] for s in sorted(refs)]
+    assert summary["reference_median"] == pytest.approx(np.median(ref_errors))
+    assert summary["near_reference"] == np.mean(
+        np.array(errors) <= np.array(ref_errors) + 0.005)
+    assert sum(v["episodes"] for k, v in row["designed"].items() if k != "all") == 2
+    table = results_markdown(rows, {"platform": "p", "processor": "x", "cpu_count": 2,
+                                    "python": "3", "torch": "t", "torch_threads": 1},
+                             "dlo benchmark", 1.0)
+    assert "## Designed shapes" in table and "| reference |" in table
+    assert "| straight-line | endpoint | shapes-curves | 1 cm | 2 |" in table
