@@ -271,4 +271,9 @@ def build_agent(name: str, env: Any, **options: Any) -> Policy:
         raise ValueError(f"agent {name!r} acts in {', '.join(spec.environments)}, "
                          f"got environment {env_id!r}")
     given = {k: v for k, v in options.items() if v is not None}  # None: the default
-    return spec.build(env, replace(AgentOptions(), **{**spec.defaults, **given}))
+    policy = spec.build(env, replace(AgentOptions(), **{**spec.defaults, **given}))
+    from planners.episodes import EpisodicPolicy
+
+    if isinstance(policy, EpisodicPolicy):  # aim as the environment scores
+        policy.success_metric = getattr(env.unwrapped, "success_metric", "error")
+    return policy

@@ -22,6 +22,7 @@ timed it, so the report compares planning times only between cells of one run.
 
 from __future__ import annotations
 
+import functools
 import json
 import math
 import os
@@ -40,7 +41,13 @@ from dlo_bench.agents import (
     build_agent,
     load_transition_model,
 )
-from dlo_bench.evaluation import EpisodeRecord, Evaluation, evaluate, summarise
+from dlo_bench.evaluation import (
+    EpisodeRecord,
+    Evaluation,
+    evaluate,
+    summarise,
+    task_env_kwargs,
+)
 from dlo_bench.paths import (
     baseline_folder_name,
     shape_model_file,
@@ -368,6 +375,18 @@ def row_of(agent: LoadedAgent, env_id: str, suite: str, threshold: float,
     return row
 
 
+@functools.lru_cache(maxsize=16)
+def designed_tasks(suite: str, env_id: str, count: int) -> tuple[tuple[int, str], ...]:
+    """``(seed, family)`` of the first ``count`` test tasks of a designed suite in ``env_id``
+    (made once per process: each goal is relaxed in the simulator)."""
+    from dlo_env.designed_suites import load_designed_suite
+    from dlo_env.envs import ENVIRONMENTS
+
+    grasp = "both" if ENVIRONMENTS[env_id][1] == "dual-endpoint" else "head"
+    return tuple((t.seed, t.family)
+                 for t in load_designed_suite(suite, "test", grasp=grasp, limit=count))
+
+
 #: An agent is near the reference on a designed task when its error at rest is within this
 #: many metres of the reference error (the issue's 0.5 cm).
 NEAR_REFERENCE = 0.005
@@ -382,17 +401,13 @@ def designed_summary(suite: str, env_id: str, records: list[EpisodeRecord]
 
     Episode ``i`` is the ``i``-th test task of the suite (``evaluate``'s order)."""
     from dlo_bench.reference import load_references
-    from dlo_env.designed_suites import load_designed_suite
-    from dlo_env.envs import ENVIRONMENTS
 
-    grasp = "both" if ENVIRONMENTS[env_id][1] == "dual-endpoint" else "head"
-    tasks = load_designed_suite(suite, "test", grasp=grasp, limit=len(records))
     references = load_references(suite, env_id)
     groups: dict[str, list[tuple[float, float | None]]] = {"all": []}
-    for task, record in zip(tasks, records):
-        ref = references.get(task.seed)
+    for (seed, family), record in zip(designed_tasks(suite, env_id, len(records)), records):
+        ref = references.get(seed)
         pair = (record.rest_direction_free_error, None if ref is None else ref["error"])
-        groups.setdefault(task.family, []).append(pair)
+        groups.setdefault(family, []).append(pair)
         groups["all"].append(pair)
 
     def share(values: np.ndarray, limit: float) -> float:
@@ -548,14 +563,17 @@ def run_cell(name: str, env_id: str, suite: str | int, config: BenchmarkConfig, 
         shape_model, why = load_shape_model(config.model)
         if shape_model is None:
             raise FileNotFoundError(f"no shape model: {why}")
-    with gym.make(env_id, success_threshold=threshold) as env:
+    if not isinstance(suite, str):
+        suite = SUITE_OF_DIFFICULTY[suite]
+    # The agent is built for the environment the suite's episodes run in (its threshold and
+    # success metric), and warmed up there.
+    kwargs = {**task_env_kwargs(suite=suite), "success_threshold": threshold}
+    with gym.make(env_id, **kwargs) as env:
         agent = load_agent(name, config, env, shape_model)
         if agent.policy is None:
             raise ValueError(f"agent {name!r} is missing in {env_id}: {agent.missing}")
         _warm_up(agent.policy, env)
     t0 = time.perf_counter()
-    if not isinstance(suite, str):
-        suite = SUITE_OF_DIFFICULTY[suite]
     result = evaluate(agent.policy, env_id, suite=suite,
                       episodes=config.episodes, seed=config.seed, split="test", agent=name,
                       fidelity=config.fidelity, progress=progress,
@@ -638,7 +656,13 @@ def run_benchmark(config: BenchmarkConfig, out_dir: str | os.PathLike, *,
         slot, name, env_id, suite, threshold, agent, key = todo[k]
         cell = cell_name(name, env_id, suite, threshold)
         facts = {"wall_seconds": seconds, "commit": version, "run": run_id}
-        write_evaluation(result, folder, cell, extra={"benchmark_key": key, **facts})
+        extra: dict[str, Any] = {"benchmark_key": key, **facts}
+        if suite in DESIGNED_SUITES:  # for the figure of designed shapes
+            extra["shapes"] = {"families": [f for _, f in designed_tasks(
+                                   suite, env_id, len(result.records))],
+                               "goals": [g.tolist() for g in result.goals],
+                               "rest": [r.tolist() for r in result.rest_shapes]}
+        write_evaluation(result, folder, cell, extra=extra)
         rows[slot] = {**row_of(agent, env_id, suite, threshold, result, config.episodes),
                       **facts}
 

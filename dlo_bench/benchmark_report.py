@@ -217,6 +217,49 @@ def designed_section(rows: list[dict[str, Any]]) -> list[str]:
     return lines
 
 
+#: Tasks of each curve family shown in the figure of designed shapes.
+FIGURE_TASKS_PER_FAMILY = 2
+
+
+def designed_panels(rows: list[dict[str, Any]], out_dir: str | os.PathLike,
+                    per_family: int = FIGURE_TASKS_PER_FAMILY
+                    ) -> list[tuple[str, dict[str, tuple[Any, Any, float]]]]:
+    """The figure's panels from the designed cells' files in ``out_dir``: the first
+    ``per_family`` tasks of each curve family, per suite and environment, with each agent's
+    goal, rest shape and direction-free error (cells written without shapes are skipped)."""
+    import numpy as np
+
+    from dlo_bench.benchmark import CELLS_DIR, cell_name
+
+    designed = [r for r in rows if r.get("designed") and r["status"] == "ok"]
+    panels = []
+    for suite, env_id in dict.fromkeys((_suite(r), r["env_id"]) for r in designed):
+        cells = {}
+        for r in designed:
+            if (_suite(r), r["env_id"]) != (suite, env_id):
+                continue
+            path = (Path(out_dir) / CELLS_DIR /
+                    f"{cell_name(r['agent'], env_id, suite, r['threshold'])}.json")
+            data = json.loads(path.read_text()) if path.is_file() else {}
+            if data.get("shapes"):
+                cells[r["agent"]] = data
+        if not cells:
+            continue
+        families = next(iter(cells.values()))["shapes"]["families"]
+        chosen = [i for family in dict.fromkeys(families)
+                  for i in [k for k, f in enumerate(families) if f == family][:per_family]]
+        env = next(r["env"] for r in designed if r["env_id"] == env_id)
+        for i in chosen:
+            entry = {}
+            for agent, data in cells.items():
+                shapes = data["shapes"]
+                if i < len(shapes["rest"]):
+                    entry[agent] = (np.asarray(shapes["goals"][i]), np.asarray(shapes["rest"][i]),
+                                    float(data["records"][i]["rest_direction_free_error"]))
+            panels.append((f"{env} {families[i]} #{i}", entry))
+    return panels
+
+
 def machine_description() -> dict[str, Any]:
     """The machine the numbers were measured on."""
     import torch
@@ -326,10 +369,11 @@ def results_markdown(rows: list[dict[str, Any]], machine: dict[str, Any], comman
 
 def write_results(rows: list[dict[str, Any]], out_dir: str | os.PathLike, command: str,
                   seconds: float) -> dict[str, Path]:
-    """Write ``results.json``, ``results.md`` and ``results.png`` into ``out_dir`` atomically.
+    """Write ``results.json``, ``results.md`` and ``results.png`` into ``out_dir`` atomically,
+    and ``results_designed.png`` (designed goals and the shapes reached) with designed cells.
 
     Returns:
-        The paths, by kind (``json``, ``md``, ``png``).
+        The paths, by kind (``json``, ``md``, ``png``, ``designed_png``).
     """
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
@@ -337,7 +381,11 @@ def write_results(rows: list[dict[str, Any]], out_dir: str | os.PathLike, comman
     paths = {"json": out / "results.json", "md": out / "results.md", "png": out / "results.png"}
     write_text_atomic(paths["json"], json.dumps(json_ready(rows), indent=2) + "\n")
     write_text_atomic(paths["md"], results_markdown(rows, machine, command, seconds))
-    from dlo_bench.charts import plot_results
+    from dlo_bench.charts import plot_designed, plot_results
 
     plot_results(rows, paths["png"])
+    panels = designed_panels(rows, out)
+    if panels:
+        paths["designed_png"] = out / "results_designed.png"
+        plot_designed(panels, paths["designed_png"])
     return paths

@@ -146,6 +146,44 @@ def plot_results(rows: list[dict[str, Any]], png: str | os.PathLike) -> None:
     _save(fig, png, dpi=100)
 
 
+def plot_designed(panels: list[tuple[str, dict[str, tuple[np.ndarray, np.ndarray, float]]]],
+                  png: str | os.PathLike) -> None:
+    """Designed goals and the shapes agents left the cord in: one row per task, one column per
+    agent; each panel shows the goal (green), the cord at rest after the last step (blue, its
+    head a red dot) and the direction-free error.
+
+    Args:
+        panels: ``(row label, {agent: (goal, rest shape, error in metres)})`` per task.
+        png: Output file.
+    """
+    plt = _pyplot()
+    agents = list(dict.fromkeys(a for _, entry in panels for a in entry))
+    rows, cols = max(1, len(panels)), max(1, len(agents))
+    fig, axes = plt.subplots(rows, cols, figsize=(max(1.9 * cols + 0.6, 5.0), 1.9 * rows + 0.9),
+                             squeeze=False)
+    for i, (label, entry) in enumerate(panels):
+        for j, agent in enumerate(agents):
+            ax = axes[i, j]
+            ax.set_xticks([])
+            ax.set_yticks([])
+            ax.set_aspect("equal", adjustable="datalim")
+            if i == 0:
+                ax.set_title(agent, fontsize=8)
+            if j == 0:
+                ax.set_ylabel(label, fontsize=7)
+            if agent not in entry:
+                continue
+            goal, rest, err = entry[agent]
+            ax.plot(goal[:, 0], goal[:, 1], "-", color="tab:green", lw=4, alpha=0.45)
+            ax.plot(rest[:, 0], rest[:, 1], "-", color="tab:blue", lw=1.4)
+            ax.plot(rest[0, 0], rest[0, 1], "o", color="tab:red", ms=3)
+            ax.text(0.03, 0.03, f"{100 * err:.1f} cm", transform=ax.transAxes, fontsize=7)
+    fig.suptitle("designed goals (green) and the cord at rest after the last step\n(blue, head "
+                 "red); direction-free error", fontsize=9)
+    fig.tight_layout(rect=(0, 0, 1, 1 - 0.5 / (1.9 * rows + 0.9)))
+    _save(fig, png, dpi=90)
+
+
 def plot_learning_curve(logs: dict[str, Any], png: str | os.PathLike, title: str = "") -> None:
     """Episode return and success rate (moving averages) against environment steps.
 

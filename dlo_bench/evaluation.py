@@ -115,11 +115,15 @@ class FidelityProfile:
 
 @dataclass(frozen=True)
 class Evaluation:
-    """Per-episode records, their summary (see :func:`summarise`) and fidelity profiles."""
+    """Per-episode records, their summary (see :func:`summarise`), fidelity profiles, and each
+    episode's goal and the shape its cord rests in after the last step (float32 ``(n, 2)``,
+    episode order; empty for evaluations read back from a file without them)."""
 
     records: list[EpisodeRecord]
     summary: dict[str, Any]
     profiles: list[FidelityProfile] = field(default_factory=list)
+    goals: list[np.ndarray] = field(default_factory=list)
+    rest_shapes: list[np.ndarray] = field(default_factory=list)
 
 
 def _travel_label(low: float, high: float) -> str:
@@ -235,8 +239,9 @@ def _episode_options(
 def _run_episode(
     policy: Policy, env: Any, index: int, reset_seed: int | None, options: dict[str, Any] | None,
     difficulty: int | None, fidelity: bool,
-) -> tuple[EpisodeRecord, FidelityProfile | None]:
-    """One episode of ``policy`` in ``env``: its record, and the first plan's fidelity profile."""
+) -> tuple[EpisodeRecord, FidelityProfile | None, np.ndarray, np.ndarray]:
+    """One episode of ``policy`` in ``env``: its record, the first plan's fidelity profile, the
+    goal and the shape the cord rests in after the last step."""
     from dlo_bench.fidelity import transition_fidelity
     from dlo_env.shapes import error as shape_error
 
@@ -297,7 +302,25 @@ def _run_episode(
         start_inversion_error=start_inv,
         goal_inversion_error=stats.goal_inversion_error,
     )
-    return record, profile
+    return record, profile, goal, rest["shape"]
+
+
+def task_env_kwargs(difficulty: int | None = None, suite: str | None = None
+                    ) -> dict[str, Any]:
+    """``gym.make`` keyword arguments of the environment a suite's (or a difficulty's) tasks
+    run in: episodes of ``dlo_env.tasks.suite_max_steps`` / ``difficulty_max_steps`` steps;
+    a designed suite's drawn goals get ``DESIGNED_MAX_STEPS`` steps and are scored
+    direction-free."""
+    from dlo_env.designed_suites import DESIGNED_MAX_STEPS, DESIGNED_SUITES
+    from dlo_env.tasks import difficulty_max_steps, suite_max_steps
+
+    if suite in DESIGNED_SUITES:
+        return {"max_episode_steps": DESIGNED_MAX_STEPS, "success_metric": "direction_free_error"}
+    if suite is not None:
+        return {"max_episode_steps": suite_max_steps(suite)}
+    if difficulty is not None:
+        return {"max_episode_steps": difficulty_max_steps(difficulty)}
+    return {}
 
 
 def evaluate(
@@ -358,18 +381,7 @@ def evaluate(
         env = env_id
     owned = isinstance(env, str)
     if owned:
-        from dlo_env.designed_suites import DESIGNED_MAX_STEPS, DESIGNED_SUITES
-        from dlo_env.tasks import difficulty_max_steps, suite_max_steps
-
-        kwargs = dict(env_kwargs or {})
-        if suite in DESIGNED_SUITES:  # drawn goals: scored direction-free, longer episodes
-            kwargs.setdefault("max_episode_steps", DESIGNED_MAX_STEPS)
-            kwargs.setdefault("success_metric", "direction_free_error")
-        elif suite is not None:
-            kwargs.setdefault("max_episode_steps", suite_max_steps(suite))
-        elif difficulty is not None:
-            kwargs.setdefault("max_episode_steps", difficulty_max_steps(difficulty))
-        env = gym.make(env, **kwargs)
+        env = gym.make(env, **{**task_env_kwargs(difficulty, suite), **(env_kwargs or {})})
     elif not isinstance(env, gym.Env):
         raise ValueError(f"env must be a dlo_env environment or its id, got "
                          f"{type(env).__name__}")
@@ -386,11 +398,14 @@ def evaluate(
             policy.check_env(env)
         options = _episode_options(difficulty, suite, split, episodes, env.unwrapped.cord.grasp)
         bar = progress_bar(episodes, agent or "evaluate", "episode") if progress else None
-        records, profiles = [], []
+        records, profiles, goals, rest_shapes = [], [], [], []
         for i, opts in enumerate(options):
             reset_seed = seed + i if suite is None else None
-            record, profile = _run_episode(policy, env, i, reset_seed, opts, difficulty, fidelity)
+            record, profile, goal, rest = _run_episode(policy, env, i, reset_seed, opts,
+                                                       difficulty, fidelity)
             records.append(record)
+            goals.append(goal)
+            rest_shapes.append(rest)
             if profile is not None:
                 profiles.append(profile)
             if bar is not None:
@@ -403,4 +418,5 @@ def evaluate(
             env.close()
     summary = summarise(records, agent=agent, env_id=env_id)
     summary["divergence"] = divergence(profiles)
-    return Evaluation(records=records, summary=summary, profiles=profiles)
+    return Evaluation(records=records, summary=summary, profiles=profiles, goals=goals,
+                      rest_shapes=rest_shapes)

@@ -183,5 +183,5 @@ def run(args: argparse.Namespace) -> int:
     missing = sorted({r["agent"] for r in rows if r["status"] != "ok"})
     if missing:
         print("agents with missing cells (reported in the table): " + ", ".join(missing))
-    print(f"wrote {paths['md']}, {paths['json']}, {paths['png']} in {seconds:.0f} s")
+    print(f"wrote {', '.join(str(p) for p in paths.values())} in {seconds:.0f} s")
     return 0

@@ -16,7 +16,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from dlo_env.checks import fractions, non_negative, positive, positive_ints
+from dlo_env.checks import fractions, non_negative, non_negative_ints, positive, positive_ints
 from dlo_env.cord import CordParams
 from dlo_env.shapes import SUCCESS_METRICS
 from dlo_env.tasks import GRASP_ENDS, split_move
@@ -40,6 +40,11 @@ class CEMConfig:
             (0: always ``init_std``).
         min_std: The smallest initial standard deviation with ``focus``, metres.
         max_move: Largest displacement of one move, metres (per end).
+        far_moves: The horizon while the cord is farther than ``far_error`` from the goal
+            (0: always ``moves``): far goals need long paths, near ones precise short plans.
+        far_error: Error (metres, the policy's success metric) beyond which ``far_moves``
+            applies.
+        far_grasps: The grasps ``far_moves`` applies to.
         stop_fraction: Stop iterating once the best predicted error is at most this fraction
             of the policy's ``success_threshold`` (the environment's; 0: always run every
             iteration).
@@ -54,15 +59,22 @@ class CEMConfig:
     focus: float = 0.0
     min_std: float = 0.005
     max_move: float = 0.4
+    far_moves: int = 0
+    far_error: float = 0.03
+    far_grasps: tuple[str, ...] = tuple(GRASP_ENDS)
     stop_fraction: float = 0.0
     seed: int = 0
 
     def __post_init__(self) -> None:
         name = type(self).__name__
         positive_ints(self, "moves", "samples", "elites", "iterations")
-        positive(self, "init_std", "max_move", "min_std")
+        non_negative_ints(self, "far_moves")
+        positive(self, "init_std", "max_move", "min_std", "far_error")
         non_negative(self, "focus")
         fractions(self, "stop_fraction", closed_low=True)
+        if not (isinstance(self.far_grasps, tuple) and set(self.far_grasps) <= set(GRASP_ENDS)):
+            raise ValueError(f"{name}.far_grasps must be a tuple of {tuple(GRASP_ENDS)}, "
+                             f"got {self.far_grasps!r}")
         if self.min_std > self.init_std:
             raise ValueError(f"{name}.min_std must be <= init_std ({self.init_std}), "
                              f"got {self.min_std}")
@@ -169,13 +181,16 @@ class CEMPolicy(EpisodicPolicy):
         """
         cfg = self.config
         t0 = time.perf_counter()
-        dims = (cfg.moves, len(self.ends), 2)
+        moves = self.horizon(shape, goal)
+        dims = (moves, len(self.ends), 2)
         if self._mean is None:
             # Warm start: every end goes straight to where the goal has it, in equal moves.
-            straight = (self._end_points(goal) - self._end_points(shape)) / cfg.moves
+            straight = (self._end_points(goal) - self._end_points(shape)) / moves
             mean = np.broadcast_to(straight, dims).astype(np.float64)
-        else:
-            mean = self._mean
+        else:  # the rest of the previous plan, cut or padded with still moves to this horizon
+            mean = np.zeros(dims)
+            kept = min(moves, len(self._mean))
+            mean[:kept] = self._mean[:kept]
         std = np.full(dims, cfg.init_std)
         if cfg.focus > 0:
             near = cfg.focus * float(self._distance(shape, goal))
@@ -201,6 +216,16 @@ class CEMPolicy(EpisodicPolicy):
         self.stats.seconds += time.perf_counter() - t0
         self.stats.predicted_errors.append(best_err)
         return best_plan, best_err
+
+    def horizon(self, shape: np.ndarray, goal: np.ndarray) -> int:
+        """Moves of the plan from ``shape``: ``config.far_moves`` while farther than
+        ``config.far_error`` from ``goal`` (when set, for ``config.far_grasps``), else
+        ``config.moves``."""
+        cfg = self.config
+        if (cfg.far_moves and self.grasp in cfg.far_grasps
+                and float(self._distance(shape, goal)) > cfg.far_error):
+            return cfg.far_moves
+        return cfg.moves
 
     def _actions(self, plan: np.ndarray) -> list[np.ndarray]:
         """Each move as the environments carry it out: ``split_move``'s equal actions."""

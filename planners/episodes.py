@@ -35,6 +35,7 @@ from __future__ import annotations
 
 import copy
 import math
+from dataclasses import replace
 from typing import Any
 
 import numpy as np
@@ -97,6 +98,11 @@ class EpisodicPolicy:
     n_points: int | None = None
     #: The cord's parameters where the policy knows them (``gripper_reach`` uses its rim).
     params: CordParams | None = None
+    #: The environment's ``success_metric``. With ``"direction_free_error"`` (a drawn goal
+    #: does not say which end is the head) the policy aims at the goal in the order nearer
+    #: the cord at the episode's first step, for the whole episode; ``build_agent`` and the
+    #: planners' ``for_env`` set it from the environment.
+    success_metric: str = "error"
 
     @property
     def env_policies(self) -> list[EpisodicPolicy]:
@@ -134,7 +140,14 @@ class EpisodicPolicy:
         obs = read_observation(observation, n)
         if start or self._new_episode(obs):
             self.reset()
+            self._reversed_goal = None
         self._last_seen = obs
+        if self.success_metric == "direction_free_error":
+            if getattr(self, "_reversed_goal", None) is None:
+                self._reversed_goal = bool(error(obs.shape, obs.goal[::-1])
+                                           < error(obs.shape, obs.goal))
+            if self._reversed_goal:
+                obs = replace(obs, goal=np.ascontiguousarray(obs.goal[::-1]))
         return np.clip(np.asarray(self._act(obs), dtype=np.float32), -1.0, 1.0)
 
     def _copies(self, size: int) -> list[EpisodicPolicy]:
@@ -146,6 +159,7 @@ class EpisodicPolicy:
                 twin = copy.copy(self)  # shallow: models, planners and configs are shared
                 twin._env_policies = []
                 twin._last_seen = None
+                twin._reversed_goal = None
                 twin.reset()
                 copies.append(twin)
             self._env_policies = copies

@@ -267,14 +267,17 @@ class CordGoalEnv(gym.Env[dict[str, np.ndarray], np.ndarray]):
 
         Returns:
             ``error``, ``max_error``, ``direction_free_error`` and ``bead_share`` of the shape
-            at rest, and ``at_rest`` (False when the cord still moves after the zero actions).
+            at rest, ``shape`` (float32 ``(n, 2)``, the shape itself) and ``at_rest`` (False
+            when the cord still moves after the zero actions).
         """
         if self.cord.space is None or self._goal_flat is None:
             raise RuntimeError("settled_metrics() needs an episode: call reset() first")
         cord = self.cord if at_rest(self.cord) else copy.deepcopy(self.cord)
         if cord is not self.cord:
             wait_for_rest(cord, self.max_step)
-        metrics = self._metrics(cord.shape, self._goal_flat.reshape(-1, 2))
+        shape = cord.shape
+        metrics = self._metrics(shape, self._goal_flat.reshape(-1, 2))
+        metrics["shape"] = np.asarray(shape, dtype=np.float32).copy()
         metrics["at_rest"] = at_rest(cord)
         return metrics
 

@@ -9,7 +9,7 @@ import pytest
 
 from dlo_bench import reference
 from dlo_bench.benchmark import BenchmarkConfig, run_benchmark
-from dlo_bench.benchmark_report import results_markdown
+from dlo_bench.benchmark_report import designed_panels, results_markdown, write_results
 from dlo_bench.reference import load_references, make_references, reference_file
 from dlo_env.designed_suites import designed_suite_seeds, designed_task
 from dlo_env.shapes import error
@@ -80,6 +80,19 @@ def test_designed_cells_report_families_beside_the_reference(tmp_path, monkeypat
     assert summary["near_reference"] == np.mean(
         np.array(errors) <= np.array(ref_errors) + 0.005)
     assert sum(v["episodes"] for k, v in row["designed"].items() if k != "all") == 2
+    cell = json.loads((tmp_path / "out" / "results_episodes" /
+                       "straight-line-endpoint-shapes-curves-1cm.json").read_text())
+    shapes = cell["shapes"]
+    assert len(shapes["goals"]) == len(shapes["rest"]) == len(shapes["families"]) == 2
+    for goal, rest, record in zip(shapes["goals"], shapes["rest"], records):
+        goal, rest = np.asarray(goal), np.asarray(rest)
+        assert min(error(rest, goal), error(rest, goal[::-1])) == pytest.approx(
+            record["rest_direction_free_error"], abs=1e-6)
+    paths = write_results(rows, tmp_path / "out", "dlo benchmark", 1.0)
+    assert paths["designed_png"].stat().st_size > 1000
+    assert [label for label, _ in designed_panels(rows, tmp_path / "out")] == [
+        f"endpoint {f} #{i}" for i, f in enumerate(shapes["families"])
+        if f not in shapes["families"][:i] or shapes["families"][:i].count(f) < 2]
     table = results_markdown(rows, {"platform": "p", "processor": "x", "cpu_count": 2,
                                     "python": "3", "torch": "t", "torch_threads": 1},
                              "dlo benchmark", 1.0)

@@ -99,3 +99,32 @@ def test_a_policy_built_for_another_success_metric_is_refused():
     assert PhysicsMPCPolicy.for_env(env).success_metric == "direction_free_error"
     with pytest.raises(ValueError, match="success_metric"):
         PhysicsMPCPolicy.for_env(gym.make("dlo_env/DLOEndpoint-v0")).check_env(env)
+
+
+def test_far_moves_lengthen_the_horizon_only_far_from_the_goal_and_for_their_grasps():
+    config = CEMConfig(moves=2, far_moves=5, far_error=0.06, samples=8, elites=2, iterations=1)
+    policy = Recording(config)
+    far, goal = _shapes(0.10)
+    plan, _ = policy.plan(far, goal)
+    assert plan.shape == (5, 1, 2) and policy.batches[-1].shape[1] == 5
+    # The warm start of the next, near plan is the rest of the far one, cut to 2 moves.
+    rest = policy._mean.copy()
+    near, _ = _shapes(0.01)
+    plan, _ = policy.plan(near, goal)
+    assert plan.shape == (2, 1, 2)
+    assert np.array_equal(policy.batches[-1][0], rest[:2])  # candidate 0 is the mean
+    # And back out: a near plan's rest, padded with still moves to 5.
+    rest = policy._mean.copy()
+    policy.plan(far, goal)
+    assert np.array_equal(policy.batches[-1][0], np.concatenate([rest, np.zeros((3, 1, 2))]))
+    # Off for a grasp not in far_grasps, and with far_moves 0.
+    other = CEMConfig(moves=2, far_moves=5, far_grasps=("both",), samples=8, elites=2,
+                      iterations=1)
+    assert Recording(other).horizon(far, goal) == 2
+    assert Recording(CEMConfig(moves=2, samples=8, elites=2)).horizon(far, goal) == 2
+
+
+@pytest.mark.parametrize("value", [("hand",), ["head"]])
+def test_far_grasps_are_checked(value):
+    with pytest.raises(ValueError, match="far_grasps"):
+        CEMConfig(far_grasps=value)

@@ -290,3 +290,25 @@ def test_the_sb3_loop_example_solves_the_same_tasks_in_every_loop():
     plain = example.plain_loop(StraightLinePolicy(), env, tasks, tell_starts=False)
     vector = example.vector_loop(StraightLinePolicy(), ENDPOINT, tasks)
     assert told == plain == vector == [True, True, True]  # one straight move solves linear-1
+
+
+@pytest.mark.parametrize("env_id", [ENDPOINT, DUAL])
+def test_a_direction_free_policy_aims_at_the_nearer_order_of_the_goal(env_id):
+    # A difficulty-1 goal given tail first: the straight line built for a direction-free
+    # environment moves the held end(s) to where the goal in the nearer order has them.
+    from dlo_bench.agents import build_agent
+
+    task = load_suite("linear-1", "test", grasp="both" if env_id == DUAL else "head", limit=1)[0]
+    options = {"start": task.start, "goal": task.goal[::-1].copy()}
+    results = {}
+    for metric in ("error", "direction_free_error"):
+        env = gym.make(env_id, success_metric=metric, success_threshold=0.02)
+        policy = build_agent("straight-line", env)
+        assert policy.success_metric == metric
+        obs, _ = env.reset(options=options)
+        for _ in range(60):
+            obs, _, terminated, truncated, info = env.step(policy.predict(obs)[0])
+            if terminated or truncated:
+                break
+        results[metric] = info["direction_free_error"]
+    assert results["direction_free_error"] < 0.02 < results["error"]
