@@ -161,11 +161,12 @@ def run(args: argparse.Namespace) -> int:
     )
     backend = backend_of(args)
     run_id = new_run_id()
-    cells = ", ".join(dict.fromkeys(f"{e.split('/')[-1]} {suite_label(s)}"
-                                    for e, s, _ in config.cells()))
-    at = ", ".join(threshold_label(t) for t in config.thresholds)
-    print(f"benchmark run {run_id}: {len(config.agents)} agents x ({cells}) x ({at}) x "
-          f"{config.episodes} episodes -> {args.out}", flush=True)
+    groups: dict[float, list[str]] = {}
+    for env, suite, t in config.cells():
+        groups.setdefault(t, []).append(f"{env.split('/')[-1]} {suite_label(suite)}")
+    cells = "; ".join(f"{threshold_label(t)}: {', '.join(names)}" for t, names in groups.items())
+    print(f"benchmark run {run_id}: {len(config.agents)} agents x {config.episodes} episodes "
+          f"x {len(config.cells())} cells ({cells}) -> {args.out}", flush=True)
     t0 = time.perf_counter()
     rows = run_benchmark(config, args.out, resume=args.resume, progress=True,
                          backend=backend, run_id=run_id)

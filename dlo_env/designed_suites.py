@@ -8,7 +8,7 @@ made it): score such tasks direction-free (``gym.make(..., success_metric=
 
 ``shapes-curves`` draws, for each seed, a family and its parameters within the ranges the
 default cord rests in (within ``goals.MAX_CHANGE`` of the drawing; measured per grasp, see
-docs/environments.md): arcs, flat S-curves and zigzags with the head held; wide arcs and deep
+docs/tasks.md): arcs, flat S-curves and zigzags with the head held; wide arcs and deep
 S-curves with both ends held (zigzags put the ends beyond the grippers' span, spirals and
 letters spring open on this cord). A drawing the cord refuses is redrawn from the next
 sub-seed, so every task of a split exists.

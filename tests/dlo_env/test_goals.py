@@ -59,7 +59,7 @@ def test_letters_and_curves_relax_into_shapes_a_soft_cord_rests_in():
 
 
 def test_a_drawing_the_cord_cannot_rest_in_is_refused_saying_why():
-    # The default cord springs open out of a letter-sized S (docs/environments.md's table).
+    # The default cord springs open out of a letter-sized S (docs/tasks.md's table).
     with pytest.raises(ValueError, match="points must draw a shape the cord can rest in: it "
                                          "relaxes .* cm from the drawing"):
         goals.letter("S")
