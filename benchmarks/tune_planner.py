@@ -47,6 +47,7 @@ def _config(agent: str, setting: dict[str, Any]) -> Any:
     from planners.physics_mpc import PhysicsMPCConfig
 
     kind = LatentMPCConfig if agent == "latent-mpc" else PhysicsMPCConfig
+    setting = {k: tuple(v) if isinstance(v, list) else v for k, v in setting.items()}  # JSON
     if "samples" in setting and "elites" not in setting:
         setting = {**setting, "elites": max(2, setting["samples"] // 10)}
     return kind(**setting)

@@ -117,14 +117,16 @@ def load_transition_model(model: Any) -> Any:
 
 
 def _goal_for(config: Any, env: Any) -> Any:
-    """``config`` (a ``TreeConfig``) with its ``goal_threshold`` scaled to ``env``'s success
-    threshold: the defaults were tuned at the default threshold (2 cm)."""
+    """``config`` (a ``TreeConfig``) for ``env``: its grasp (the end(s) the environment holds),
+    and its ``goal_threshold`` scaled to the environment's success threshold (the defaults
+    were tuned at the default threshold, 2 cm)."""
     from dataclasses import replace as with_fields
 
     from dlo_env.tasks import SUCCESS_THRESHOLD
 
     scale = float(env.unwrapped.success_threshold) / SUCCESS_THRESHOLD
-    return with_fields(config, goal_threshold=config.goal_threshold * scale)
+    return with_fields(config, goal_threshold=config.goal_threshold * scale,
+                       grasp=env.unwrapped.cord.grasp)
 
 
 def _latent_tree(closed: bool) -> Callable[[Any, AgentOptions], Policy]:
@@ -204,12 +206,15 @@ AGENTS: dict[str, AgentSpec] = {spec.name: spec for spec in (
     AgentSpec("straight-line", "moves the held end(s) straight to the goal's (reference)",
               _straight_line, environments=(ENDPOINT, DUAL_ENDPOINT)),
     AgentSpec("latent-tree", "the paper's latent tree, planned once (open loop)",
-              _latent_tree(closed=False), extra="model", shape_model=True),
+              _latent_tree(closed=False), environments=(ENDPOINT, DUAL_ENDPOINT), extra="model",
+              shape_model=True),
     AgentSpec("latent-tree-closed", "the latent tree, checked and replanned every few steps",
-              _latent_tree(closed=True), extra="model", shape_model=True),
+              _latent_tree(closed=True), environments=(ENDPOINT, DUAL_ENDPOINT), extra="model",
+              shape_model=True),
     AgentSpec("latent-tree-kino", "the latent tree with straight-move edges predicted by the "
               "transition model, one move per plan (closed loop)", _latent_tree_kino,
-              extra="model", shape_model=True, transition_model=True),
+              environments=(ENDPOINT, DUAL_ENDPOINT), extra="model", shape_model=True,
+              transition_model=True),
     AgentSpec("physics-mpc", "CEM over straight moves with the simulator as the model",
               _physics_mpc, environments=(ENDPOINT, DUAL_ENDPOINT)),
     AgentSpec("latent-mpc", "CEM over straight moves scored by the learned transition model",

@@ -136,8 +136,9 @@ class BenchmarkConfig:
         if not self.thresholds or not all(ok) or len(set(self.thresholds)) < len(ok):
             raise ValueError(f"thresholds must be distinct numbers > 0 (metres), "
                              f"got {self.thresholds!r}")
-        if any(d not in DESIGNED_SUITES for d in self.designed):
-            raise ValueError(f"designed must be some of {tuple(DESIGNED_SUITES)}, "
+        if any(d not in DESIGNED_SUITES for d in self.designed) or len(
+                set(self.designed)) < len(self.designed):
+            raise ValueError(f"designed must be distinct suites of {tuple(DESIGNED_SUITES)}, "
                              f"got {self.designed!r}")
         size = SPLIT_SIZES["test"]
         if not (isinstance(self.episodes, int) and 1 <= self.episodes <= size):
@@ -395,9 +396,11 @@ NEAR_REFERENCE = 0.005
 def designed_summary(suite: str, env_id: str, records: list[EpisodeRecord]
                      ) -> dict[str, dict[str, Any]]:
     """Per curve family (and ``"all"``) of a designed cell: ``episodes``, the agent's
-    ``median_error`` (direction-free, at rest), the shares ``within_1cm``, ``within_2cm`` and
-    ``near_reference``, and the reference's ``reference_median``, ``reference_within_1cm``
-    and ``reference_within_2cm`` (None without a reference file).
+    ``median_error`` (direction-free, at rest), the shares ``within_1cm`` and ``within_2cm``,
+    and, over the ``reference_tasks`` episodes whose task has a reference error,
+    ``near_reference`` (the agent within ``NEAR_REFERENCE`` of it) and the reference's
+    ``reference_median``, ``reference_within_1cm`` and ``reference_within_2cm`` (None where no
+    task has one).
 
     Episode ``i`` is the ``i``-th test task of the suite (``evaluate``'s order)."""
     from dlo_bench.reference import load_references
@@ -420,11 +423,14 @@ def designed_summary(suite: str, env_id: str, records: list[EpisodeRecord]
                                  "median_error": float(np.nanmedian(errors)),
                                  "within_1cm": share(errors, 0.01),
                                  "within_2cm": share(errors, 0.02),
-                                 "near_reference": None, "reference_median": None,
-                                 "reference_within_1cm": None, "reference_within_2cm": None}
-        if all(p[1] is not None for p in pairs):
-            refs = np.array([p[1] for p in pairs], dtype=float)
-            entry.update(near_reference=float(np.mean(errors <= refs + NEAR_REFERENCE)),
+                                 "reference_tasks": 0, "near_reference": None,
+                                 "reference_median": None, "reference_within_1cm": None,
+                                 "reference_within_2cm": None}
+        known = np.array([p[1] is not None for p in pairs])
+        if known.any():
+            refs = np.array([p[1] for p in pairs if p[1] is not None], dtype=float)
+            entry.update(reference_tasks=int(known.sum()),
+                         near_reference=float(np.mean(errors[known] <= refs + NEAR_REFERENCE)),
                          reference_median=float(np.median(refs)),
                          reference_within_1cm=share(refs, 0.01),
                          reference_within_2cm=share(refs, 0.02))
@@ -658,8 +664,8 @@ def run_benchmark(config: BenchmarkConfig, out_dir: str | os.PathLike, *,
         facts = {"wall_seconds": seconds, "commit": version, "run": run_id}
         extra: dict[str, Any] = {"benchmark_key": key, **facts}
         if suite in DESIGNED_SUITES:  # for the figure of designed shapes
-            extra["shapes"] = {"families": [f for _, f in designed_tasks(
-                                   suite, env_id, len(result.records))],
+            tasks = designed_tasks(suite, env_id, len(result.records))
+            extra["shapes"] = {"seeds": [s for s, _ in tasks], "families": [f for _, f in tasks],
                                "goals": [g.tolist() for g in result.goals],
                                "rest": [r.tolist() for r in result.rest_shapes]}
         write_evaluation(result, folder, cell, extra=extra)

@@ -202,7 +202,9 @@ def designed_section(rows: list[dict[str, Any]]) -> list[str]:
                   "near reference |", "|---|" + "---|" * (len(families) + 3)]
         first = group[0]["designed"]
         if first["all"]["reference_median"] is not None:
-            lines.append("| reference | " + " | ".join(
+            known, total = first["all"]["reference_tasks"], first["all"]["episodes"]
+            label = "reference" if known == total else f"reference ({known} of {total} tasks)"
+            lines.append(f"| {label} | " + " | ".join(
                 _fmt(first.get(f, {}).get("reference_median"), "{:.2f}", 100) for f in families)
                 + f" | {_fmt(first['all']['reference_within_1cm'], '{:.0%}')} | "
                   f"{_fmt(first['all']['reference_within_2cm'], '{:.0%}')} | – |")
@@ -245,7 +247,10 @@ def designed_panels(rows: list[dict[str, Any]], out_dir: str | os.PathLike,
                 cells[r["agent"]] = data
         if not cells:
             continue
-        families = next(iter(cells.values()))["shapes"]["families"]
+        first = next(iter(cells.values()))["shapes"]
+        families = first["families"]
+        # Panels compare agents on the same tasks: a cell of other tasks is left out.
+        cells = {a: d for a, d in cells.items() if d["shapes"].get("seeds") == first.get("seeds")}
         chosen = [i for family in dict.fromkeys(families)
                   for i in [k for k, f in enumerate(families) if f == family][:per_family]]
         env = next(r["env"] for r in designed if r["env_id"] == env_id)

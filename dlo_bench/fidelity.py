@@ -8,7 +8,7 @@ import numpy as np
 
 from dlo_env.cord import Cord, CordParams
 from dlo_env.shapes import error
-from dlo_env.tasks import apply_action
+from dlo_env.tasks import GRASP_ENDS, apply_action
 from planners.interfaces import Plan
 from planners.moves import actions_through
 from planners.observation import as_shape
@@ -79,23 +79,41 @@ def transition_fidelity(
                          f"{plan.shapes.shape[1]} points")
     cord = Cord(params, grasp=plan.grasp)
     cord.reset(start)
+    names = list(GRASP_ENDS[plan.grasp])
     corners = plan.corners
+    waypoints = plan.waypoints
+    if len(names) > 1:  # both ends: follow the end that moves farther on each edge
+        lead = np.linalg.norm(np.diff(corners, axis=0), axis=-1).argmax(axis=1)
     real = np.empty_like(plan.shapes)
     real[0] = start
+    zero = np.zeros(2 * len(names), dtype=np.float32)
+
+    def held() -> np.ndarray:
+        positions = cord.gripper_positions()
+        return positions[names[0]] if len(names) == 1 else np.stack([positions[n]
+                                                                    for n in names])
+
     for e in range(len(plan.nodes) - 1):
         a, b = int(plan.nodes[e]), int(plan.nodes[e + 1])
-        origin = cord.gripper_positions()[plan.grasp]
+        origin = held()
         recorded = [cord.shape]
         progress = [0.0]
+
         for action in actions_through(origin, corners[e + 1 : e + 2], max_step):
             apply_action(cord, action, max_step)
             recorded.append(cord.shape)
-            progress.append(float(np.linalg.norm(cord.gripper_positions()[plan.grasp] - origin)))
-        chord = corners[e + 1] - corners[e]
+            gap = held() - origin  # how far the (leading) end has come along this edge
+            progress.append(float(np.linalg.norm(gap if gap.ndim == 1 else gap[lead[e]])))
+        if len(names) == 1:
+            chord, start_e, points = corners[e + 1] - corners[e], corners[e], waypoints
+        else:
+            j = lead[e]
+            chord, start_e = corners[e + 1, j] - corners[e, j], corners[e, j]
+            points = waypoints[:, j]
         length = float(np.linalg.norm(chord))
         idx = np.arange(a + 1, b + 1)
         if length > 1e-9:
-            wanted = (plan.waypoints[idx] - corners[e]) @ (chord / length)
+            wanted = (points[idx] - start_e) @ (chord / length)
         else:
             wanted = np.zeros(len(idx))
         # The end may have been stopped short by the table: scale progress to the real travel.
@@ -107,12 +125,13 @@ def transition_fidelity(
             span = prog[j] - prog[j - 1]
             w = 0.0 if span <= 1e-12 else (s - prog[j - 1]) / span
             real[i] = (1.0 - w) * rec[j - 1] + w * rec[j]
-    zero = np.zeros(2, dtype=np.float32)
     for _ in range(settle_steps):
         apply_action(cord, zero, max_step)
     final = cord.shape
     errors = np.asarray(error(plan.shapes, real), dtype=np.float64).reshape(-1)
-    steps = np.linalg.norm(np.diff(plan.waypoints.astype(np.float64), axis=0), axis=1)
+    steps = np.linalg.norm(np.diff(plan.waypoints.astype(np.float64), axis=0), axis=-1)
+    if steps.ndim > 1:
+        steps = steps.max(axis=1)
     move = np.searchsorted(plan.nodes, np.arange(len(plan.shapes)), side="left") - 1
     return Fidelity(
         mean_error=float(errors.mean()),

@@ -59,8 +59,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
     parser.add_argument("--designed", nargs="*", metavar="SUITE", default=None,
                         choices=tuple(DESIGNED_SUITES),
-                        help="designed suites run in every --env at the headline threshold, "
-                             "scored direction-free (default: " + " ".join(
+                        help="designed suites run in every --env at the headline threshold "
+                             "(1 cm; the first --threshold without it), scored direction-free "
+                             "(default: " + " ".join(
                                  BenchmarkConfig.designed) + "; none with --quick or "
                              "--difficulty; `--designed` alone: none)")
     parser.add_argument("--baselines", default=BenchmarkConfig.baselines,
@@ -117,6 +118,16 @@ def _command(args: argparse.Namespace, parser_defaults: dict) -> str:
     return " ".join(parts)
 
 
+def designed_suites(args: argparse.Namespace) -> list[str]:
+    """The designed suites to run: ``--designed`` as given (alone: none); by default the
+    config's, or none with ``--quick`` or ``--difficulty`` (a smoke test, a subset of cells)."""
+    from dlo_bench.benchmark import BenchmarkConfig
+
+    if args.designed is not None:
+        return list(dict.fromkeys(args.designed))
+    return [] if args.quick or args.difficulty else list(BenchmarkConfig.designed)
+
+
 def run(args: argparse.Namespace) -> int:
     """Run the benchmark, print the table and the speed ratio, write the results."""
     import time
@@ -144,9 +155,7 @@ def run(args: argparse.Namespace) -> int:
     from dlo_bench.report import threshold_label
 
     torch.set_num_threads(args.threads)
-    designed = args.designed
-    if designed is None:
-        designed = [] if args.quick or args.difficulty else list(BenchmarkConfig.designed)
+    designed = designed_suites(args)
     episodes = args.episodes if args.episodes is not None else (
         QUICK_EPISODES if args.quick else BenchmarkConfig.episodes)
     config = BenchmarkConfig(

@@ -34,6 +34,7 @@ subclass's ``reset()`` must create anew every attribute an episode changes; ever
 from __future__ import annotations
 
 import copy
+import functools
 import math
 from dataclasses import replace
 from typing import Any
@@ -101,8 +102,23 @@ class EpisodicPolicy:
     #: The environment's ``success_metric``. With ``"direction_free_error"`` (a drawn goal
     #: does not say which end is the head) the policy aims at the goal in the order nearer
     #: the cord at the episode's first step, for the whole episode; ``build_agent`` and the
-    #: planners' ``for_env`` set it from the environment.
+    #: CEM planners' ``for_env`` set it from the environment (set it yourself otherwise).
     success_metric: str = "error"
+
+    def __init_subclass__(cls, **kwargs: Any) -> None:
+        """A subclass's ``reset()`` also forgets the goal order chosen for the episode."""
+        super().__init_subclass__(**kwargs)
+        own = cls.__dict__.get("reset")
+        if own is None or getattr(own, "_forgets_goal_order", False):
+            return
+
+        @functools.wraps(own)
+        def reset(self: EpisodicPolicy, *args: Any, **kw: Any) -> Any:
+            self._reversed_goal = None
+            return own(self, *args, **kw)
+
+        reset._forgets_goal_order = True  # type: ignore[attr-defined]
+        cls.reset = reset  # type: ignore[method-assign]
 
     @property
     def env_policies(self) -> list[EpisodicPolicy]:
@@ -140,7 +156,6 @@ class EpisodicPolicy:
         obs = read_observation(observation, n)
         if start or self._new_episode(obs):
             self.reset()
-            self._reversed_goal = None
         self._last_seen = obs
         if self.success_metric == "direction_free_error":
             if getattr(self, "_reversed_goal", None) is None:

@@ -25,13 +25,16 @@ class Plan:
     """A planned shape transition: the decoded path and the end's straight moves.
 
     The manipulated end moves in straight lines between the positions it has at the path's
-    nodes; every planned shape has the end position (waypoint) at which it is predicted.
+    nodes; every planned shape has the end position (waypoint) at which it is predicted. With
+    both ends held (``grasp="both"``) every end array gains an ends axis (head first) and both
+    ends move at once, each in a straight line.
 
     Attributes:
         shapes: ``(T, n, 2)`` decoded shapes along the path, metres (``shapes[0]`` decodes the
             inverted start).
         latents: ``(T, d)`` their latents.
-        waypoints: ``(T, 2)`` position of the manipulated end for each shape, metres; on the
+        waypoints: ``(T, 2)`` position of the manipulated end for each shape (``(T, 2, 2)``
+            with both ends), metres; on the
             straight line of its edge, anchored at the real start (and, on success, real goal)
             end position.
         nodes: ``(K,)`` indices into ``shapes`` of the path's nodes (first 0, last T-1): the
@@ -39,7 +42,7 @@ class Plan:
         success: Whether the path reaches the goal (within ``goal_threshold``).
         stats: What the search did: ``nodes``, ``decoder_calls``, ``seconds``, ``iterations``,
             inversion errors, rejection counts per check, ``direct`` (one straight move).
-        grasp: The manipulated end, ``"head"`` or ``"tail"``.
+        grasp: The manipulated end(s): ``"head"``, ``"tail"`` or ``"both"``.
     """
 
     shapes: np.ndarray
@@ -52,18 +55,20 @@ class Plan:
 
     @property
     def corners(self) -> np.ndarray:
-        """``(K, 2)`` end positions at the nodes: the end moves straight from one to the next."""
+        """``(K, 2)`` end positions at the nodes (``(K, 2, 2)`` with both ends): the end moves
+        straight from one to the next."""
         return self.waypoints[self.nodes]
 
     @property
     def moves(self) -> np.ndarray:
-        """``(K - 1, 2)`` straight displacements of the end, metres."""
+        """``(K - 1, 2)`` straight displacements of the end (``(K - 1, 2, 2)`` with both),
+        metres."""
         return np.diff(self.corners, axis=0)
 
     @property
     def path_length(self) -> float:
-        """Total distance the end travels, metres."""
-        return float(np.linalg.norm(self.moves, axis=1).sum())
+        """Total distance the end travels (both ends: summed), metres."""
+        return float(np.linalg.norm(self.moves, axis=-1).sum())
 
 
 #: A ``dlo_env`` goal observation: ``observation``, ``achieved_goal``, ``desired_goal`` arrays.

@@ -37,7 +37,8 @@ from planners.interfaces import Plan, ShapeSurrogate
 from planners.observation import as_shape
 from planners.surrogate import Surrogate
 
-ENDS = {"head": 0, "tail": -1}
+#: Grasp -> the indices of the held points: one end, or both (head first).
+ENDS = {"head": (0,), "tail": (-1,), "both": (0, -1)}
 #: The edge types of the tree (``TreeConfig.edges``).
 EDGES = ("latent", "moves")
 #: ``"moves"`` edges: a move must change the cord by more than this (``error``, metres) to
@@ -55,15 +56,16 @@ class TreeConfig:
         edge_points: Shapes decoded along a tree edge (after Q); longer edges (goal connections,
             shortcuts) are decoded at the same latent spacing ``step_length / edge_points``.
         similarity: Largest ``error`` between consecutive decoded shapes on an edge, metres.
-        straightness: Largest distance of the manipulated end from the straight line between
+        straightness: Largest distance of a manipulated end from the straight line between
             its positions at the two nodes of an edge (and largest backward motion along it),
-            metres, for an edge of zero length.
+            metres, for an edge of zero length; with both ends held, each end is checked.
         straightness_ratio: The tolerance grows by this fraction of the end's displacement over
             the edge: long goal connections and shortcuts bend as much, relatively, as short
             tree edges (0 keeps the absolute ``straightness``).
         follow_ratio: No point may move more than ``follow_ratio`` times the manipulated end's
-            displacement (plus ``follow_slack``) over an edge: a cord on a table moves only
-            where it is dragged. ``None`` disables the check (the paper does not have it).
+            displacement (the larger of the two with both ends held; plus ``follow_slack``)
+            over an edge: a cord on a table moves only where it is dragged. ``None``
+            disables the check (the paper does not have it).
         follow_slack: Metres added to the allowed displacement (decoder noise).
         max_stretch: Largest relative deviation of a decoded segment from the start shape's mean
             segment length; ``None`` disables it. Keeps the path among cord-like shapes.
@@ -80,7 +82,8 @@ class TreeConfig:
             by ``max(sample_margin, |z_goal - z_start|)`` (latent units) on every axis.
         max_edge_points: Cap on the shapes decoded along one long edge.
         shortcut: Shorten the path found with straight connections that pass the checks.
-        grasp: The manipulated end: ``"head"`` (point 0) or ``"tail"`` (point n-1).
+        grasp: The manipulated end(s): ``"head"`` (point 0), ``"tail"`` (point n-1) or
+            ``"both"`` (``DLODualEndpoint-v0``: both ends move, each in straight lines).
         invert_steps: Refinement steps of the start (and goal) inversion, passed to
             ``model.invert(steps=...)``; ``None`` keeps the model's default. Inversion is most
             of a plan's time: 60 steps cost a quarter of the default 150 for ~0.3 mm more error.
@@ -259,7 +262,7 @@ class LatentTreePlanner:
         self.surrogate = Surrogate(model)
         self.model = model
         self.seed = int(seed)
-        self._end = ENDS[self.config.grasp]
+        self._end = list(ENDS[self.config.grasp])  # indices of the held points
         self.transition_model = transition_model
         if self.config.edges == "moves":
             if transition_model is None:
@@ -287,18 +290,19 @@ class LatentTreePlanner:
         cfg = self.config
         step = error(chains[:, 1:], chains[:, :-1])  # (B, K)
         ok_similar = step.max(axis=1) <= cfg.similarity
-        ends = chains[:, :, self._end, :].astype(np.float64)  # (B, K+1, 2)
+        ends = chains[:, :, self._end, :].astype(np.float64)  # (B, K+1, E, 2)
         rel = ends - ends[:, :1]
-        chord = rel[:, -1]  # (B, 2)
-        length = np.linalg.norm(chord, axis=1)
-        unit = chord / np.maximum(length, 1e-12)[:, None]
-        along = (rel * unit[:, None, :]).sum(axis=-1)  # (B, K+1)
-        across = np.abs(rel[..., 0] * unit[:, None, 1] - rel[..., 1] * unit[:, None, 0])
+        chord = rel[:, -1]  # (B, E, 2)
+        length = np.linalg.norm(chord, axis=-1)  # (B, E)
+        unit = chord / np.maximum(length, 1e-12)[..., None]
+        along = (rel * unit[:, None]).sum(axis=-1)  # (B, K+1, E)
+        across = np.abs(rel[..., 0] * unit[:, None, :, 1] - rel[..., 1] * unit[:, None, :, 0])
         backwards = np.maximum(np.diff(along, axis=1).min(axis=1) * -1.0, 0.0)
         deviation = np.where(length > 1e-9, across.max(axis=1),
                              np.linalg.norm(rel, axis=-1).max(axis=1))
         tolerance = cfg.straightness + cfg.straightness_ratio * length
-        ok_straight = (deviation <= tolerance) & (backwards <= tolerance)
+        ok_straight = ((deviation <= tolerance) & (backwards <= tolerance)).all(axis=1)
+        length = length.max(axis=1)  # the end that moves most drags the cord
         ok = ok_similar & ok_straight
         counts["similarity"] += int((~ok_similar).sum())
         counts["straightness"] += int((ok_similar & ~ok_straight).sum())
@@ -410,7 +414,7 @@ class LatentTreePlanner:
                     passing = candidates[ok]
                     head_goal = shape_goal[self._end]
                     total = tree.cost[passing] + np.linalg.norm(
-                        tree.shapes[passing, self._end] - head_goal, axis=1)
+                        tree.shapes[passing][:, self._end] - head_goal, axis=-1).sum(axis=1)
                     goal_edge = (int(passing[np.argmin(total)]), points)
                     break
             if reached is not None:
@@ -436,7 +440,8 @@ class LatentTreePlanner:
                 points=cfg.edge_points,
             )
             parents = nearest[ok]
-            moved = np.linalg.norm(shapes[ok, self._end] - tree.shapes[parents, self._end], axis=1)
+            moved = np.linalg.norm(shapes[ok][:, self._end] - tree.shapes[parents][:, self._end],
+                                   axis=-1).sum(axis=1)
             added = tree.add(targets[ok].astype(np.float32), shapes[ok], parents,
                              tree.cost[parents] + moved, np.full(len(parents), points))
             candidates = added
@@ -521,17 +526,17 @@ class LatentTreePlanner:
         all predicted in one batched call of the transition model.
 
         Returns:
-            ``(B, 2)`` moves, ``(B, n, 2)`` predicted shapes, ``(B,)`` their errors to the
-            targets.
+            ``(B, E, 2)`` moves of the E held ends, ``(B, n, 2)`` predicted shapes, ``(B,)``
+            their errors to the targets.
         """
         cfg = self.config
-        b, m = len(shapes), cfg.move_samples
-        toward = targets[:, self._end] - shapes[:, self._end]  # (B, 2)
-        moves = toward[:, None] + rng.normal(0.0, cfg.move_noise, (b, m, 2))
+        b, m, e = len(shapes), cfg.move_samples, len(self._end)
+        toward = targets[:, self._end] - shapes[:, self._end]  # (B, E, 2)
+        moves = toward[:, None] + rng.normal(0.0, cfg.move_noise, (b, m, e, 2))
         moves[:, 0] = toward
         norms = np.linalg.norm(moves, axis=-1, keepdims=True)
         moves *= np.minimum(1.0, cfg.max_move / np.maximum(norms, 1e-12))
-        flat = moves.reshape(b * m, 2)
+        flat = moves.reshape(b * m, 2 * e)
         # Raw predictions (inextensible=False): the setting the tree was tuned and benchmarked
         # with; the projection's fixed cost per call adds up over the tree's many small calls.
         predicted = self.transition_model.predict(
@@ -560,7 +565,8 @@ class LatentTreePlanner:
         low, high = self._sample_box(z_start, z_goal)
         tree = _Tree(cfg.max_nodes + 1, len(z_goal), n)
         tree.add(z_start[None], start[None], np.array([-1]), np.zeros(1), np.zeros(1, np.int64))
-        moves = np.zeros((cfg.max_nodes + 1, 2))
+        e = len(self._end)
+        moves = np.zeros((cfg.max_nodes + 1, e, 2))
         best_node, best_err = 0, float(error(start, goal))
         found: tuple[int, np.ndarray, np.ndarray] | None = None  # (node, move, shape)
         candidates = np.array([0])
@@ -596,7 +602,7 @@ class LatentTreePlanner:
                 if gaps.min() < best_err:
                     best_node, best_err = int(added[np.argmin(gaps)]), float(gaps.min())
                 if gaps.min() <= cfg.goal_threshold:
-                    found = (best_node, np.zeros(2), tree.shapes[best_node])
+                    found = (best_node, np.zeros((e, 2)), tree.shapes[best_node])
                     break
         if found is not None:
             node, last_move, last_shape = found
@@ -613,7 +619,9 @@ class LatentTreePlanner:
             path_shapes = [tree.shapes[i] for i in path]
             success = False
         shapes = np.array(path_shapes, dtype=np.float32)
-        corners = np.concatenate([start[self._end][None], shapes[1:, self._end]])
+        corners = np.concatenate([start[self._end][None], shapes[1:][:, self._end]])
+        if e == 1:
+            corners = corners[:, 0]
         stats = {
             "nodes": int(tree.size),
             "iterations": iterations,
@@ -622,7 +630,7 @@ class LatentTreePlanner:
             "path_nodes": len(shapes),
             "direct": len(shapes) == 2,
             "predicted_error": float(error(shapes[-1], goal)),
-            "moves": np.array(path_moves).reshape(-1, 2).tolist(),
+            "moves": np.array(path_moves).reshape(-1, 2 * e).tolist(),
             "decoder_calls": self.surrogate.decoder_calls - calls0,
             "seconds": time.perf_counter() - t0,
         }
@@ -668,7 +676,7 @@ class LatentTreePlanner:
             nodes.append(nodes[-1] + k)
         latents = np.concatenate(latents).astype(np.float32)
         shapes = self.surrogate.decode(latents)
-        decoded_ends = shapes[:, self._end].astype(np.float64)
+        decoded_ends = shapes[:, self._end].astype(np.float64)  # (T, E, 2)
         corners = decoded_ends[nodes].copy()
         corners[0] = start[self._end]
         if success:
@@ -676,14 +684,18 @@ class LatentTreePlanner:
         waypoints = np.empty_like(decoded_ends)
         waypoints[0] = corners[0]
         for e, (a, b) in enumerate(zip(nodes[:-1], nodes[1:])):
-            chord = decoded_ends[b] - decoded_ends[a]
-            length2 = float(chord @ chord)
             idx = np.arange(a + 1, b + 1)
-            if length2 > 1e-18:
-                t = np.clip((decoded_ends[idx] - decoded_ends[a]) @ chord / length2, 0.0, 1.0)
-            else:
-                t = (idx - a) / (b - a)
-            waypoints[idx] = corners[e] + t[:, None] * (corners[e + 1] - corners[e])
+            for j in range(len(self._end)):  # each end on the straight line between corners
+                chord = decoded_ends[b, j] - decoded_ends[a, j]
+                length2 = float(chord @ chord)
+                if length2 > 1e-18:
+                    t = np.clip((decoded_ends[idx, j] - decoded_ends[a, j]) @ chord / length2,
+                                0.0, 1.0)
+                else:
+                    t = (idx - a) / (b - a)
+                waypoints[idx, j] = corners[e, j] + t[:, None] * (corners[e + 1, j] - corners[e, j])
+        if len(self._end) == 1:
+            waypoints = waypoints[:, 0]
         stats = dict(stats)
         stats["path_nodes"] = len(nodes)
         stats["direct"] = len(nodes) == 2

@@ -14,27 +14,30 @@ EDGE_MARGIN = 0.02
 def actions_by_move(
     end: np.ndarray, corners: np.ndarray, max_step: float
 ) -> list[list[np.ndarray]]:
-    """Actions that move the end from ``end`` straight to each of ``corners``, move by move.
+    """Actions that move the end(s) from ``end`` straight to each of ``corners``, move by move.
 
     Every straight move is split into equal actions (``dlo_env.tasks.split_move``, as the
-    environments' own tasks are made), so no action moves the end farther than ``max_step``
-    and the end stops exactly at every corner. Corners are clipped to the table; a corner
-    less than a micrometre from the previous one gives an empty move.
+    environments' own tasks are made), so no action moves an end farther than ``max_step``
+    and the ends stop exactly at every corner (both ends held: they move at once, each in a
+    straight line). Corners are clipped to the table; a corner less than a micrometre from
+    the previous one gives an empty move.
 
     Args:
-        end: ``(2,)`` the end's position now, metres.
-        corners: ``(K, 2)`` positions to visit, metres.
+        end: ``(2,)`` the end's position now, metres; ``(E, 2)`` for E ends held.
+        corners: ``(K, 2)`` positions to visit, metres; ``(K, E, 2)`` for E ends.
         max_step: Displacement of an action of 1.0, metres.
 
     Returns:
-        ``K`` lists of float32 ``(2,)`` actions in ``[-1, 1]``, with ``|action| <= 1``.
+        ``K`` lists of float32 ``(2 E,)`` actions in ``[-1, 1]``, with every end's part of
+        length ``<= 1``.
     """
     if not max_step > 0:
         raise ValueError(f"max_step must be > 0, got {max_step!r}")
     lim = TABLE_HALF - EDGE_MARGIN
-    here = np.asarray(end, dtype=np.float64).reshape(2)
+    here = np.asarray(end, dtype=np.float64).reshape(-1)
+    width = here.size
     moves: list[list[np.ndarray]] = []
-    for corner in np.clip(np.asarray(corners, dtype=np.float64).reshape(-1, 2), -lim, lim):
+    for corner in np.clip(np.asarray(corners, dtype=np.float64).reshape(-1, width), -lim, lim):
         displacement = corner - here
         if np.linalg.norm(displacement) < 1e-6:
             moves.append([])
@@ -50,6 +53,6 @@ def actions_through(end: np.ndarray, corners: np.ndarray, max_step: float) -> li
     The moves of :func:`actions_by_move`, one after the other.
 
     Returns:
-        A list of float32 ``(2,)`` actions in ``[-1, 1]``, with ``|action| <= 1``.
+        A list of float32 ``(2 E,)`` actions in ``[-1, 1]`` (E held ends).
     """
     return [action for move in actions_by_move(end, corners, max_step) for action in move]

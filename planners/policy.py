@@ -33,7 +33,7 @@ import numpy as np
 from dlo_env.shapes import error
 from planners.episodes import EpisodicPolicy
 from planners.interfaces import EpisodeStats, Plan, ShapeSurrogate
-from planners.latent_tree import LatentTreePlanner
+from planners.latent_tree import ENDS, LatentTreePlanner
 from planners.moves import actions_by_move
 from planners.observation import CordObservation
 from planners.surrogate import model_n_points
@@ -261,10 +261,13 @@ class PlannerPolicy(EpisodicPolicy):
             error(plan.shapes[-1], goal)) < float(error(shape, goal)))
         if not plan.success:
             self.stats.failures += 1
+        ends = list(ENDS[self.planner.config.grasp])
         if follow:
             corners = plan.corners[1:]
-        else:  # the fallback: straight to the goal's end position
-            corners = goal[0 if self.planner.config.grasp == "head" else -1][None]
+        elif len(ends) == 1:  # the fallback: straight to the goal's end position
+            corners = goal[ends[0]][None]
+        else:  # ... the goal's end positions, both ends at once
+            corners = goal[ends][None]
         moves = actions_by_move(head, corners, self.max_step)
         if self.moves_per_plan is not None:
             self._expect_progress = not plan.success or len(moves) <= self.moves_per_plan
@@ -278,11 +281,25 @@ class PlannerPolicy(EpisodicPolicy):
         if not self._queue and self.replan_every is not None:
             # Nothing to do by this plan (start and goal decode alike): wait instead of
             # replanning at every step.
-            self._queue = [np.zeros(2, dtype=np.float32)] * self.replan_every
+            self._queue = [self._still()] * self.replan_every
         self._since_plan = 0
         seconds = time.perf_counter() - t0
         self.stats.seconds += seconds
         self.stats.plan_seconds.append(seconds)
+
+    def _still(self) -> np.ndarray:
+        """The zero action of the held end(s)."""
+        return np.zeros(2 * len(ENDS[self.planner.config.grasp]), dtype=np.float32)
+
+    def _held(self, obs: CordObservation) -> np.ndarray:
+        """Where the held end(s) are: ``(2,)`` for one end, ``(E, 2)`` for several (the
+        grippers when the observation has them, else the cord's end points)."""
+        ends = list(ENDS[self.planner.config.grasp])
+        if len(ends) == 1:
+            return obs.head
+        if len(obs.grippers) == len(ends):
+            return obs.grippers
+        return obs.shape[ends]
 
     def _act(self, obs: CordObservation) -> np.ndarray:
         """The next action: plan at the episode's first step; closed loop, check the plan
@@ -294,7 +311,7 @@ class PlannerPolicy(EpisodicPolicy):
         if closed and self.plans and not self._queue and moving and (
                 self._waited < self.settle_steps):
             self._waited += 1  # let the cord come to rest before judging the plan's outcome
-            return np.zeros(2, dtype=np.float32)
+            return self._still()
         due = not self.plans or (closed and (not self._queue or (
             self.moves_per_plan is None and self._since_plan >= self.replan_every
             and (self._done in self._corners or not self.wait_for_corner)
@@ -306,22 +323,33 @@ class PlannerPolicy(EpisodicPolicy):
             if closed and self._stalled(obs.shape, obs.goal):
                 self._queue = []
             else:
-                self._replan(obs.shape, obs.goal, obs.head)
-        action = self._queue.pop(0) if self._queue else np.zeros(2, dtype=np.float32)
+                self._replan(obs.shape, obs.goal, self._held(obs))
+        action = self._queue.pop(0) if self._queue else self._still()
         self._since_plan += 1
         self._done += 1
         return action
+
+
+def _travel(action: np.ndarray) -> float:
+    """How far an action moves the end that moves most, in units of ``max_step``."""
+    action = np.asarray(action)
+    if action.size == 2:
+        return float(np.linalg.norm(action))
+    return float(np.linalg.norm(action.reshape(-1, 2), axis=1).max())
 
 
 def expected_shapes(plan: Plan, actions: list[np.ndarray], max_step: float) -> list[np.ndarray]:
     """The shape ``plan`` predicts after each of ``actions`` (its end path, executed in order).
 
     The end's distance along the plan after each action is matched with the distance at which
-    each planned shape was predicted; shapes in between are blended linearly.
+    each planned shape was predicted; shapes in between are blended linearly. With both ends
+    held, the distance is that of the end that moves farther (both move in proportion).
     """
-    steps = np.linalg.norm(np.diff(plan.waypoints.astype(np.float64), axis=0), axis=1)
+    steps = np.linalg.norm(np.diff(plan.waypoints.astype(np.float64), axis=0), axis=-1)
+    if steps.ndim > 1:
+        steps = steps.max(axis=1)
     travel = np.concatenate([[0.0], np.cumsum(steps)])
-    done = np.cumsum([float(np.linalg.norm(a)) * max_step for a in actions])
+    done = np.cumsum([_travel(a) * max_step for a in actions])
     out = []
     for s in done:
         j = int(np.clip(np.searchsorted(travel, s, side="right"), 1, len(travel) - 1))

@@ -78,21 +78,20 @@ def test_quick_benchmark_writes_every_agent_and_difficulty(models, tmp_path, cap
 def test_agents_without_a_model_are_reported_not_dropped(tmp_path, capsys):
     out = tmp_path / "bench"
     code = main(["benchmark", "--quick", "--agent", "straight-line", "ppo", "sac-her",
-                 "latent-tree", "--difficulty", "1", "2", "--episodes", "1",
+                 "latent-tree", "bc", "--difficulty", "1", "2", "--episodes", "1",
                  "--threshold", "0.02", "0.01",
                  "--baselines", str(tmp_path / "none"), "--allow-dirty", "--out", str(out)])
     assert code == 0
     rows = json.loads((out / "results.json").read_text())
     assert [(r["agent"], r["threshold"], r["env"], r["difficulty"]) for r in rows] == [
-        (a, t, e, d) for a in ("straight-line", "ppo", "sac-her", "latent-tree")
+        (a, t, e, d) for a in ("straight-line", "ppo", "sac-her", "latent-tree", "bc")
         for t in (0.02, 0.01) for e in ("endpoint", "dual-endpoint") for d in (1, 2)]
     for r in rows:
-        if r["agent"] == "straight-line" or (r["agent"], r["env"]) == ("latent-tree",
-                                                                         "endpoint"):
+        if r["agent"] in ("straight-line", "latent-tree"):  # both act in both environments
             assert r["status"] == "ok"
             continue
         assert r["status"] == "missing" and r["success_rate"] is None
-        if r["agent"] == "latent-tree":
+        if (r["agent"], r["env"]) == ("bc", "dual-endpoint"):
             assert r["note"] == "acts only in dlo_env/DLOEndpoint-v0"
         else:
             assert r["note"].startswith(f"no trained model for {r['env_id']}")
@@ -100,7 +99,7 @@ def test_agents_without_a_model_are_reported_not_dropped(tmp_path, capsys):
     assert "| ppo | dual-endpoint | linear-2 | 1 cm | – | missing |" in table
     assert table.index("## Success at 1 cm") < table.index("## Success at 2 cm")
     assert "| ppo | – | – | – | – |" in table  # the success table
-    assert "with missing cells (reported in the table): latent-tree, ppo, sac-her" in \
+    assert "with missing cells (reported in the table): bc, ppo, sac-her" in \
         capsys.readouterr().out
 
 

@@ -51,9 +51,9 @@ def test_an_unknown_agent_is_one_line_naming_the_agents(tmp_path, capsys):
 
 
 def test_an_agent_in_an_environment_it_does_not_act_in_is_one_line(tmp_path, capsys):
-    line = _one_line_error(capsys, main(["evaluate", "--agent", "latent-tree", "--env",
+    line = _one_line_error(capsys, main(["evaluate", "--agent", "bc", "--env",
                                          "dlo_env/DLODualEndpoint-v0", "--out", str(tmp_path)]))
-    assert "--agent latent-tree acts in dlo_env/DLOEndpoint-v0" in line and "--env" in line
+    assert "--agent bc acts in dlo_env/DLOEndpoint-v0" in line and "--env" in line
 
 
 def test_a_shape_model_for_another_cord_is_one_line(tmp_path, capsys):

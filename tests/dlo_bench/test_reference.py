@@ -54,8 +54,9 @@ def test_bad_arguments_are_one_line_errors(tmp_path):
         make_references("shapes-curves", ENDPOINT, tmp_path, jobs=0)
 
 
-def test_designed_cells_report_families_beside_the_reference(tmp_path, monkeypatch):
-    make_references("shapes-curves", ENDPOINT, tmp_path / "refs", limit=2, **TINY)
+@pytest.mark.parametrize("known", [2, 1])
+def test_designed_cells_report_families_beside_the_reference(tmp_path, monkeypatch, known):
+    make_references("shapes-curves", ENDPOINT, tmp_path / "refs", limit=known, **TINY)
     monkeypatch.setattr(reference, "SHIPPED_REFERENCES", tmp_path / "refs")
     config = BenchmarkConfig(agents=("straight-line",), envs=(ENDPOINT,), difficulties=(1,),
                              thresholds=(0.01,), designed=("shapes-curves",), episodes=2,
@@ -76,14 +77,16 @@ def test_designed_cells_report_families_beside_the_reference(tmp_path, monkeypat
     assert row["median_rest_error"] == pytest.approx(np.median(errors))
     refs = load_references("shapes-curves", ENDPOINT, tmp_path / "refs")
     ref_errors = [refs[s]["error"] for s in sorted(refs)]
+    assert summary["reference_tasks"] == known == len(ref_errors)
     assert summary["reference_median"] == pytest.approx(np.median(ref_errors))
-    assert summary["near_reference"] == np.mean(
-        np.array(errors) <= np.array(ref_errors) + 0.005)
+    assert summary["near_reference"] == np.mean(  # over the tasks with a reference
+        np.array(errors[:known]) <= np.array(ref_errors) + 0.005)
     assert sum(v["episodes"] for k, v in row["designed"].items() if k != "all") == 2
     cell = json.loads((tmp_path / "out" / "results_episodes" /
                        "straight-line-endpoint-shapes-curves-1cm.json").read_text())
     shapes = cell["shapes"]
     assert len(shapes["goals"]) == len(shapes["rest"]) == len(shapes["families"]) == 2
+    assert shapes["seeds"] == [int(s) for s in designed_suite_seeds("shapes-curves", "test")[:2]]
     for goal, rest, record in zip(shapes["goals"], shapes["rest"], records):
         goal, rest = np.asarray(goal), np.asarray(rest)
         assert min(error(rest, goal), error(rest, goal[::-1])) == pytest.approx(
@@ -96,5 +99,27 @@ def test_designed_cells_report_families_beside_the_reference(tmp_path, monkeypat
     table = results_markdown(rows, {"platform": "p", "processor": "x", "cpu_count": 2,
                                     "python": "3", "torch": "t", "torch_threads": 1},
                              "dlo benchmark", 1.0)
-    assert "## Designed shapes" in table and "| reference |" in table
+    label = "| reference |" if known == 2 else "| reference (1 of 2 tasks) |"
+    assert "## Designed shapes" in table and label in table
     assert "| straight-line | endpoint | shapes-curves | 1 cm | 2 |" in table
+
+
+@pytest.mark.parametrize(("flags", "expected"), [
+    ([], ["shapes-curves"]),
+    (["--quick"], []),
+    (["--difficulty", "1"], []),
+    (["--quick", "--designed", "shapes-curves"], ["shapes-curves"]),
+    (["--designed"], []),
+    (["--designed", "shapes-curves", "shapes-curves"], ["shapes-curves"]),
+])
+def test_which_designed_suites_a_benchmark_command_runs(flags, expected):
+    from dlo_cli.benchmark import designed_suites
+    from dlo_cli.main import build_parser
+
+    args = build_parser().parse_args(["benchmark", *flags])
+    assert designed_suites(args) == expected
+
+
+def test_duplicate_designed_suites_are_refused():
+    with pytest.raises(ValueError, match="designed must be distinct"):
+        BenchmarkConfig(designed=("shapes-curves", "shapes-curves"))

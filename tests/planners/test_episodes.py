@@ -312,3 +312,16 @@ def test_a_direction_free_policy_aims_at_the_nearer_order_of_the_goal(env_id):
                 break
         results[metric] = info["direction_free_error"]
     assert results["direction_free_error"] < 0.02 < results["error"]
+
+
+def test_reset_forgets_the_goal_order_chosen_for_the_episode():
+    policy = StraightLinePolicy(max_step=0.02)
+    policy.success_metric = "direction_free_error"
+    task = load_suite("linear-1", "test", limit=1)[0]
+    env = gym.make(ENDPOINT, success_metric="direction_free_error")
+    obs, _ = env.reset(options={"start": task.start, "goal": task.goal[::-1].copy()})
+    policy.predict(obs)
+    assert policy._reversed_goal is True
+    policy.reset()
+    assert policy._reversed_goal is None
+
