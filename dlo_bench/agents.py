@@ -197,8 +197,10 @@ def _sb3(algo: str) -> Callable[[Any, AgentOptions], Policy]:
 def _bc(env: Any, options: AgentOptions) -> Policy:
     from dlo_bench.behaviour_cloning import load_bc
 
-    folder = options.baseline if options.baseline is not None else shipped_baseline("bc")
-    return load_bc(folder, device=options.device)
+    env_id = env.unwrapped.spec.id
+    folder = (options.baseline if options.baseline is not None
+              else shipped_baseline("bc", env_id))
+    return load_bc(folder, device=options.device, env_id=env_id)
 
 
 #: Every agent by name, in the benchmark's table order.
@@ -225,7 +227,7 @@ AGENTS: dict[str, AgentSpec] = {spec.name: spec for spec in (
     AgentSpec("sac-her", "the shipped SAC + HER baseline (Stable-Baselines3)", _sb3("sac-her"),
               environments=(ENDPOINT, DUAL_ENDPOINT), extra="rl"),
     AgentSpec("bc", "behaviour cloning of the oracle demonstrations (Minari datasets)", _bc,
-              extra="rl"),
+              environments=(ENDPOINT, DUAL_ENDPOINT), extra="rl"),
 )}
 
 

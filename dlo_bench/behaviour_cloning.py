@@ -27,8 +27,14 @@ import numpy as np
 from dlo_env.atomic import atomic_path, write_text_atomic
 
 FORMAT_VERSION = 1
+#: The demonstrations a ``bc`` agent is cloned from, per environment: the oracle of the
+#: train splits of linear-1 to linear-3 (``dlo export-minari --env ENV``).
+DEMONSTRATIONS = {
+    env_id: tuple(f"dlo/{label}/linear-{d}-oracle-v0" for d in (1, 2, 3))
+    for env_id, label in (("dlo_env/DLOEndpoint-v0", "endpoint"),
+                          ("dlo_env/DLODualEndpoint-v0", "dual-endpoint"))}
 #: The demonstrations of the benchmark's difficulties in ``DLOEndpoint-v0``.
-ENDPOINT_DEMONSTRATIONS = tuple(f"dlo/endpoint/linear-{d}-oracle-v0" for d in (1, 2, 3))
+ENDPOINT_DEMONSTRATIONS = DEMONSTRATIONS["dlo_env/DLOEndpoint-v0"]
 
 
 @dataclass(frozen=True)
@@ -179,13 +185,21 @@ def train_bc(config: BCConfig, out_dir: str | os.PathLike[str], threads: int | N
     return out / "model.zip"
 
 
-def load_bc(path: str | os.PathLike[str], device: str = "cpu") -> Any:
+def load_bc(path: str | os.PathLike[str], device: str = "cpu", env_id: str | None = None
+            ) -> Any:
     """Load a folder written by ``train_bc`` (or its ``model.zip``): an SB3 model whose
     ``predict(obs, state, episode_start, deterministic)`` acts.
 
+    Args:
+        path: The folder or its ``model.zip``.
+        device: Torch device.
+        env_id: The environment it will act in: refused unless the demonstrations came from
+            it (None: not checked).
+
     Raises:
         FileNotFoundError: If the folder holds no behaviour-cloning model.
-        ValueError: If it holds another algorithm or another format version.
+        ValueError: If it holds another algorithm or another format version, or was cloned
+            in another environment than ``env_id``.
     """
     from stable_baselines3 import PPO
 
@@ -197,4 +211,7 @@ def load_bc(path: str | os.PathLike[str], device: str = "cpu") -> Any:
     if meta.get("algo") != "bc":
         raise ValueError(f"path {str(folder)!r} holds no behaviour-cloning model (algo "
                          f"{meta.get('algo', meta.get('config', {}).get('algo'))!r})")
+    if env_id is not None and meta.get("env_id") != env_id:
+        raise ValueError(f"path {str(folder)!r} holds a policy cloned in {meta.get('env_id')}, "
+                         f"not {env_id}")
     return PPO.load(folder / "model.zip", device=device)

@@ -74,8 +74,6 @@ CASES = [
     ("evaluate --agent latent-mpc --transition-model OUT/none.pt --out OUT",
      "--transition-model", ("none.pt",)),
     ("benchmark --model OUT/none.pt --out OUT", "--model", ("none.pt",)),
-    ("evaluate --agent bc --env DLODualEndpoint-v0 --out OUT", "--env",
-     ("--agent bc", "dlo_env/DLODualEndpoint-v0")),
     ("evaluate --agent straight-line --threads 0 --out OUT", "--threads", ("'0'",)),
     ("evaluate --agent straight-line --address auto --out OUT", "--address", ("--backend ray",)),
     ("evaluate --agent straight-line --bogus --out OUT", "--bogus", ("unrecognized",)),

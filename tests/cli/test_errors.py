@@ -50,10 +50,18 @@ def test_an_unknown_agent_is_one_line_naming_the_agents(tmp_path, capsys):
     assert "teleport" in line and "straight-line" in line
 
 
-def test_an_agent_in_an_environment_it_does_not_act_in_is_one_line(tmp_path, capsys):
-    line = _one_line_error(capsys, main(["evaluate", "--agent", "bc", "--env",
+def test_an_agent_in_an_environment_it_does_not_act_in_is_one_line(tmp_path, capsys,
+                                                                   monkeypatch):
+    # Every registered agent acts in both environments; one that does not is refused.
+    from dataclasses import replace
+
+    from dlo_bench import agents
+
+    spec = replace(agents.AGENTS["straight-line"], environments=("dlo_env/DLOEndpoint-v0",))
+    monkeypatch.setitem(agents.AGENTS, "straight-line", spec)
+    line = _one_line_error(capsys, main(["evaluate", "--agent", "straight-line", "--env",
                                          "dlo_env/DLODualEndpoint-v0", "--out", str(tmp_path)]))
-    assert "--agent bc acts in dlo_env/DLOEndpoint-v0" in line and "--env" in line
+    assert "--agent straight-line acts in dlo_env/DLOEndpoint-v0" in line and "--env" in line
 
 
 def test_a_shape_model_for_another_cord_is_one_line(tmp_path, capsys):

@@ -61,9 +61,20 @@ def test_build_agent_rejects_an_unknown_option():
         build_agent("straight-line", env, replan_evry=3)
 
 
-def test_build_agent_rejects_an_environment_the_agent_does_not_act_in():
+def test_build_agent_rejects_an_environment_the_agent_does_not_act_in(monkeypatch):
+    from dataclasses import replace
+
+    from dlo_bench import agents
+
+    spec = replace(agents.AGENTS["straight-line"], environments=("dlo_env/DLOEndpoint-v0",))
+    monkeypatch.setitem(agents.AGENTS, "straight-line", spec)
     with gym.make(DUAL_ENDPOINT) as env, pytest.raises(ValueError, match="acts in"):
-        build_agent("bc", env)
+        build_agent("straight-line", env)
+
+
+def test_every_registered_agent_acts_in_both_environments():
+    assert all(set(spec.environments) == {"dlo_env/DLOEndpoint-v0", DUAL_ENDPOINT}
+               for spec in AGENTS.values())
 
 
 def test_agent_names_list_the_registry_and_the_sb3_form():

@@ -63,3 +63,15 @@ def test_the_shipped_bc_agent_acts_in_the_endpoint_environment():
     obs, _ = env.reset(seed=1)
     action, _ = build_agent("bc", env).predict(obs, deterministic=True)
     assert action.shape == (2,)
+
+
+def test_the_shipped_bc_agents_act_in_both_environments_and_refuse_the_other():
+    env = gym.make("dlo_env/DLODualEndpoint-v0")
+    obs, _ = env.reset(seed=1)
+    action, _ = build_agent("bc", env).predict(obs, deterministic=True)
+    assert action.shape == (4,)
+    with pytest.raises(ValueError, match="cloned in dlo_env/DLOEndpoint-v0, not"):
+        load_bc(shipped_baseline("bc"), env_id="dlo_env/DLODualEndpoint-v0")
+    with pytest.raises(ValueError, match="cloned in dlo_env/DLODualEndpoint-v0, not"):
+        build_agent("bc", gym.make("dlo_env/DLOEndpoint-v0"),
+                    baseline=shipped_baseline("bc", "dlo_env/DLODualEndpoint-v0"))
