@@ -92,3 +92,10 @@ def test_shipped_baselines_are_found_from_any_working_directory(tmp_path, monkey
 def test_a_baseline_folder_of_another_algorithm_is_rejected():
     with gym.make(ENDPOINT) as env, pytest.raises(ValueError, match="holds a ppo model"):
         build_agent("sac-her", env, baseline=shipped_baseline("ppo"))
+
+
+def test_the_shipped_ppo_acts_in_the_dual_environment():
+    env = gym.make(DUAL_ENDPOINT)
+    obs, _ = env.reset(seed=3)
+    action, _ = build_agent("ppo", env).predict(obs, deterministic=True)
+    assert action.shape == (4,)
