@@ -6,7 +6,10 @@ the success of an agent on a designed suite (``dlo_env.designed_suites``) is rea
 reached with a long budget (:data:`REFERENCE_CONFIG`, planning on the true simulator, ``max
 steps`` :data:`REFERENCE_MAX_STEPS`, 1.5 times an agent's episode). After every step, the shape
 the cord would rest in if the grippers stopped (``settled_metrics``) is scored, and the best
-is kept: each is a shape the cord reaches at rest from the start.
+is kept: each is a shape the cord reaches at rest from the start. Two searches run on every
+task (:data:`REFERENCE_SEARCHES`: 3-move plans, and 5-move plans while the cord is far from
+the goal, as latent-mpc plans); neither reached lower on every task, so the reference is the
+better of the two.
 
 ``dlo reference`` makes the files (one JSON per suite and environment) with worker processes,
 resuming from the tasks a folder already holds; the shipped ones live in
@@ -32,6 +35,10 @@ from planners.physics_mpc import PhysicsMPCConfig
 #: simulations per plan), sampling focused near the goal, so it refines where the agents'
 #: budget stops.
 REFERENCE_CONFIG = PhysicsMPCConfig(samples=64, elites=6, iterations=4, focus=2.0)
+#: The searches of every task; its reference is the best error any of them reached.
+REFERENCE_SEARCHES = (REFERENCE_CONFIG,
+                      PhysicsMPCConfig(samples=64, elites=6, iterations=4, focus=2.0,
+                                       far_moves=5, far_error=0.06))
 #: Steps of a search episode (an agent's designed episode has ``DESIGNED_MAX_STEPS``).
 REFERENCE_MAX_STEPS = 300
 #: The search stops once a shape at rest is this close (metres, direction-free).
@@ -83,19 +90,46 @@ def search_task(env_id: str, suite: str, seed: int, *, config: PhysicsMPCConfig 
             "step": best_step, "steps": steps, "seconds": time.perf_counter() - t0}
 
 
-def _search(args: tuple[str, str, int, PhysicsMPCConfig, int, float]) -> dict[str, Any]:
-    env_id, suite, seed, config, max_steps, stop = args
-    return search_task(env_id, suite, seed, config=config, max_steps=max_steps, stop=stop)
+def _search(args: tuple[str, str, int, int, PhysicsMPCConfig, int, float]
+            ) -> tuple[int, dict[str, Any]]:
+    env_id, suite, seed, index, config, max_steps, stop = args
+    return index, search_task(env_id, suite, seed, config=config, max_steps=max_steps,
+                              stop=stop)
+
+
+def _config_of(fields: dict[str, Any]) -> Any:
+    """A search's settings as saved, with the fields a file made by an older version lacks
+    set to their defaults (which keep what that version did); None for unknown fields."""
+    try:
+        config = PhysicsMPCConfig(**{k: tuple(v) if isinstance(v, list) else v
+                                     for k, v in fields.items()})
+    except (TypeError, ValueError):
+        return None
+    return json.loads(json.dumps(asdict(config)))
+
+
+def _upgraded(old: dict[str, Any], searches: int) -> dict[str, Any]:
+    """A file of one search (``settings["config"]``, before several searches) as one whose
+    first search is done: its rows keep their results as ``searches[0]``."""
+    settings = dict(old["settings"])
+    settings["searches"] = [settings.pop("config")]
+    tasks = [{"seed": t["seed"], "family": t["family"], "error": t["error"],
+              "searches": [{k: t[k] for k in ("error", "step", "steps", "seconds")}]
+              + [None] * (searches - 1)} for t in old["tasks"]]
+    return {**old, "settings": settings, "tasks": tasks}
 
 
 def make_references(suite: str, env_id: str, out: str | Path, *, split: str = "test",
                     limit: int | None = None, jobs: int = 1, progress: bool = False,
-                    config: PhysicsMPCConfig = REFERENCE_CONFIG,
+                    searches: tuple[PhysicsMPCConfig, ...] = REFERENCE_SEARCHES,
                     max_steps: int = REFERENCE_MAX_STEPS, stop: float = REFERENCE_STOP) -> Path:
     """Search every task of a designed suite's split; write ``out/<suite>-<env>.json``.
 
-    The file is rewritten (atomically) after every task, so an interrupted run resumes from
-    it: tasks it holds are not searched again.
+    Every task is searched with each of ``searches``; a task's ``error`` is the best they
+    reached so far, and its ``searches`` hold each one's result (None: not run yet). The file
+    is rewritten (atomically) after every search, so an interrupted run resumes from it:
+    searches it holds are not run again (a file of the first search alone, as made before
+    there were several, is taken up).
 
     Raises:
         ValueError: For an unknown suite or environment, or when ``out`` holds a file made
@@ -107,7 +141,7 @@ def make_references(suite: str, env_id: str, out: str | Path, *, split: str = "t
         limit: Only the first ``limit`` tasks.
         jobs: Worker processes.
         progress: Print a line per task.
-        config, max_steps, stop: The search (the defaults make the shipped files).
+        searches, max_steps, stop: The searches (the defaults make the shipped files).
     """
     from dlo_env.designed_suites import DESIGNED_SUITES
     from dlo_env.envs import ENVIRONMENTS
@@ -122,46 +156,72 @@ def make_references(suite: str, env_id: str, out: str | Path, *, split: str = "t
     if limit is not None:
         seeds = seeds[:limit]
     path = reference_file(out, suite, env_id)
-    settings = {"config": asdict(config), "max_steps": max_steps, "stop": stop}
+    if not searches:
+        raise ValueError("searches must hold at least one PhysicsMPCConfig")
+    settings = {"searches": [asdict(c) for c in searches], "max_steps": max_steps,
+                "stop": stop}
     data: dict[str, Any] = {"suite": suite, "env_id": env_id, "split": split,
                             "settings": settings, "tasks": []}
-    if path.is_file():  # resume what the same search made; never overwrite another's
+    if path.is_file():  # resume what the same searches made; never overwrite another's
         old = json.loads(path.read_text())
-        same = {k: old.get(k) for k in ("suite", "env_id", "split", "settings")}
-        if same != json.loads(json.dumps({k: data[k] for k in same})):
+        if "config" in old.get("settings", {}):
+            old = _upgraded(old, len(searches))
+        same = {k: old.get(k) for k in ("suite", "env_id", "split")}
+        mine = json.loads(json.dumps(settings))
+        theirs = old.get("settings", {})
+        done = [_config_of(c) for c in theirs.get("searches", [])]
+        ok = same == {k: data[k] for k in same} and all(
+            theirs.get(k) == mine[k] for k in ("max_steps", "stop")) and (
+            done == [_config_of(c) for c in mine["searches"][:len(done)]])
+        if not ok:
             raise ValueError(f"out holds {path}, made by another search (settings or split "
                              "differ): pass another --out, or remove the file to redo it")
         data["tasks"] = old["tasks"]
-    done = {t["seed"] for t in data["tasks"]}
-    todo = [(env_id, suite, s, config, max_steps, stop) for s in seeds if s not in done]
+        for task in data["tasks"]:  # searches added since: not run yet
+            task["searches"] += [None] * (len(searches) - len(task["searches"]))
+    rows = {t["seed"]: t for t in data["tasks"]}
+    todo = [(env_id, suite, s, k, c, max_steps, stop) for s in seeds
+            for k, c in enumerate(searches)
+            if s not in rows or rows[s]["searches"][k] is None]
     path.parent.mkdir(parents=True, exist_ok=True)
 
-    def save(row: dict[str, Any]) -> None:
-        data["tasks"].append(row)
-        data["tasks"].sort(key=lambda t: t["seed"])
+    def save(index: int, result: dict[str, Any]) -> None:
+        seed = result["seed"]
+        if seed not in rows:
+            rows[seed] = {"seed": seed, "family": result["family"], "error": math.inf,
+                          "searches": [None] * len(searches)}
+            data["tasks"].append(rows[seed])
+            data["tasks"].sort(key=lambda t: t["seed"])
+        row = rows[seed]
+        row["searches"][index] = {k: result[k] for k in ("error", "step", "steps", "seconds")}
+        row["error"] = min(r["error"] for r in row["searches"] if r is not None)
         write_text_atomic(path, json.dumps(data, indent=1) + "\n")
         if progress:
-            print(f"{suite} {env_id} seed {row['seed']} ({row['family']}): "
-                  f"{100 * row['error']:.2f} cm after {row['step']} steps, "
-                  f"{row['seconds']:.0f} s", flush=True)
+            print(f"{suite} {env_id} seed {seed} ({row['family']}), search {index + 1}: "
+                  f"{100 * result['error']:.2f} cm after {result['step']} steps, "
+                  f"{result['seconds']:.0f} s (best {100 * row['error']:.2f} cm)", flush=True)
 
     if jobs == 1:
         for args in todo:
-            save(_search(args))
+            save(*_search(args))
     else:
         from multiprocessing import get_context
 
         with get_context("spawn").Pool(jobs) as pool:
-            for row in pool.imap_unordered(_search, todo):
-                save(row)
+            for index, result in pool.imap_unordered(_search, todo):
+                save(index, result)
     return path
 
 
 def load_references(suite: str, env_id: str, folder: str | Path | None = None
                     ) -> dict[int, dict[str, Any]]:
-    """Seed -> reference row of a designed suite's test tasks ({} without a file)."""
+    """Seed -> reference row of a designed suite's test tasks whose every search has run
+    ({} without a file)."""
     path = reference_file(folder or SHIPPED_REFERENCES, suite, env_id)
     if not path.is_file():
         return {}
-    return {int(t["seed"]): t for t in json.loads(path.read_text())["tasks"]
-            if math.isfinite(t["error"])}
+    data = json.loads(path.read_text())
+    if "config" in data.get("settings", {}):  # a file of one search, made before there were several
+        data = _upgraded(data, len(REFERENCE_SEARCHES))
+    return {int(t["seed"]): t for t in data["tasks"]
+            if all(r is not None for r in t["searches"]) and math.isfinite(t["error"])}
