@@ -39,3 +39,12 @@ def solved() -> Callable[[str, str, int], int]:
         return count
 
     return run
+
+
+@pytest.fixture(scope="module")
+def models():
+    """The shipped shape model and transition model, on the CPU."""
+    from latent_model import ShapeModel, TransitionModel
+
+    return (ShapeModel.load_or_pretrained(None, device="cpu"),
+            TransitionModel.load_or_pretrained(device="cpu"))

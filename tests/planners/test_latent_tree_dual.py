@@ -13,17 +13,10 @@ from dlo_bench.fidelity import transition_fidelity
 from dlo_env.cord import Cord
 from dlo_env.shapes import error
 from dlo_env.tasks import DEFAULT_MAX_STEP, apply_action, load_suite, split_move, wait_for_rest
-from latent_model import ShapeModel, TransitionModel
 from planners.latent_tree import KINO_CONFIG, LatentTreePlanner, TreeConfig
 from planners.moves import actions_by_move
 
 DUAL = "dlo_env/DLODualEndpoint-v0"
-
-
-@pytest.fixture(scope="module")
-def models():
-    return (ShapeModel.load_or_pretrained(None, device="cpu"),
-            TransitionModel.load_or_pretrained(device="cpu"))
 
 
 def test_a_kino_plan_moves_both_ends_as_the_transition_model_predicts(models):

@@ -12,15 +12,9 @@ from dlo_bench import build_agent
 from dlo_env.cord import Cord
 from dlo_env.shapes import error
 from dlo_env.tasks import load_suite, wait_for_rest
-from latent_model import ShapeModel, TransitionModel, TransitionModelConfig
+from latent_model import TransitionModel, TransitionModelConfig
 from planners.latent_tree import KINO_CONFIG, LatentTreePlanner, TreeConfig
 from planners.policy import PlannerPolicy
-
-
-@pytest.fixture(scope="module")
-def models():
-    return (ShapeModel.load_or_pretrained(None, device="cpu"),
-            TransitionModel.load_or_pretrained(device="cpu"))
 
 
 def test_a_plan_is_straight_moves_whose_predicted_outcomes_the_simulator_reproduces(models):
