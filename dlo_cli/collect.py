@@ -24,8 +24,9 @@ _share = number_in(float, 0.0, 1.0, expected="a number in [0, 1]")
 _weight = number_in(float, 0.0, None, expected="a number >= 0")
 
 #: Flags of ``--kind transitions`` only: fields of ``TransitionCollectConfig`` of the same name.
-TRANSITION_FLAGS = ("wide_fraction", "wavy_fraction", "grasp_weights", "rim_fraction",
-                    "push_fraction", "randomize")
+TRANSITION_FLAGS = ("wide_fraction", "wavy_fraction", "rim_fraction", "randomize")
+#: Flags of both kinds: fields of ``CollectConfig`` and ``TransitionCollectConfig``.
+SHARED_FLAGS = ("grasp_weights", "push_fraction")
 
 
 def _range(text: str) -> tuple[str, tuple[float, float]]:
@@ -77,18 +78,22 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                              "--wide-fraction at most 1)")
     parser.add_argument("--grasp-weights", type=_weight, nargs=3, default=None,
                         metavar=("HEAD", "TAIL", "BOTH"),
-                        help="--kind transitions: relative chances of an episode holding the "
-                             "head, the tail or both ends (default " + " ".join(
-                                 f"{w:g}" for w in TransitionCollectConfig.grasp_weights) + ")")
+                        help="relative chances of driving the head, the tail or both ends: of "
+                             "each move for shapes (head or tail > 0), of each episode for "
+                             "transitions (default: shapes " + " ".join(
+                                 f"{w:g}" for w in CollectConfig.grasp_weights) + ", transitions "
+                             + " ".join(f"{w:g}" for w in TransitionCollectConfig.grasp_weights)
+                             + ")")
     parser.add_argument("--rim-fraction", type=_share, default=None,
                         help="--kind transitions: share of moves aimed at the nearest table edge "
                              f"(default {TransitionCollectConfig.rim_fraction:g}; with "
                              "--push-fraction at most 1)")
     parser.add_argument("--push-fraction", type=_share, default=None,
-                        help="--kind transitions: share of moves aimed at the cord's middle, "
-                             "which push it onto itself and, with both ends held, compress and "
-                             f"buckle it (default {TransitionCollectConfig.push_fraction:g}; with "
-                             "--rim-fraction at most 1)")
+                        help="share of moves aimed at the cord's middle, which push it onto "
+                             "itself and, with both ends held, compress and buckle it (default: "
+                             f"shapes {CollectConfig.push_fraction:g} per driven end, transitions "
+                             f"{TransitionCollectConfig.push_fraction:g}, with --rim-fraction at "
+                             "most 1)")
     parser.add_argument("--randomize", type=_range, nargs="+", default=None,
                         metavar="NAME=LOW:HIGH",
                         help="--kind transitions: draw every episode's cord, NAME one of length, "
@@ -127,8 +132,14 @@ def run(args: argparse.Namespace) -> int:
     from dlo_env.dataset.collect import CollectConfig, collect
     from dlo_env.dataset.diversity import diversity_report
 
-    config = CollectConfig(seed=args.seed, cosine_threshold=args.cosine_threshold,
-                           record_every=args.record_every)
+    given = {k: getattr(args, k) for k in SHARED_FLAGS if getattr(args, k) is not None}
+    try:
+        config = CollectConfig(seed=args.seed, cosine_threshold=args.cosine_threshold,
+                               record_every=args.record_every,
+                               **{k: tuple(v) if isinstance(v, list) else v
+                                  for k, v in given.items()})
+    except ValueError as exc:  # "grasp_weights must ..." names the flag
+        raise ValueError(f"--{str(exc).replace('_', '-', 1)}") from None
     rejected_share = RejectedShare()
     result = run_chunked(
         args, lambda progress: collect(args.out, args.num_shapes, config, workers=args.workers,

@@ -16,7 +16,7 @@ def run(args: argparse.Namespace) -> int:
     import numpy as np
 
     from dlo_cli.chunked_run import run_chunked
-    from dlo_cli.collect import TRANSITION_FLAGS
+    from dlo_cli.collect import SHARED_FLAGS, TRANSITION_FLAGS
     from dlo_env.dataset.transitions import (
         GRASP_NAMES,
         TransitionCollectConfig,
@@ -38,7 +38,8 @@ def run(args: argparse.Namespace) -> int:
     if (args.wide_fraction or 0) + (args.wavy_fraction or 0) > 1:
         raise ValueError("--wide-fraction and --wavy-fraction must have a sum <= 1, got "
                          f"{args.wide_fraction:g} and {args.wavy_fraction:g}")
-    given = {k: getattr(args, k) for k in TRANSITION_FLAGS if getattr(args, k) is not None}
+    given = {k: getattr(args, k) for k in (*TRANSITION_FLAGS, *SHARED_FLAGS)
+             if getattr(args, k) is not None}
     if "randomize" in given:
         names = [name for name, _ in given["randomize"]]
         if len(set(names)) < len(names):

@@ -27,12 +27,13 @@ SHAPE_DEFAULTS = {"minutes": 30.0, "report_size": 2000}
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     """Flags of ``dlo train``; model and training flags map onto the config dataclasses."""
     parser.add_argument("--data", required=True, nargs="+",
-                        help="training data: shapes (.npz from dlo collect), or transition "
-                             "files (dlo collect --kind transitions; several are joined) for "
-                             "--stage transition")
+                        help="training data: shape files (.npz from dlo collect), or "
+                             "transition files (dlo collect --kind transitions) for --stage "
+                             "transition; several are joined")
     parser.add_argument("--out", required=True, help="output folder (resumes if it holds a run)")
-    parser.add_argument("--heldout", default=None,
-                        help="held-out data collected with another seed (None: 5%% of --data)")
+    parser.add_argument("--heldout", default=None, nargs="+",
+                        help="held-out data collected with other seeds, one or several files "
+                             "(several are joined; None: 5%% of --data)")
     parser.add_argument("--stage", choices=("gan", "encoder", "all", "transition"), default="all",
                         help="what to train: gan, encoder, all (the shape model), or transition "
                              "(the transition model, on transition data)")
@@ -150,17 +151,17 @@ def run(args: argparse.Namespace) -> int:
 
     from dlo_env.atomic import write_text_atomic
     from latent_model.config import PAPER_MODEL, PAPER_TRAIN, ModelConfig, TrainConfig
-    from latent_model.dataset import load_shapes, split_heldout
+    from latent_model.dataset import load_labelled_shapes, split_heldout
     from latent_model.evaluation import quality_report
     from latent_model.training import CHECKPOINT_FILE, train
 
-    if len(args.data) != 1:
-        raise ValueError(f"--data takes one shape dataset for --stage {args.stage}, "
-                         f"got {len(args.data)} files")
-    args.data = args.data[0]
-    data = load_shapes(args.data, name="--data")
+    data, _ = load_labelled_shapes(args.data, name="--data")
+    groups = None
     if args.heldout is not None:
-        heldout = load_shapes(args.heldout, name="--heldout")
+        heldout, groups = load_labelled_shapes(args.heldout, name="--heldout")
+        if heldout.shape[1] != data.shape[1]:
+            raise ValueError(f"--heldout holds shapes of {heldout.shape[1]} points, --data of "
+                             f"{data.shape[1]}")
     else:
         print("no --heldout file: holding out 5% of --data (near duplicates leak; see README)")
         data, heldout = split_heldout(data, 0.05, args.seed)
@@ -191,7 +192,7 @@ def run(args: argparse.Namespace) -> int:
           f"model: {out / 'model.pt'}, curves: {out / 'metrics.csv'}, {out / 'metrics.png'}")
     size = min(args.report_size, len(heldout) // 3)
     report = quality_report(model, heldout, n_reference=size, n_inversion=min(size, 1000),
-                            seed=args.seed)
+                            seed=args.seed, groups=groups)
     print(report.format())
     write_text_atomic(out / "report.json", json.dumps(report.as_dict(), indent=2))
     return 0

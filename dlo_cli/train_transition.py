@@ -23,7 +23,6 @@ def run(args: argparse.Namespace) -> int:
     from dlo_bench.progress import progress_bar
     from dlo_env.dataset.transitions import (
         load_transition_files,
-        load_transitions,
         split_transitions,
     )
     from latent_model.transition_metrics import report_lines, transition_report, write_report
@@ -42,7 +41,10 @@ def run(args: argparse.Namespace) -> int:
     except ValueError as exc:
         raise ValueError(f"--data: {exc}") from exc
     if args.heldout is not None:
-        heldout = load_transitions(args.heldout)
+        try:
+            heldout = load_transition_files(args.heldout)
+        except ValueError as exc:
+            raise ValueError(f"--heldout: {exc}") from exc
         if heldout.one_cord("--heldout") != data.one_cord("--data"):
             raise ValueError("--heldout was collected with another cord than --data")
     else:

@@ -60,6 +60,43 @@ def load_shapes(path: str | os.PathLike, name: str = "path") -> np.ndarray:
     return shapes
 
 
+#: The groups of shapes the quality report is broken down by: shapes recorded while one end
+#: was driven (what ``DLOEndpoint-v0`` does) and while both were (``DLODualEndpoint-v0``).
+SHAPE_GROUPS = ("one end", "both ends")
+
+
+def load_labelled_shapes(paths: str | os.PathLike | list, name: str = "path"
+                         ) -> tuple[np.ndarray, np.ndarray | None]:
+    """The shapes of one or several dataset files joined, and the group of each shape.
+
+    Returns:
+        ``(shapes (N, n, 2) float32, groups)``: ``groups`` is an ``(N,)`` array of indices into
+        ``SHAPE_GROUPS`` (the ends driven during the move that recorded the shape), or None when
+        a file is not a ``dlo collect`` file and so does not record its moves.
+
+    Raises:
+        ValueError: Naming ``name`` if a file is unusable or the files' point counts differ.
+    """
+    from dlo_env.dataset.shape_file import GRASP_NAMES
+
+    paths = [paths] if isinstance(paths, (str, os.PathLike)) else list(paths)
+    shapes, groups = [], []
+    for path in paths:
+        shapes.append(load_shapes(path, name=name))
+        groups.append(None)
+        with np.load(path, allow_pickle=False) as data:
+            if {"metadata", "shape_transition", "transition_grasp"} <= set(data.files):
+                grasp = data["transition_grasp"][data["shape_transition"]]
+                groups[-1] = (grasp == GRASP_NAMES.index("both")).astype(np.int64)
+    points = {s.shape[1] for s in shapes}
+    if len(points) > 1:
+        raise ValueError(f"{name}: the files hold shapes of different point counts "
+                         f"{sorted(points)}")
+    joined = shapes[0] if len(shapes) == 1 else np.concatenate(shapes)
+    labelled = None if any(g is None for g in groups) else np.concatenate(groups)
+    return joined, labelled
+
+
 def split_heldout(
     shapes: np.ndarray, fraction: float, seed: int
 ) -> tuple[np.ndarray, np.ndarray]:

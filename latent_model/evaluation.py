@@ -7,14 +7,14 @@ come from the collector (arcs, S-curves, clothoids) for the generalisation floor
 
 from __future__ import annotations
 
-from dataclasses import asdict, dataclass
+from dataclasses import asdict, dataclass, field
 
 import numpy as np
 import torch
 
 from dlo_env.shapes import TABLE_HALF, is_cord_like, shape_from_headings
 from latent_model import metrics
-from latent_model.dataset import evaluation_subsets
+from latent_model.dataset import SHAPE_GROUPS, evaluation_subsets
 from latent_model.shape_model import ShapeModel
 
 #: Floors of the shipped model (README section "model").
@@ -78,6 +78,9 @@ class QualityReport:
         foreign_inversion_encoder, foreign_inversion: The same on ``foreign_shapes``.
         inversion_median_error: Median refined error on the held-out shapes, metres.
         n_reference, n_inversion: Sample sizes.
+        groups: The break-down by ``SHAPE_GROUPS`` when the held-out shapes record their moves:
+            ``group -> {"cov", "mmd", "nna", "inversion", "n_reference", "n_inversion"}``
+            (``metrics.grouped_quality``; inversion after refinement). Empty otherwise.
     """
 
     cov: float
@@ -93,6 +96,7 @@ class QualityReport:
     inversion_median_error: float
     n_reference: int
     n_inversion: int
+    groups: dict[str, dict[str, float]] = field(default_factory=dict)
 
     def checks(self) -> dict[str, tuple[float, str, float, bool]]:
         """``name -> (value, op, floor, passed)`` for every floor."""
@@ -116,6 +120,13 @@ class QualityReport:
         lines.append(f"{'length':<28}{self.length:>8.4f} m")
         lines.append(f"(n_reference={self.n_reference}, generated={5 * self.n_reference}, "
                      f"n_inversion={self.n_inversion})")
+        if self.groups:
+            lines.append(f"{'by the ends driven':<16}{'cov':>7}{'mmd cm':>8}{'nna':>7}"
+                         f"{'inversion':>11}{'reference':>11}{'inverted':>10}")
+            for name, g in self.groups.items():
+                lines.append(f"{name:<16}{g['cov']:>7.3f}{100 * g['mmd']:>8.2f}{g['nna']:>7.3f}"
+                             f"{g['inversion']:>11.3f}{g['n_reference']:>11d}"
+                             f"{g['n_inversion']:>10d}")
         return "\n".join(lines)
 
     def as_dict(self) -> dict[str, float]:
@@ -130,15 +141,18 @@ def quality_report(
     n_reference: int = 2000,
     n_inversion: int = 1000,
     seed: int = 0,
+    groups: np.ndarray | None = None,
 ) -> QualityReport:
     """Measure ``model`` against held-out simulator shapes and foreign shapes.
 
     ``n_reference`` random held-out shapes are the reference set and ``n_inversion`` others are
     inverted (``evaluation_subsets``, seeded by ``seed``); ``n_inversion`` foreign shapes are
-    inverted too.
+    inverted too. ``groups`` (``(M,)`` indices into ``SHAPE_GROUPS``, as
+    ``latent_model.dataset.load_labelled_shapes`` reads them) adds the break-down by group.
     """
     heldout = np.asarray(heldout, dtype=np.float32)
-    reference_np, targets = evaluation_subsets(heldout, (n_reference, n_inversion), seed)
+    sizes = (n_reference, n_inversion)
+    reference_np, targets = evaluation_subsets(heldout, sizes, seed)
     reference = torch.from_numpy(reference_np)
     generated = torch.from_numpy(model.sample(5 * n_reference, seed=seed))
     q = metrics.set_quality(generated, reference, model.cord_length)
@@ -149,6 +163,20 @@ def quality_report(
     _, ferr_e, _ = model.invert(foreign, refine=False)
     _, ferr, _ = model.invert(foreign, seed=seed)
     rate = metrics.success_rate
+    by_group: dict[str, dict[str, float]] = {}
+    if groups is not None:
+        groups = np.asarray(groups)
+        if groups.shape != (len(heldout),):
+            raise ValueError(f"groups must have shape ({len(heldout)},), got {groups.shape}")
+        ref_groups, target_groups = evaluation_subsets(groups, sizes, seed)
+        broken = metrics.grouped_quality(generated, reference, torch.from_numpy(ref_groups))
+        for g, (cov, mmd, nna) in broken.items():
+            mine = target_groups == g
+            by_group[SHAPE_GROUPS[g]] = {
+                "cov": cov, "mmd": mmd, "nna": nna,
+                "inversion": rate(torch.as_tensor(np.asarray(err)[mine])) if mine.any()
+                else float("nan"),
+                "n_reference": int((ref_groups == g).sum()), "n_inversion": int(mine.sum())}
     return QualityReport(
         cov=q.cov, mmd=q.mmd, nna=q.nna, spacing_cv=q.spacing_cv, length=q.length,
         length_error=q.length_error,
@@ -156,5 +184,5 @@ def quality_report(
         foreign_inversion_encoder=rate(torch.as_tensor(ferr_e)),
         foreign_inversion=rate(torch.as_tensor(ferr)),
         inversion_median_error=float(np.median(err)),
-        n_reference=n_reference, n_inversion=n_inversion,
+        n_reference=n_reference, n_inversion=n_inversion, groups=by_group,
     )

@@ -70,6 +70,8 @@ class CollectConfig:
         max_move: Longest random displacement of a driven end, metres.
         moves_per_start: Moves applied to one cord before starting again from a new shape.
         grasp_weights: Probabilities of driving the head, the tail, or both ends.
+        push_fraction: Chance that a driven end moves towards the cord's middle (within +-60
+            degrees) rather than in a random direction; pushing both ends buckles the cord.
         both_span: Both ends are driven only while they are closer than
             ``both_span * max_span * length``.
         start_margin: Distance start shapes keep from the table edge, metres.
@@ -113,6 +115,8 @@ class CollectConfig:
                 "grasp_weights must be 3 non-negative weights (head, tail, both) with head or "
                 f"tail > 0, got {self.grasp_weights!r}"
             )
+        if not 0.0 <= self.push_fraction <= 1.0:
+            raise ValueError(f"push_fraction must be in [0, 1], got {self.push_fraction!r}")
         if not 0.0 < self.both_span <= 1.0:
             raise ValueError(f"both_span must be in (0, 1], got {self.both_span!r}")
         if not 0.0 <= self.start_margin < 0.5 * TABLE_HALF:

@@ -35,6 +35,23 @@ def test_collect_flags_reach_the_configuration(tmp_path):
     assert is_cord_like(load_shapes(out).shapes, 0.9).all()
 
 
+def test_grasp_weights_and_push_fraction_choose_the_moves_of_a_shape_collection(tmp_path,
+                                                                                capsys):
+    out = tmp_path / "both.npz"
+    assert main(["collect", "--num-shapes", "300", "--out", str(out), "--grasp-weights", "0.05",
+                 "0.05", "0.9", "--push-fraction", "0.7"]) == 0
+    data = load_shapes(out)
+    assert tuple(data.metadata["collect"]["grasp_weights"]) == (0.05, 0.05, 0.9)
+    assert data.metadata["collect"]["push_fraction"] == 0.7
+    both = data.transition_grasp[data.shape_transition] == 2
+    assert both.mean() > 0.6  # both only while the ends are within the span limit
+    assert main(["collect", "--num-shapes", "5", "--grasp-weights", "0", "0", "1",
+                 "--out", str(tmp_path / "z.npz")]) == 2
+    assert "--grasp-weights must be 3 non-negative weights (head, tail, both) with head or " \
+           "tail > 0" in capsys.readouterr().err
+    assert not (tmp_path / "z.npz").exists()
+
+
 @pytest.mark.parametrize(
     ("flags", "message"),
     [

@@ -86,9 +86,9 @@ def test_each_kind_needs_its_own_count(tmp_path, capsys):
     assert main(["collect", "--num-shapes", "5", "--wide-fraction", "0.5",
                  "--out", str(tmp_path / "z.npz")]) == 2
     assert "--wide-fraction applies to --kind transitions" in capsys.readouterr().err
-    assert main(["collect", "--num-shapes", "5", "--grasp-weights", "0", "0", "1",
+    assert main(["collect", "--num-shapes", "5", "--rim-fraction", "0.5",
                  "--out", str(tmp_path / "z.npz")]) == 2
-    assert "--grasp-weights applies to --kind transitions" in capsys.readouterr().err
+    assert "--rim-fraction applies to --kind transitions" in capsys.readouterr().err
 
 
 def test_grasp_weights_rim_and_push_fraction_choose_the_grasps_and_the_aims(tmp_path, capsys):

@@ -71,3 +71,19 @@ def test_set_quality_reports_length_error_relative_to_the_rest_length(cord_shape
 def test_metrics_reject_single_shapes():
     with pytest.raises(ValueError, match=r"\(B, n, 2\)"):
         metrics.coverage_and_mmd(torch.zeros(20, 2), torch.zeros(3, 20, 2))
+
+
+def test_grouped_quality_breaks_down_the_whole_set_metrics(cord_shapes):
+    ref = torch.from_numpy(cord_shapes[:60])
+    groups = torch.tensor([0] * 20 + [1] * 40)
+    # A generator that draws only shapes of group 0 (and slightly moved copies of them).
+    gen = torch.cat([ref[:20], ref[:20] + 0.001])
+    broken = metrics.grouped_quality(gen, ref, groups, aligned=False)
+    cov, mmd = metrics.coverage_and_mmd(gen, ref, aligned=False)
+    assert broken[0][0] == 1.0 and broken[1][0] == 0.0
+    assert broken[0][1] == pytest.approx(0.0, abs=1e-6) and broken[1][1] > 0.0
+    # Whole-set COV and MMD are the reference-weighted means of the groups'.
+    assert cov == pytest.approx((20 * broken[0][0] + 40 * broken[1][0]) / 60)
+    assert mmd == pytest.approx((20 * broken[0][1] + 40 * broken[1][1]) / 60, rel=1e-5)
+    with pytest.raises(ValueError, match="groups must have shape"):
+        metrics.grouped_quality(gen, ref, groups[:5])
