@@ -51,7 +51,8 @@ class LatentTransitionModel(TransitionModel):
         self.latent_dim = gan.latent_dim
         super().__init__(config, device, info)
 
-    def networks(self, members: int, width: int | None = None) -> EnsembleMLP:  # noqa: D102
+    def networks(self, members: int, width: int | None = None,  # noqa: D102
+                 design: str = "mlp") -> EnsembleMLP:
         c = self.config
         inputs = self.latent_dim + 2 * c.rim_inputs + 4  # latent, rim, move
         return EnsembleMLP(members, inputs, c.width if width is None else width, c.depth,

@@ -12,8 +12,8 @@ non_negative_float = number_in(float, 0.0, expected="a number >= 0")
 #: Flags that only one kind of stage reads: "transition", or "shape" (gan, encoder, all).
 #: Given to the other kind they would be silently ignored, so they are an error there.
 STAGE_FLAGS = {
-    "transition": ("steps", "members", "rim_reach", "rim_targets", "contact_reach",
-                   "no_mirror", "init",
+    "transition": ("steps", "members", "architecture", "depth", "rim_reach", "rim_targets",
+                   "contact_reach", "no_mirror", "init",
                    "teacher", "mean_by_grasp", "mean_width", "teacher_weight", "teacher_moves",
                    "chain_weight", "miss_weight", "miss_margin", "lr"),
     "shape": ("minutes", "gan_steps", "encoder_steps", "representation", "output", "paper",
@@ -52,6 +52,13 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                              "(metres) per point and target, for contact with the walls (0: "
                              "none; None: TransitionModelConfig's); --init from a model without "
                              "it starts their weights at zero; not with --teacher")
+    parser.add_argument("--architecture", choices=("mlp", "chain"), default=None,
+                        help="--stage transition: the ensemble's design, an MLP on the whole "
+                             "chain or a chain-local network (weights shared along the chain, "
+                             "latent_model.chain_network; None: TransitionModelConfig's mlp)")
+    parser.add_argument("--depth", type=positive_int, default=None,
+                        help="--stage transition: hidden layers of the MLP, residual blocks of "
+                             "the chain network (None: TransitionModelConfig's)")
     parser.add_argument("--no-mirror", action="store_true",
                         help="--stage transition: networks that see both handednesses (the "
                              "models before TransitionModelConfig.mirror)")

@@ -61,6 +61,7 @@ def run(args: argparse.Namespace) -> int:
                                   "miss_margin": args.miss_margin}.items()
                 if v is not None}
     model_kw = {k: v for k, v in {"width": args.width, "members": args.members,
+                                  "architecture": args.architecture, "depth": args.depth,
                                   "rim_reach": args.rim_reach,
                                   "rim_targets": args.rim_targets,
                                   "contact_reach": args.contact_reach,

@@ -34,6 +34,7 @@ from dlo_env.checks import non_negative, positive, positive_ints
 from dlo_env.cord import CordParams, reachable_targets
 from dlo_env.shapes import TABLE_HALF, unflatten
 from dlo_env.tasks import DEFAULT_MAX_STEP
+from latent_model.chain_network import EnsembleChainNet
 from latent_model.checkpoint import load_checkpoint, save_atomic
 from latent_model.config import config_from_dict
 from latent_model.inextensible import make_inextensible
@@ -76,6 +77,10 @@ def _grasp_argument(grasp: str | None, end: str | None) -> str:
     return grasp
 
 
+#: The ensemble designs of ``TransitionModelConfig.architecture``.
+ARCHITECTURES = ("mlp", "chain")
+
+
 @dataclass(frozen=True)
 class TransitionModelConfig:
     """Architecture of the transition model and the setting it was trained for.
@@ -113,6 +118,10 @@ class TransitionModelConfig:
             back. The physics has no handedness, so the networks learn one instead of two.
             Where the centroid crosses the line (a cord lying along the move) the prediction
             may jump by twice the network's sideways error there.
+        architecture: The ensemble's design: ``"mlp"`` (``EnsembleMLP``, the whole chain as
+            one vector) or ``"chain"`` (``latent_model.chain_network.EnsembleChainNet``:
+            weights shared along the chain, ``width`` channels, ``depth`` residual blocks). The
+            mean network is always an MLP: the fast student of either ensemble.
     """
 
     n_points: int = 20
@@ -130,9 +139,13 @@ class TransitionModelConfig:
     mirror: bool = True
     mean_by_grasp: bool = False
     mean_width: int | None = None
+    architecture: str = "mlp"
 
     def __post_init__(self) -> None:
         positive_ints(self, "n_points", "members", "width", "depth")
+        if self.architecture not in ARCHITECTURES:
+            raise ValueError(f"TransitionModelConfig.architecture must be one of "
+                             f"{ARCHITECTURES}, got {self.architecture!r}")
         if self.rim_targets not in (1, 2):
             raise ValueError(f"TransitionModelConfig.rim_targets must be 1 or 2, "
                              f"got {self.rim_targets!r}")
@@ -329,7 +342,7 @@ class TransitionModel(nn.Module):
         super().__init__()
         self.config = config if config is not None else TransitionModelConfig()
         c = self.config
-        self.net = self.networks(c.members)
+        self.net = self.networks(c.members, design=c.architecture)
         self.mean_net: EnsembleMLP | GraspRoutedMLP | None = None
         if c.mean_network:
             self.mean_net = (GraspRoutedMLP(self.networks(2, c.mean_units)) if c.mean_by_grasp
@@ -345,12 +358,16 @@ class TransitionModel(nn.Module):
         return CordParams(n_points=self.config.n_points, length=self.config.cord_length)
 
     # ------------------------------------------------------------- torch core
-    def networks(self, members: int, width: int | None = None) -> EnsembleMLP:
-        """``members`` new networks of this design (the ensemble, or one: the mean network),
-        ``width`` hidden units per layer (None: the ensemble's)."""
+    def networks(self, members: int, width: int | None = None, design: str = "mlp"
+                 ) -> EnsembleMLP | EnsembleChainNet:
+        """``members`` new networks (the ensemble, or one: the mean network) of ``design``
+        (``ARCHITECTURES``), ``width`` hidden units or channels (None: the ensemble's)."""
         c = self.config
-        return EnsembleMLP(members, c.inputs, c.width if width is None else width, c.depth,
-                           2 * c.n_points)
+        width = c.width if width is None else width
+        if design == "chain":
+            return EnsembleChainNet(members, c.n_points, c.rim_targets,
+                                    2 if c.contact_reach else 1, width, c.depth)
+        return EnsembleMLP(members, c.inputs, width, c.depth, 2 * c.n_points)
 
     def features(self, points: torch.Tensor, lead: torch.Tensor, other: torch.Tensor,
                  both: torch.Tensor, rim: torch.Tensor) -> torch.Tensor:

@@ -332,9 +332,10 @@ def train_transition_model(
         model.net.requires_grad_(False)
         trained = model.mean_net
         # Start from the ensemble's first member (widened to a wider student, which then
-        # predicts as it does; a narrower student starts from its own random weights).
+        # predicts as it does; a narrower student, or the MLP student of a chain ensemble,
+        # starts from its own random weights).
         first = None
-        if mc.mean_units >= mc.width:
+        if mc.mean_units >= mc.width and mc.architecture == "mlp":
             first = model.net.first(1)
             if mc.mean_units > mc.width:
                 first = first.widened(mc.mean_units, seed=tc.seed)

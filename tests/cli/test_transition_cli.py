@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import numpy as np
 import pytest
 
 from dlo_cli.main import main
@@ -128,3 +129,31 @@ def test_wavy_fraction_is_recorded_and_applies_to_transitions_only(tmp_path, cap
     assert main(["collect", "--num-shapes", "5", "--wavy-fraction", "0.5",
                  "--out", str(tmp_path / "z.npz")]) == 2
     assert "--wavy-fraction applies to --kind transitions" in capsys.readouterr().err
+
+
+def test_a_chain_ensemble_trains_saves_loads_and_distils_into_an_mlp_student(tmp_path, capsys):
+    data = tmp_path / "a.npz"
+    assert main(["collect", "--kind", "transitions", "--num-transitions", "30", "--seed", "3",
+                 "--grasp-weights", "1", "1", "1", "--out", str(data)]) == 0
+    out, mean = tmp_path / "chain", tmp_path / "student"
+    common = ["--data", str(data), "--heldout", str(data), "--steps", "6", "--batch-size", "16",
+              "--eval-every", "6", "--no-progress"]
+    assert main(["train", "--stage", "transition", *common, "--out", str(out),
+                 "--architecture", "chain", "--width", "8", "--depth", "3",
+                 "--members", "2"]) == 0
+    model = TransitionModel.load(out)
+    assert model.config.architecture == "chain" and model.config.depth == 3
+    assert type(model.net).__name__ == "EnsembleChainNet" and model.net.members == 2
+    shapes = load_transitions(data).start[:4]
+    for grasp, width in (("head", 2), ("tail", 2), ("both", 4)):
+        moved = model.predict(shapes, grasp, np.full((4, width), 0.04, np.float32))
+        assert moved.shape == shapes.shape and np.isfinite(moved).all()
+    assert main(["train", "--stage", "transition", *common, "--out", str(mean),
+                 "--teacher", str(out / "transition.pt")]) == 0
+    student = TransitionModel.load(mean)
+    assert type(student.mean_net).__name__ == "EnsembleMLP"
+    assert type(student.net).__name__ == "EnsembleChainNet"
+    capsys.readouterr()
+    assert main(["train", "--stage", "transition", *common, "--out", str(tmp_path / "x"),
+                 "--architecture", "transformer"]) == 2
+    assert "--architecture: invalid choice" in capsys.readouterr().err
