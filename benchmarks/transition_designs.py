@@ -59,7 +59,7 @@ class LatentTransitionModel(TransitionModel):
                            self.latent_dim)
 
     def predict_points(self, points, lead, other, both, rim, members_batch,  # noqa: D102
-                       members=None, net=None):
+                       members=None, net=None, cord=None):
         net = self.net if net is None else net
         gan = self.shape_model
         c = self.config

@@ -12,7 +12,8 @@ non_negative_float = number_in(float, 0.0, expected="a number >= 0")
 #: Flags that only one kind of stage reads: "transition", or "shape" (gan, encoder, all).
 #: Given to the other kind they would be silently ignored, so they are an error there.
 STAGE_FLAGS = {
-    "transition": ("steps", "members", "architecture", "depth", "rim_reach", "rim_targets",
+    "transition": ("steps", "members", "architecture", "depth", "cord_inputs", "rim_reach",
+                   "rim_targets",
                    "contact_reach", "no_mirror", "init",
                    "teacher", "mean_by_grasp", "mean_width", "teacher_weight", "teacher_moves",
                    "chain_weight", "miss_weight", "miss_margin", "lr"),
@@ -59,6 +60,11 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--depth", type=positive_int, default=None,
                         help="--stage transition: hidden layers of the MLP, residual blocks of "
                              "the chain network (None: TransitionModelConfig's)")
+    parser.add_argument("--cord-inputs", action="store_true",
+                        help="--stage transition: networks that also see each move's cord "
+                             "(length, bending stiffness, friction, mass), for data of several "
+                             "cords (dlo collect --randomize); predict(params=...) then says "
+                             "which cord")
     parser.add_argument("--no-mirror", action="store_true",
                         help="--stage transition: networks that see both handednesses (the "
                              "models before TransitionModelConfig.mirror)")

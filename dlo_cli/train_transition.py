@@ -26,7 +26,7 @@ def run(args: argparse.Namespace) -> int:
         split_transitions,
     )
     from latent_model.transition_metrics import report_lines, transition_report, write_report
-    from latent_model.transition_model import TransitionModelConfig
+    from latent_model.transition_model import TransitionModel, TransitionModelConfig
     from latent_model.transition_training import (
         CHECKPOINT_FILE,
         CURVE_FILE,
@@ -45,7 +45,9 @@ def run(args: argparse.Namespace) -> int:
             heldout = load_transition_files(args.heldout)
         except ValueError as exc:
             raise ValueError(f"--heldout: {exc}") from exc
-        if heldout.one_cord("--heldout") != data.one_cord("--data"):
+        conditioned = args.cord_inputs or bool(
+            args.teacher and TransitionModel.load(args.teacher, device="cpu").config.cord_inputs)
+        if not conditioned and heldout.one_cord("--heldout") != data.one_cord("--data"):
             raise ValueError("--heldout was collected with another cord than --data")
     else:
         print("no --heldout file: holding out 5% of --data's episodes for the report")
@@ -62,6 +64,7 @@ def run(args: argparse.Namespace) -> int:
                 if v is not None}
     model_kw = {k: v for k, v in {"width": args.width, "members": args.members,
                                   "architecture": args.architecture, "depth": args.depth,
+                                  "cord_inputs": True if args.cord_inputs else None,
                                   "rim_reach": args.rim_reach,
                                   "rim_targets": args.rim_targets,
                                   "contact_reach": args.contact_reach,

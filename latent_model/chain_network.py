@@ -26,13 +26,12 @@ from torch.nn import functional as F
 KERNEL = 3
 
 
-def chain_layout(n_points: int, rim_targets: int, rim_blocks: int) -> tuple[int, int]:
+def chain_layout(rim_targets: int, rim_blocks: int, extra_globals: int = 0) -> tuple[int, int]:
     """``(point_features, global_features)`` of the flat input of this layout: per point its
     position (2), the segments before and after it (4), its rim vectors (2 per block) and its
-    place along the chain (1); globally the targets' rim vectors, the lead length, the other
-    end's move and the both-ends flag."""
-    del n_points
-    return 2 + 4 + 2 * rim_blocks + 1, 2 * rim_targets * rim_blocks + 4
+    place along the chain (1); globally the targets' rim vectors, ``extra_globals`` (the cord's
+    parameters), the lead length, the other end's move and the both-ends flag."""
+    return 2 + 4 + 2 * rim_blocks + 1, 2 * rim_targets * rim_blocks + extra_globals + 4
 
 
 class EnsembleChainNet(nn.Module):
@@ -45,14 +44,16 @@ class EnsembleChainNet(nn.Module):
         rim_blocks: Rim vectors per point: 1, or 2 with ``contact_reach``.
         width: Channels of the convolutions.
         depth: Residual blocks; block ``i`` has dilation ``2 ** (i % 4)``.
+        extra_globals: Global inputs between the rim vectors and the move (the cord's
+            parameters of a cord-conditioned model).
     """
 
     def __init__(self, members: int, n_points: int, rim_targets: int, rim_blocks: int,
-                 width: int, depth: int) -> None:
+                 width: int, depth: int, extra_globals: int = 0) -> None:
         super().__init__()
         self.n_points, self.rim_targets, self.rim_blocks = n_points, rim_targets, rim_blocks
-        self.width, self.depth = width, depth
-        point, glob = chain_layout(n_points, rim_targets, rim_blocks)
+        self.width, self.depth, self.extra_globals = width, depth, extra_globals
+        point, glob = chain_layout(rim_targets, rim_blocks, extra_globals)
         self.point_features, self.global_features = point, glob
         self.lift = self._conv(members, point + glob, width, 1)
         self.blocks = nn.ParameterList()
@@ -76,7 +77,7 @@ class EnsembleChainNet(nn.Module):
     def inputs(self) -> int:
         """Length of the flat input (``TransitionModelConfig.inputs`` of its layout)."""
         n, rt, rb = self.n_points, self.rim_targets, self.rim_blocks
-        return 2 * n + 2 * (n - 1) + 2 * (n + rt) * rb + 4
+        return 2 * n + 2 * (n - 1) + 2 * (n + rt) * rb + self.extra_globals + 4
 
     @property
     def members(self) -> int:
@@ -99,7 +100,7 @@ class EnsembleChainNet(nn.Module):
             rims.append(block[:, :, :n])
             targets.append(block[:, :, n:].flatten(2))
             at += 2 * (n + rt)
-        glob = torch.cat([*targets, x[..., at:at + 4]], dim=-1)  # (k, B, global)
+        glob = torch.cat([*targets, x[..., at:]], dim=-1)  # (k, B, global): cord, move
         where = self.position.expand(k, b, n)[..., None]
         return torch.cat([points, before, after, *rims, where,
                           glob[:, :, None].expand(k, b, n, glob.shape[-1])], dim=-1)
@@ -141,7 +142,8 @@ class EnsembleChainNet(nn.Module):
     def first_from(self, start: int, members: int = 1) -> EnsembleChainNet:
         """A copy of ``members`` networks from network ``start`` on."""
         out = EnsembleChainNet(members, self.n_points, self.rim_targets, self.rim_blocks,
-                               self.width, self.depth).to(self.lift[0].device)
+                               self.width, self.depth, self.extra_globals
+                               ).to(self.lift[0].device)
         with torch.no_grad():
             for mine, theirs in zip(out.parameters(), self.parameters()):
                 mine.copy_(theirs[start:start + members])

@@ -101,6 +101,13 @@ class ErrorRow:
                    100 * low, 100 * high, *mean_interval(within, episodes))
 
 
+def cords_of(model: TransitionModel, data: TransitionDataset, idx: np.ndarray
+             ) -> np.ndarray | None:
+    """The cords of transitions ``idx`` for a model that sees cords (``cord_inputs``); None,
+    its own cord, for a model of one cord."""
+    return data.params[idx] if model.config.cord_inputs else None
+
+
 def rollout_errors(model: TransitionModel, data: TransitionDataset, moves: int
                    ) -> tuple[np.ndarray, np.ndarray]:
     """Errors (metres) after ``moves`` chained predictions from every possible chain start.
@@ -116,7 +123,8 @@ def rollout_errors(model: TransitionModel, data: TransitionDataset, moves: int
             continue
         shapes = data.start[sel]
         for k in range(moves):
-            shapes = model.predict(shapes, name, data.end_displacement(sel + k))
+            shapes = model.predict(shapes, name, data.end_displacement(sel + k),
+                                   params=cords_of(model, data, sel + k))
         errors[data.grasp[first] == code] = error(shapes, data.next[sel + moves - 1])
     return first, errors
 
@@ -132,7 +140,7 @@ def spread_rank_correlation(model: TransitionModel, data: TransitionDataset) -> 
         if not len(idx):
             continue
         pred, spread = model.predict(data.start[idx], name, data.end_displacement(idx),
-                                     return_std=True)
+                                     params=cords_of(model, data, idx), return_std=True)
         spreads.append(spread)
         errors.append(error(pred, data.next[idx]))
     s, e = np.concatenate(spreads), np.concatenate(errors)

@@ -20,7 +20,7 @@ from __future__ import annotations
 import math
 import os
 import warnings
-from dataclasses import asdict, dataclass
+from dataclasses import asdict, dataclass, replace
 from importlib import resources
 from numbers import Integral
 from pathlib import Path
@@ -32,6 +32,7 @@ from torch import nn
 
 from dlo_env.checks import non_negative, positive, positive_ints
 from dlo_env.cord import CordParams, reachable_targets
+from dlo_env.dataset.transitions import PARAM_COLUMNS
 from dlo_env.shapes import TABLE_HALF, unflatten
 from dlo_env.tasks import DEFAULT_MAX_STEP
 from latent_model.chain_network import EnsembleChainNet
@@ -77,6 +78,17 @@ def _grasp_argument(grasp: str | None, end: str | None) -> str:
     return grasp
 
 
+#: The default cord's ``PARAM_COLUMNS``: ``cord_features`` are log ratios to these.
+DEFAULT_CORD_ROW = np.array([getattr(CordParams(), k) for k in PARAM_COLUMNS], dtype=np.float64)
+
+
+def cord_features(rows: np.ndarray) -> np.ndarray:
+    """What a cord-conditioned network sees of cords ``(B, len(PARAM_COLUMNS))`` (length m,
+    bending stiffness N m^2, friction, mass kg): the logarithm of each over the default
+    cord's, float32 (0 for the default cord; a cord twice as stiff adds log 2)."""
+    return np.log(np.asarray(rows, dtype=np.float64) / DEFAULT_CORD_ROW).astype(np.float32)
+
+
 #: The ensemble designs of ``TransitionModelConfig.architecture``.
 ARCHITECTURES = ("mlp", "chain")
 
@@ -118,6 +130,9 @@ class TransitionModelConfig:
             back. The physics has no handedness, so the networks learn one instead of two.
             Where the centroid crosses the line (a cord lying along the move) the prediction
             may jump by twice the network's sideways error there.
+        cord_inputs: The networks also see the cord (``CORD_FEATURES``: the logarithm of
+            each of ``PARAM_COLUMNS`` over the default cord's), so one model predicts cords
+            that differ; ``predict(params=...)`` says which. Off: a model of one cord.
         architecture: The ensemble's design: ``"mlp"`` (``EnsembleMLP``, the whole chain as
             one vector) or ``"chain"`` (``latent_model.chain_network.EnsembleChainNet``:
             weights shared along the chain, ``width`` channels, ``depth`` residual blocks). The
@@ -140,6 +155,7 @@ class TransitionModelConfig:
     mean_by_grasp: bool = False
     mean_width: int | None = None
     architecture: str = "mlp"
+    cord_inputs: bool = False
 
     def __post_init__(self) -> None:
         positive_ints(self, "n_points", "members", "width", "depth")
@@ -178,9 +194,15 @@ class TransitionModelConfig:
     @property
     def inputs(self) -> int:
         """Network inputs: the cord's points and segment directions in the frame, the rim near
-        each point and near the held ends' targets (and their contact vectors), the lead
-        length, the other move, both."""
-        return self.contact_at + 2 * (self.rim_inputs - self.n_points - self.rim_targets) + 4
+        each point and near the held ends' targets (and their contact vectors), the cord's
+        parameters (``cord_inputs``), the lead length, the other move, both."""
+        return (self.contact_at + 2 * (self.rim_inputs - self.n_points - self.rim_targets)
+                + self.cord_features + 4)
+
+    @property
+    def cord_features(self) -> int:
+        """Inputs that describe the cord: ``len(PARAM_COLUMNS)`` with ``cord_inputs``, else 0."""
+        return len(PARAM_COLUMNS) if self.cord_inputs else 0
 
     @property
     def mean_units(self) -> int:
@@ -366,22 +388,29 @@ class TransitionModel(nn.Module):
         width = c.width if width is None else width
         if design == "chain":
             return EnsembleChainNet(members, c.n_points, c.rim_targets,
-                                    2 if c.contact_reach else 1, width, c.depth)
+                                    2 if c.contact_reach else 1, width, c.depth,
+                                    extra_globals=c.cord_features)
         return EnsembleMLP(members, c.inputs, width, c.depth, 2 * c.n_points)
 
     def features(self, points: torch.Tensor, lead: torch.Tensor, other: torch.Tensor,
-                 both: torch.Tensor, rim: torch.Tensor) -> torch.Tensor:
-        """Network input ``(B, inputs)`` from a batch described in the move frames."""
+                 both: torch.Tensor, rim: torch.Tensor, cord: torch.Tensor | None = None
+                 ) -> torch.Tensor:
+        """Network input ``(B, inputs)`` from a batch described in the move frames; ``cord``
+        ``(B, len(PARAM_COLUMNS))`` is the cords' ``cord_features`` (None: the default cord's),
+        read only with ``config.cord_inputs``."""
         c = self.config  # the both-ends flag comes last: GraspRoutedMLP routes by it
         seg = points[:, 1:] - points[:, :-1]
         seg = seg / seg.norm(dim=-1, keepdim=True).clamp_min(1e-9)
-        return torch.cat([points.flatten(1) / c.cord_length, seg.flatten(1), rim.flatten(1),
-                          lead[:, None] / c.move_scale, other / c.move_scale,
+        parts = [points.flatten(1) / c.cord_length, seg.flatten(1), rim.flatten(1)]
+        if c.cord_inputs:
+            parts.append(points.new_zeros(len(points), c.cord_features) if cord is None
+                         else cord.to(points.dtype))
+        return torch.cat([*parts, lead[:, None] / c.move_scale, other / c.move_scale,
                           both[:, None].to(points.dtype)], dim=1)
 
     def in_frame(self, shapes: torch.Tensor, grasp: torch.Tensor, moves: torch.Tensor,
-                 members: int | None = None, net: EnsembleMLP | None = None
-                 ) -> tuple[torch.Tensor, MoveFrame]:
+                 members: int | None = None, net: EnsembleMLP | None = None,
+                 cord: torch.Tensor | None = None) -> tuple[torch.Tensor, MoveFrame]:
         """Every member's prediction in the move frames, ``(members, B, n, 2)``, and the frames.
 
         ``shapes`` is ``(B, n, 2)`` (one frame per move, shared by the members) or
@@ -389,7 +418,8 @@ class TransitionModel(nn.Module):
         ``members`` runs only the first networks (shared frames only). ``net`` is the
         networks to run (None: the ensemble; ``self.mean_net`` for the mean network). With
         ``config.mirror`` the networks (``predict_points``) get the mirrored inputs of cords
-        on the right of the move's line and their outputs are mirrored back here.
+        on the right of the move's line and their outputs are mirrored back here. ``cord``
+        is ``(B, len(PARAM_COLUMNS))`` ``cord_features`` (None: the default cord).
         """
         net = self.net if net is None else net
         e, n = net.members, self.config.n_points
@@ -400,6 +430,7 @@ class TransitionModel(nn.Module):
         if per_member:
             b = shapes.shape[1]
             grasp, moves, shapes = grasp.repeat(e), moves.repeat(e, 1, 1), shapes.reshape(-1, n, 2)
+            cord = None if cord is None else cord.repeat(e, 1)
         else:
             b = shapes.shape[0]
         points, lead, other, frame = to_frame(shapes, grasp, moves)
@@ -422,7 +453,7 @@ class TransitionModel(nn.Module):
         seen = (points, other, rim) if flip is None else (
             points * flip[:, None], other * flip, rim * flip[:, None])
         moved = self.predict_points(seen[0], lead, seen[1], both, seen[2],
-                                    (e, b) if per_member else None, members, net)
+                                    (e, b) if per_member else None, members, net, cord)
         if flip is not None:
             moved = moved * flip.reshape(-1, b, 1, 2)
         if per_member:
@@ -433,7 +464,8 @@ class TransitionModel(nn.Module):
     def predict_points(self, points: torch.Tensor, lead: torch.Tensor, other: torch.Tensor,
                        both: torch.Tensor, rim: torch.Tensor,
                        members_batch: tuple[int, int] | None, members: int | None = None,
-                       net: EnsembleMLP | None = None) -> torch.Tensor:
+                       net: EnsembleMLP | None = None, cord: torch.Tensor | None = None
+                       ) -> torch.Tensor:
         """The members' points in the move frames, ``(members, B, n, 2)``, before the held
         ends are pinned: the one place where a model design differs. With ``config.mirror``
         every input is a cord on the left of its move's line (``in_frame`` mirrors).
@@ -446,17 +478,19 @@ class TransitionModel(nn.Module):
             members_batch: ``(members, B)`` when every member has its own input.
             members: Run only the first ``members`` networks (inputs shared).
             net: The networks to run (None: the ensemble).
+            cord: The cords' ``cord_features``, one row per input (None: the default cord).
         """
         n = self.config.n_points
         net = self.net if net is None else net
-        x = self.features(points, lead, other, both, rim)
+        x = self.features(points, lead, other, both, rim, cord)
         out = (net(x.reshape(*members_batch, -1)) if members_batch
                else net(x, members))  # (E, B, 2n)
         e, b = out.shape[:2]
         return points.reshape(-1, b, n, 2) + self.config.output_scale * out.reshape(e, b, n, 2)
 
     def forward(self, shapes: torch.Tensor, grasp: torch.Tensor, moves: torch.Tensor,
-                net: EnsembleMLP | None = None) -> torch.Tensor:
+                net: EnsembleMLP | None = None, cord: torch.Tensor | None = None
+                ) -> torch.Tensor:
         """Every member's prediction, world ``(members, B, n, 2)``; differentiable.
 
         Args:
@@ -465,8 +499,10 @@ class TransitionModel(nn.Module):
             grasp: ``(B,)`` int64 grasp codes (0 head, 1 tail, 2 both).
             moves: ``(B, 2, 2)`` reachable displacement of [head, tail] (zero if not held).
             net: The networks to run (None: the ensemble; ``self.mean_net``: one member).
+            cord: ``(B, len(PARAM_COLUMNS))`` ``cord_features`` of each move's cord (None: the
+                default cord; read only with ``config.cord_inputs``).
         """
-        moved, frame = self.in_frame(shapes, grasp, moves, net=net)
+        moved, frame = self.in_frame(shapes, grasp, moves, net=net, cord=cord)
         e, b, n = moved.shape[:3]
         if shapes.dim() == 3:  # one frame per move: repeat it for the members
             frame = MoveFrame(frame.origin.repeat(e, 1), frame.cos.repeat(e),
@@ -483,16 +519,63 @@ class TransitionModel(nn.Module):
         return torch.cat([first[:, :, None], moved[:, :, 1:-1], last[:, :, None]], dim=2)
 
     # ------------------------------------------------------------- numpy API
+    def cord_rows(self, params: Any, count: int) -> np.ndarray:
+        """``(count, len(PARAM_COLUMNS))`` float64 cords of a batch: ``params`` None (this
+        model's cord), a ``CordParams``, or rows of ``PARAM_COLUMNS`` values (one row for the
+        batch, or one per shape). A model without ``cord_inputs`` takes only its own cord."""
+        own = np.array([getattr(self.cord_params, k) for k in PARAM_COLUMNS], dtype=np.float64)
+        if params is None:
+            return np.tile(own, (count, 1))
+        if isinstance(params, CordParams):
+            if params.n_points != self.config.n_points:
+                raise ValueError(f"params must be a cord of {self.config.n_points} points, got "
+                                 f"{params.n_points}")
+            rows = np.array([getattr(params, k) for k in PARAM_COLUMNS], dtype=np.float64)
+        else:
+            rows = np.asarray(params, dtype=np.float64)
+        cols = len(PARAM_COLUMNS)
+        if rows.ndim == 1:
+            rows = np.tile(rows, (count, 1)) if rows.shape == (cols,) else rows[None]
+        if rows.shape != (count, cols) or not (np.isfinite(rows).all() and (rows > 0).all()):
+            raise ValueError(f"params must be None, a CordParams, or positive finite rows of "
+                             f"{PARAM_COLUMNS}, shape ({cols},) or ({count}, {cols}), got "
+                             f"shape {np.shape(params)}")
+        if not self.config.cord_inputs and not np.allclose(rows, own, rtol=1e-5):
+            raise ValueError("params: this model was trained for one cord "
+                             f"({dict(zip(PARAM_COLUMNS, own.tolist()))}) and does not see "
+                             "others (TransitionModelConfig.cord_inputs); give None")
+        return rows
+
+    def _cords(self, rows: np.ndarray) -> list[tuple[np.ndarray, CordParams]]:
+        """The distinct cords of ``rows``: ``(indices, CordParams)``, this model's cord with
+        the ``PARAM_COLUMNS`` of the rows."""
+        unique, which = np.unique(rows, axis=0, return_inverse=True)
+        base = self.cord_params
+        return [(np.flatnonzero(which.reshape(-1) == i),
+                 base if np.allclose(row, [getattr(base, k) for k in PARAM_COLUMNS])
+                 else replace(base, **dict(zip(PARAM_COLUMNS, row.tolist()))))
+                for i, row in enumerate(unique)]
+
     def reachable_moves(self, shapes: np.ndarray, grasp: str | None = None,
-                        displacement: np.ndarray | None = None, *, end: str | None = None
-                        ) -> np.ndarray:
+                        displacement: np.ndarray | None = None, *, end: str | None = None,
+                        params: Any = None) -> np.ndarray:
         """``(B, 2, 2)`` displacement of [head, tail] the grippers really make, zero for an end
         not held: the move carried out as ``split_move`` actions, each clipped by the rule of
-        ``Cord.move`` (targets on the table, both ends within the span). ``end`` is the
-        deprecated name of ``grasp``."""
+        ``Cord.move`` (targets on the table, both ends within the span of the cord, ``params``
+        as in ``predict``). ``end`` is the deprecated name of ``grasp``."""
         grasp = _grasp_argument(grasp, end)
         if displacement is None:
             raise ValueError("displacement is required")
+        if params is not None:
+            moves = np.zeros((len(shapes), 2, 2), dtype=np.float32)
+            disp = np.asarray(displacement).reshape(len(shapes), -1)
+            for idx, cord in self._cords(self.cord_rows(params, len(shapes))):
+                moves[idx] = self._reachable(shapes[idx], grasp, disp[idx], cord)
+            return moves
+        return self._reachable(shapes, grasp, displacement, self.cord_params)
+
+    def _reachable(self, shapes: np.ndarray, grasp: str, displacement: np.ndarray,
+                   params: CordParams) -> np.ndarray:
         ends = {"head": [0], "tail": [-1], "both": [0, -1]}[grasp]
         start = shapes[:, ends].astype(np.float64)  # (B, k, 2)
         d = displacement.reshape(len(shapes), len(ends), 2).astype(np.float64)
@@ -500,7 +583,6 @@ class TransitionModel(nn.Module):
         # Both rules are convex: the box, and (both ends) a gap between two ends moving in
         # straight lines, which is largest at the path's start or end. So a move whose start
         # and end obey the rule is never clipped on the way; only the others are walked.
-        params = self.cord_params  # once: a CordParams checks its fields when made
         walk = (reachable_targets(start, params) != start).any(axis=(1, 2))
         if len(ends) == 1:
             # One end: the rule only clips to a box, and clipping after every step of a
@@ -549,8 +631,9 @@ class TransitionModel(nn.Module):
 
     @torch.no_grad()
     def predict(self, shapes: Any, grasp: str | None = None, displacement: Any = None,
-                return_std: bool = False, members: int | None = None, inextensible: bool = True,
-                *, end: str | None = None) -> np.ndarray | tuple[np.ndarray, np.ndarray]:
+                params: Any = None, return_std: bool = False, members: int | None = None,
+                inextensible: bool = True, *, end: str | None = None
+                ) -> np.ndarray | tuple[np.ndarray, np.ndarray]:
         """The shape at rest after one straight move of the held end(s).
 
         Args:
@@ -560,6 +643,10 @@ class TransitionModel(nn.Module):
             displacement: ``(2,)``/``(B, 2)`` for one end; ``(4,)``/``(B, 4)`` (head dx, dy,
                 then tail dx, dy) for both. Targets off the table are clipped as the
                 simulator clips them.
+            params: The cord: None (the cord the model was trained for, the default cord for
+                a model of several), a ``CordParams``, or ``PARAM_COLUMNS`` values, one row
+                ``(4,)`` for every shape or ``(B, 4)``. A model of one cord
+                (``config.cord_inputs`` off) takes only None or its own cord.
             return_std: Also return the ensemble's spread.
             members: Use only the first ``members`` networks of the ensemble for the mean and
                 the spread (None: the model's prediction, below). Their share of the time
@@ -593,17 +680,22 @@ class TransitionModel(nn.Module):
             raise ValueError("return_std needs members >= 2 (one network has no spread), "
                              f"got members={members or total}")
         use_mean_net = members is None and self.mean_net is not None
-        moves = self.reachable_moves(arr, grasp, d)
-        grasp = torch.full((len(arr),), GRASP_CODES[grasp], dtype=torch.int64)
+        rows = (self.cord_rows(params, len(arr)) if params is not None or self.config.cord_inputs
+                else None)
+        moves = self.reachable_moves(arr, grasp, d, params=rows)
+        cord = (None if rows is None or not self.config.cord_inputs
+                else torch.from_numpy(cord_features(rows)).to(self.device))
+        grasp_name, grasp = grasp, torch.full((len(arr),), GRASP_CODES[grasp], dtype=torch.int64)
         means, spreads = [], []
         for lo in range(0, len(arr), PREDICT_CHUNK):
             part = slice(lo, lo + PREDICT_CHUNK)
             batch = (torch.from_numpy(arr[part]).to(self.device), grasp[part].to(self.device),
                      torch.from_numpy(moves[part]).to(self.device))
+            mine = None if cord is None else cord[part]
             if use_mean_net:
-                moved, frame = self.in_frame(*batch, net=self.mean_net)
+                moved, frame = self.in_frame(*batch, net=self.mean_net, cord=mine)
             if not use_mean_net or return_std:
-                ensemble, frame = self.in_frame(*batch, members)
+                ensemble, frame = self.in_frame(*batch, members, cord=mine)
                 if not use_mean_net:
                     moved = ensemble
                 if return_std:  # in the frame: the spread does not depend on its angle
@@ -615,9 +707,14 @@ class TransitionModel(nn.Module):
         mean = torch.cat(means).cpu().numpy() if means else np.zeros((0,) + arr.shape[1:])
         spread = torch.cat(spreads).cpu().numpy() if spreads else np.zeros(0)
         if inextensible and len(mean):
-            rest = self.config.cord_length / (self.config.n_points - 1)
-            mean = make_inextensible(mean, rest, np.full(len(mean), grasp != "tail"),
-                                     np.full(len(mean), grasp != "head"))  # the held ends
+            held = (np.full(len(mean), grasp_name != "tail"),
+                    np.full(len(mean), grasp_name != "head"))
+            lengths = (np.full(len(mean), self.config.cord_length) if rows is None
+                       else rows[:, PARAM_COLUMNS.index("length")])
+            for length in np.unique(lengths):
+                idx = np.flatnonzero(lengths == length)
+                mean[idx] = make_inextensible(mean[idx], length / (self.config.n_points - 1),
+                                              held[0][idx], held[1][idx])
         still = np.abs(moves).sum(axis=(1, 2)) == 0  # nothing moves: the cord stays at rest
         mean[still] = arr[still]
         spread[still] = 0.0

@@ -45,6 +45,7 @@ from latent_model.transition_model import (
     EnsembleMLP,
     TransitionModel,
     TransitionModelConfig,
+    cord_features,
 )
 
 #: Marks a file as a transition-training checkpoint (resumable state).
@@ -140,6 +141,22 @@ class TransitionTensors:
     moves: torch.Tensor  # (T, 2, 2)
     episode: np.ndarray
     step: np.ndarray
+    cord: torch.Tensor | None = None  # (T, 4) cord_features, for a model with cord_inputs
+
+
+def _cords(model: TransitionModel, params: np.ndarray) -> torch.Tensor | None:
+    """The ``cord_features`` of transitions' cords, for a model that sees them (else None)."""
+    if not model.config.cord_inputs:
+        return None
+    return torch.from_numpy(cord_features(params)).to(model.device)
+
+
+def _reachable(model: TransitionModel, data: TransitionDataset, starts: np.ndarray,
+               idx: np.ndarray, name: str, moves_of: np.ndarray) -> np.ndarray:
+    """Reachable moves of ``starts`` with the commanded moves of transitions ``moves_of``, on
+    the cords of transitions ``idx`` (a model of one cord: its own)."""
+    params = data.params[idx] if model.config.cord_inputs else None
+    return model.reachable_moves(starts, name, data.end_displacement(moves_of), params=params)
 
 
 def as_tensors(model: TransitionModel, data: TransitionDataset) -> TransitionTensors:
@@ -148,12 +165,13 @@ def as_tensors(model: TransitionModel, data: TransitionDataset) -> TransitionTen
     for code, name in enumerate(GRASP_NAMES):
         idx = np.flatnonzero(data.grasp == code)
         if len(idx):
-            moves[idx] = model.reachable_moves(data.start[idx], name, data.end_displacement(idx))
+            moves[idx] = _reachable(model, data, data.start[idx], idx, name, idx)
     dev = model.device
     return TransitionTensors(
         start=torch.from_numpy(data.start).to(dev), next=torch.from_numpy(data.next).to(dev),
         grasp=torch.from_numpy(data.grasp.astype(np.int64)).to(dev),
-        moves=torch.from_numpy(moves).to(dev), episode=data.episode, step=data.step)
+        moves=torch.from_numpy(moves).to(dev), episode=data.episode, step=data.step,
+        cord=_cords(model, data.params))
 
 
 def paired_moves(model: TransitionModel, data: TransitionDataset, copies: int, seed: int
@@ -174,13 +192,14 @@ def paired_moves(model: TransitionModel, data: TransitionDataset, copies: int, s
             part = slice(lo, lo + len(idx))
             lo += len(idx)
             if len(idx):
-                moves[part] = model.reachable_moves(starts[part], name,
-                                                    data.end_displacement(rng.permutation(idx)))
+                moves[part] = _reachable(model, data, starts[part], idx, name,
+                                         rng.permutation(idx))
     dev = model.device
     return TransitionTensors(
         start=torch.from_numpy(starts).to(dev), next=torch.zeros(starts.shape, device=dev),
         grasp=torch.from_numpy(grasp).to(dev), moves=torch.from_numpy(moves).to(dev),
-        episode=np.full(len(starts), -1), step=np.zeros(len(starts), dtype=np.int64))
+        episode=np.full(len(starts), -1), step=np.zeros(len(starts), dtype=np.int64),
+        cord=_cords(model, np.concatenate([data.params[order]] * copies)))
 
 
 def chain_starts(episode: np.ndarray, step: np.ndarray, moves: int) -> np.ndarray:
@@ -203,7 +222,8 @@ def rollout(model: TransitionModel, data: TransitionTensors, first: torch.Tensor
     out = []
     for k in range(moves):
         idx = first + k
-        shapes = model(shapes, data.grasp[idx], data.moves[idx], net=net)
+        shapes = model(shapes, data.grasp[idx], data.moves[idx], net=net,
+                       cord=None if data.cord is None else data.cord[idx])
         out.append(shapes)
     return out
 
@@ -250,8 +270,8 @@ def mean_predictions(model: TransitionModel, data: TransitionTensors,
     parts = []
     for lo in range(0, count, chunk):
         part = slice(lo, min(lo + chunk, count))
-        parts.append(model(data.start[part], data.grasp[part], data.moves[part],
-                           net=net).mean(dim=0))
+        parts.append(model(data.start[part], data.grasp[part], data.moves[part], net=net,
+                           cord=None if data.cord is None else data.cord[part]).mean(dim=0))
     return torch.cat(parts)
 
 
@@ -310,9 +330,12 @@ def train_transition_model(
     if checkpoint.exists() and not resume:
         raise ValueError(f"out {str(out)!r} holds a training checkpoint; pass resume=True "
                          "(--resume) to continue it, or choose another folder")
-    data.one_cord("data")  # one cord, the one its metadata names
-    cord = data.metadata.get("cord", {})
     mc = model_config if model_config is not None else TransitionModelConfig()
+    # A model of one cord learns the cord its data's metadata names; a cord-conditioned one
+    # (cord_inputs) the cords of every transition, its own being the default cord's length.
+    conditioned = mc.cord_inputs or bool(
+        tc.teacher and TransitionModel.load(tc.teacher, device="cpu").config.cord_inputs)
+    cord = {} if conditioned else asdict(data.one_cord("data"))
     mc = TransitionModelConfig(**{**asdict(mc), "n_points": int(data.start.shape[1]),
                                   "cord_length": float(cord.get("length", mc.cord_length)),
                                   "max_step": float(data.metadata.get("collect", {}).get(
@@ -410,6 +433,7 @@ def train_transition_model(
             group["lr"] = tc.lr * factor
         idx = torch.randint(len(tr.grasp), (real,), generator=gen).to(model.device)
         start, grasp, moves, target = tr.start[idx], tr.grasp[idx], tr.moves[idx], None
+        cord = None if tr.cord is None else tr.cord[idx]
         if targets is not None:
             target = targets[idx]
         if extra is not None and real < tc.batch_size:  # the teacher's moves fill the batch
@@ -418,7 +442,9 @@ def train_transition_model(
             start, grasp, moves, target = (torch.cat([a, b[pick]]) for a, b in (
                 (start, extra.start), (grasp, extra.grasp), (moves, extra.moves),
                 (target, extra_targets)))
-        pred = model(start, grasp, moves, net=net)
+            if cord is not None:
+                cord = torch.cat([cord, extra.cord[pick]])
+        pred = model(start, grasp, moves, net=net, cord=cord)
         errors = point_error(pred[:, :real], tr.next[idx][None])
         loss_one = errors.mean()
         loss = one_move_loss(errors, tc)

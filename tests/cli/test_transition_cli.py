@@ -6,6 +6,7 @@ import numpy as np
 import pytest
 
 from dlo_cli.main import main
+from dlo_env import CordParams
 from dlo_env.dataset.transitions import load_transitions
 from latent_model import TransitionModel
 
@@ -157,3 +158,31 @@ def test_a_chain_ensemble_trains_saves_loads_and_distils_into_an_mlp_student(tmp
     assert main(["train", "--stage", "transition", *common, "--out", str(tmp_path / "x"),
                  "--architecture", "transformer"]) == 2
     assert "--architecture: invalid choice" in capsys.readouterr().err
+
+
+def test_a_cord_conditioned_model_trains_on_several_cords_and_predicts_each(tmp_path, capsys):
+    data = tmp_path / "cords.npz"
+    assert main(["collect", "--kind", "transitions", "--num-transitions", "40", "--seed", "5",
+                 "--randomize", "bending_stiffness=0.003:0.03", "length=0.8:1.2",
+                 "--out", str(data)]) == 0
+    common = ["train", "--stage", "transition", "--data", str(data), "--heldout", str(data),
+              "--steps", "6", "--batch-size", "16", "--eval-every", "6", "--no-progress",
+              "--width", "16", "--members", "2"]
+    assert main([*common, "--out", str(tmp_path / "one")]) == 2  # a model of one cord refuses
+    assert "several cords" in capsys.readouterr().err
+    out = tmp_path / "cords"
+    assert main([*common, "--out", str(out), "--cord-inputs"]) == 0
+    model = TransitionModel.load(out)
+    assert model.config.cord_inputs
+    moves = load_transitions(data)
+    shapes, d = moves.start[:3], np.full((3, 2), 0.05, np.float32)
+    stiff, soft = (CordParams(bending_stiffness=b) for b in (0.03, 0.003))
+    assert np.abs(model.predict(shapes, "head", d, params=stiff)
+                  - model.predict(shapes, "head", d, params=soft)).max() > 0
+    assert np.array_equal(model.predict(shapes, "head", d),
+                          model.predict(shapes, "head", d, params=CordParams()))
+    student = tmp_path / "student"
+    assert main(["train", "--stage", "transition", "--data", str(data), "--heldout", str(data),
+                 "--steps", "4", "--batch-size", "16", "--eval-every", "4", "--no-progress",
+                 "--out", str(student), "--teacher", str(out / "transition.pt")]) == 0
+    assert TransitionModel.load(student).config.cord_inputs

@@ -119,10 +119,10 @@ class _RimRecorder(TransitionModel):
     """Keeps the rim vectors the network was given."""
 
     def predict_points(self, points, lead, other, both, rim, members_batch, members=None,
-                       net=None):
+                       net=None, cord=None):
         self.rim = rim.clone()
         return super().predict_points(points, lead, other, both, rim, members_batch, members,
-                                      net)
+                                      net, cord)
 
 
 @pytest.mark.parametrize("lead", ["head", "tail"])
