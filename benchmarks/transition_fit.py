@@ -21,6 +21,7 @@ import torch
 from dlo_env.atomic import file_digest
 from dlo_env.dataset.transitions import GRASP_NAMES, TransitionDataset, load_transitions
 from dlo_env.shapes import error
+from latent_model.transition_metrics import cords_of
 from latent_model.transition_model import TransitionModel
 
 DEFAULT_DATA = ("data/transitions-train.npz", "data/transitions-train-9.npz",
@@ -36,7 +37,8 @@ def by_grasp(model: TransitionModel, data: TransitionDataset, members: int | Non
         if not len(idx):
             cells.append("-")
             continue
-        pred = model.predict(data.start[idx], end, data.end_displacement(idx), members=members)
+        pred = model.predict(data.start[idx], end, data.end_displacement(idx),
+                             params=cords_of(model, data, idx), members=members)
         e = error(pred, data.next[idx])
         cells.append(f"{100 * e.mean():.3f} cm ({100 * np.mean(e <= 0.01):.2f} %, {len(idx)})")
     return cells

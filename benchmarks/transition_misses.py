@@ -18,6 +18,7 @@ import numpy as np
 from dlo_cli.flags import positive_int
 from dlo_env.dataset.transitions import GRASP_NAMES, load_transitions
 from dlo_env.shapes import TABLE_HALF, error
+from latent_model.transition_metrics import cords_of
 from latent_model.transition_model import TransitionModel
 
 #: Bands of the nearest distance to the rim, metres: [low, high) (every distance is in one).
@@ -51,7 +52,7 @@ def main() -> None:
             if not len(idx):
                 continue
             pred = model.predict(data.start[idx], end, data.end_displacement(idx),
-                                 members=args.members)
+                                 params=cords_of(model, data, idx), members=args.members)
             e = error(pred, data.next[idx])
             near = rim_distance(data.start[idx], data.next[idx])
             for low, high, label in BANDS + ((-np.inf, np.inf, "all"),):

@@ -14,12 +14,13 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--shapes", required=True,
                         help=".npz with a 'shapes' array (N, n, 2) in metres the model should "
                              "represent")
-    parser.add_argument("--data", default=None,
-                        help="the original training shapes (default: the file recorded in the "
-                             "model)")
-    parser.add_argument("--heldout", default=None,
-                        help="held-out shapes to check the metrics did not degrade (default: the "
-                             "file recorded in the model, when it exists)")
+    parser.add_argument("--data", default=None, nargs="+",
+                        help="the original training shapes, one or several files (default: the "
+                             "files recorded in the model)")
+    parser.add_argument("--heldout", default=None, nargs="+",
+                        help="held-out shapes to check the metrics did not degrade, one or "
+                             "several files (default: the files recorded in the model, when "
+                             "they exist)")
     parser.add_argument("--out", default=None,
                         help="output folder for the new model.pt (None: runs/finetune)")
     parser.add_argument("--gan-steps", type=positive_int, default=None,
@@ -44,19 +45,26 @@ def run(args: argparse.Namespace) -> int:
     from dlo_bench.paths import default_out
     from dlo_env.atomic import write_text_atomic
     from latent_model import FinetuneConfig, ShapeModel, finetune
-    from latent_model.dataset import load_shapes
+    from latent_model.dataset import load_labelled_shapes, load_shapes
     from latent_model.shape_model import MODEL_FILE
 
     model = ShapeModel.load(args.model, device=args.device)
     shapes = load_shapes(args.shapes, name="--shapes")
-    data_path = args.data or model.info.get("data")
+    def recorded(key: str) -> list[str]:
+        # The files a model records: a list, or one path as text (models before several
+        # files), "None" when there were none.
+        value = model.info.get(key)
+        paths = value if isinstance(value, list) else [value] if value else []
+        return [p for p in paths if p and p != "None"]
+
+    data_path = args.data or recorded("data")
     if not data_path:
         raise ValueError("--data is required: the model does not record its training data file")
-    train_shapes = load_shapes(data_path, name="--data")
-    heldout_path = args.heldout or model.info.get("heldout")
+    train_shapes, _ = load_labelled_shapes(data_path, name="--data")
+    heldout_path = args.heldout or recorded("heldout")
     heldout = None
-    if heldout_path and heldout_path != "None" and os.path.exists(heldout_path):
-        heldout = load_shapes(heldout_path, name="--heldout")
+    if heldout_path and all(os.path.exists(p) for p in heldout_path):
+        heldout, _ = load_labelled_shapes(heldout_path, name="--heldout")
     config = FinetuneConfig()
     steps = {k: v for k, v in {"gan_steps": args.gan_steps,
                                "encoder_steps": args.encoder_steps}.items() if v is not None}

@@ -198,7 +198,8 @@ def run(args: argparse.Namespace) -> int:
         data, heldout, out, model_config, train_config,
         stage=args.stage, minutes=args.minutes, gan_steps=args.gan_steps,
         encoder_steps=args.encoder_steps, device=args.device, seed=args.seed,
-        data_info={"data": str(args.data), "heldout": str(args.heldout), "n_train": len(data)},
+        data_info={"data": list(args.data), "heldout": args.heldout and list(args.heldout),
+                   "n_train": len(data)},
         progress_bar=not args.no_progress,
     )
     print(f"trained in {(time.perf_counter() - start) / 60:.1f} min (wall, with evaluations); "

@@ -5,8 +5,9 @@ must learn again at every point how a point follows its neighbours. ``EnsembleCh
 its weights along the chain: every point sees its own features (position, the segments on
 either side, its rim vector, where it lies along the chain) and the move's global features
 (how far the lead end goes, the other end's move, whether both ends are held, the rim near the
-targets), and residual convolutions with growing dilation (1, 2, 4, 8, ...) carry information
-along the chain, so that after a few blocks every point has seen the whole cord.
+targets), and residual convolutions with growing dilation (1, 2, 4, 8, 1, 2, ...) carry
+information along the chain: a point sees ``reach`` points on either side (the dilations'
+sum; 7 blocks reach 22, the whole of a 20-point cord), and the move's features everywhere.
 
 It takes the same flat input as the MLP (``TransitionModel.features``) and unflattens it with
 the layout of its ``TransitionModelConfig``, so the model around it (move frame, mirroring,
@@ -78,6 +79,11 @@ class EnsembleChainNet(nn.Module):
         """Length of the flat input (``TransitionModelConfig.inputs`` of its layout)."""
         n, rt, rb = self.n_points, self.rim_targets, self.rim_blocks
         return 2 * n + 2 * (n - 1) + 2 * (n + rt) * rb + self.extra_globals + 4
+
+    @property
+    def reach(self) -> int:
+        """Points on either side whose features reach a point's output (the dilations' sum)."""
+        return sum(2 ** (i % 4) for i in range(self.depth))
 
     @property
     def members(self) -> int:

@@ -33,13 +33,13 @@ MAX_MOVE = 0.5
 DAMPING = 1e-4
 
 
-def make_inextensible(points: np.ndarray, rest: float, pin_first: np.ndarray,
+def make_inextensible(points: np.ndarray, rest: float | np.ndarray, pin_first: np.ndarray,
                       pin_last: np.ndarray, iterations: int = ITERATIONS) -> np.ndarray:
     """``points`` ``(B, n, 2)`` moved to nearby shapes with segments of length ``rest``.
 
     Args:
         points: The shapes.
-        rest: Rest length of a segment.
+        rest: Rest length of a segment: one for every shape, or ``(B,)``.
         pin_first, pin_last: ``(B,)`` bool, the first / last point is held (does not move).
         iterations: Linearise-and-solve steps.
 
@@ -59,7 +59,7 @@ def make_inextensible(points: np.ndarray, rest: float, pin_first: np.ndarray,
     # The solve's matrix J W J^T: diagonal w_i + w_(i+1), off-diagonal -w_(i+1) u_i . u_(i+1)
     # (w_(i+1) = 1: only the end points can be held).
     diag = free[:-1] + free[1:] + np.float32(DAMPING)
-    rest = np.float32(rest)
+    rest = np.asarray(rest, dtype=np.float32)  # () or (B,): broadcasts along the shapes
     longest = np.float32(MAX_MOVE) * rest
     m = n - 1
     ratio = np.empty((m, b), dtype=np.float32)

@@ -130,7 +130,7 @@ class TransitionModelConfig:
             back. The physics has no handedness, so the networks learn one instead of two.
             Where the centroid crosses the line (a cord lying along the move) the prediction
             may jump by twice the network's sideways error there.
-        cord_inputs: The networks also see the cord (``CORD_FEATURES``: the logarithm of
+        cord_inputs: The networks also see the cord (``cord_features``: the logarithm of
             each of ``PARAM_COLUMNS`` over the default cord's), so one model predicts cords
             that differ; ``predict(params=...)`` says which. Off: a model of one cord.
         architecture: The ensemble's design: ``"mlp"`` (``EnsembleMLP``, the whole chain as
@@ -527,12 +527,20 @@ class TransitionModel(nn.Module):
         if params is None:
             return np.tile(own, (count, 1))
         if isinstance(params, CordParams):
-            if params.n_points != self.config.n_points:
-                raise ValueError(f"params must be a cord of {self.config.n_points} points, got "
-                                 f"{params.n_points}")
+            # Only the PARAM_COLUMNS differ between the cords a model knows; the rest (points,
+            # rim margin, span...) is the model's.
+            other = [k for k, v in asdict(params).items() if k not in PARAM_COLUMNS
+                     and k != "length" and v != getattr(self.cord_params, k)]
+            if other:
+                raise ValueError(f"params may differ from the model's cord only in "
+                                 f"{PARAM_COLUMNS}, got other {', '.join(other)}")
             rows = np.array([getattr(params, k) for k in PARAM_COLUMNS], dtype=np.float64)
         else:
-            rows = np.asarray(params, dtype=np.float64)
+            try:
+                rows = np.asarray(params, dtype=np.float64)
+            except (TypeError, ValueError):
+                raise ValueError(f"params must be None, a CordParams, or rows of "
+                                 f"{PARAM_COLUMNS}, got {type(params).__name__}") from None
         cols = len(PARAM_COLUMNS)
         if rows.ndim == 1:
             rows = np.tile(rows, (count, 1)) if rows.shape == (cols,) else rows[None]
@@ -546,15 +554,15 @@ class TransitionModel(nn.Module):
                              "others (TransitionModelConfig.cord_inputs); give None")
         return rows
 
-    def _cords(self, rows: np.ndarray) -> list[tuple[np.ndarray, CordParams]]:
-        """The distinct cords of ``rows``: ``(indices, CordParams)``, this model's cord with
-        the ``PARAM_COLUMNS`` of the rows."""
-        unique, which = np.unique(rows, axis=0, return_inverse=True)
+    def _lengths(self, rows: np.ndarray) -> list[tuple[np.ndarray, CordParams]]:
+        """The distinct cord lengths of ``rows``: ``(indices, CordParams)``, this model's cord
+        of that length (the length is all the clipping rule reads of a cord)."""
+        lengths = rows[:, PARAM_COLUMNS.index("length")]
+        unique, which = np.unique(lengths, return_inverse=True)
         base = self.cord_params
         return [(np.flatnonzero(which.reshape(-1) == i),
-                 base if np.allclose(row, [getattr(base, k) for k in PARAM_COLUMNS])
-                 else replace(base, **dict(zip(PARAM_COLUMNS, row.tolist()))))
-                for i, row in enumerate(unique)]
+                 base if length == base.length else replace(base, length=float(length)))
+                for i, length in enumerate(unique)]
 
     def reachable_moves(self, shapes: np.ndarray, grasp: str | None = None,
                         displacement: np.ndarray | None = None, *, end: str | None = None,
@@ -566,10 +574,10 @@ class TransitionModel(nn.Module):
         grasp = _grasp_argument(grasp, end)
         if displacement is None:
             raise ValueError("displacement is required")
-        if params is not None:
+        if params is not None and grasp == "both":  # only the span, of two ends, is the cord's
             moves = np.zeros((len(shapes), 2, 2), dtype=np.float32)
             disp = np.asarray(displacement).reshape(len(shapes), -1)
-            for idx, cord in self._cords(self.cord_rows(params, len(shapes))):
+            for idx, cord in self._lengths(self.cord_rows(params, len(shapes))):
                 moves[idx] = self._reachable(shapes[idx], grasp, disp[idx], cord)
             return moves
         return self._reachable(shapes, grasp, displacement, self.cord_params)
@@ -709,12 +717,9 @@ class TransitionModel(nn.Module):
         if inextensible and len(mean):
             held = (np.full(len(mean), grasp_name != "tail"),
                     np.full(len(mean), grasp_name != "head"))
-            lengths = (np.full(len(mean), self.config.cord_length) if rows is None
-                       else rows[:, PARAM_COLUMNS.index("length")])
-            for length in np.unique(lengths):
-                idx = np.flatnonzero(lengths == length)
-                mean[idx] = make_inextensible(mean[idx], length / (self.config.n_points - 1),
-                                              held[0][idx], held[1][idx])
+            length = (self.config.cord_length if rows is None
+                      else rows[:, PARAM_COLUMNS.index("length")])
+            mean = make_inextensible(mean, length / (self.config.n_points - 1), *held)
         still = np.abs(moves).sum(axis=(1, 2)) == 0  # nothing moves: the cord stays at rest
         mean[still] = arr[still]
         spread[still] = 0.0

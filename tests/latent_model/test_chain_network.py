@@ -33,6 +33,7 @@ def test_members_run_together_alone_and_as_copies():
 
 def test_a_point_sees_only_its_receptive_field_along_the_chain():
     net = _net(depth=3)  # dilations 1, 2, 4: 7 points on either side
+    assert net.reach == 7 and _net(depth=7).reach == 22
     x = torch.randn(1, net.inputs)
     moved = x.clone()
     moved[0, 0:2] += 1.0  # the first point's position

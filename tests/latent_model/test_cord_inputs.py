@@ -69,3 +69,12 @@ def test_the_span_of_both_ends_is_the_cords(shapes):
     short = model.reachable_moves(apart, "both", pull, params=CordParams(length=0.8))
     long = model.reachable_moves(apart, "both", pull, params=CordParams(length=1.3))
     assert np.abs(short).sum() < np.abs(long).sum()
+
+
+def test_the_projection_holds_only_the_held_ends(shapes):
+    model = _model()
+    d = np.full((6, 2), 0.05, np.float32)
+    raw = model.predict(shapes, "head", d, inextensible=False)
+    projected = model.predict(shapes, "head", d)
+    np.testing.assert_array_equal(projected[:, 0], raw[:, 0])  # the held head stays
+    assert np.abs(projected[:, -1] - raw[:, -1]).max() > 1e-4  # the free tail may move

@@ -81,3 +81,24 @@ def test_dlo_finetune_writes_the_new_model_and_its_report(tmp_path, trained, cor
     assert "inversion success on the shapes" in capsys.readouterr().out
     assert ShapeModel.load(out / "model.pt", device="cpu").n_points == 20
     assert (out / "finetune_report.json").exists()
+
+
+@pytest.mark.parametrize("recorded", ["one path", "a list"])
+def test_dlo_finetune_reads_the_training_files_the_model_records(tmp_path, trained, cord_shapes,
+                                                                 capsys, recorded):
+    data = tmp_path / "train.npz"
+    np.savez(data, shapes=cord_shapes)
+    targets = tmp_path / "targets.npz"
+    np.savez(targets, shapes=foreign_shapes(2, seed=2)[0])
+    (tmp_path / "model").mkdir()
+    info = dict(trained.info)
+    trained.info = {**info, "data": str(data) if recorded == "one path" else [str(data)],
+                    "heldout": "None" if recorded == "one path" else None}
+    try:
+        trained.save(tmp_path / "model" / "model.pt")
+    finally:
+        trained.info = info
+    assert main(["finetune", "--model", str(tmp_path / "model"), "--shapes", str(targets),
+                 "--out", str(tmp_path / "better"), "--gan-steps", "2", "--encoder-steps", "2",
+                 "--no-progress", "--device", "cpu", "--report-size", "10"]) == 0
+    assert f"training data ['{data}']" in capsys.readouterr().out
