@@ -16,6 +16,7 @@ from dlo_cli.flags import (
     add_transition_model,
     backend_of,
     number_in,
+    positive_int,
 )
 
 
@@ -75,6 +76,10 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     add_seed(parser, "the planners' sampling (the tasks are the suites')",
              default=BenchmarkConfig.seed)
     add_backend(parser, "this process, one cell after the other")
+    parser.add_argument("--jobs", type=positive_int, default=1,
+                        help="cells run at once, each in its own local process (every cell "
+                             "the same as when run alone; with more jobs than idle cores the "
+                             "timings include the contention)")
     parser.add_argument("--resume", action="store_true",
                         help="reuse the cells an interrupted run with the same settings wrote")
     parser.add_argument("--allow-dirty", action="store_true",
@@ -169,6 +174,13 @@ def run(args: argparse.Namespace) -> int:
         fidelity=not args.no_fidelity,
     )
     backend = backend_of(args)
+    if args.jobs > 1:
+        if backend is not None:
+            raise ValueError("--jobs runs the cells in local processes; with --backend ray the "
+                             "cluster's CPUs set how many run at once")
+        from dlo_env.dataset.process_backend import ProcessBackend
+
+        backend = ProcessBackend(args.jobs)
     run_id = new_run_id()
     groups: dict[float, list[str]] = {}
     for env, suite, t in config.cells():
