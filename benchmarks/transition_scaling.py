@@ -133,6 +133,12 @@ def main() -> None:
                         help="training moves scored per size (the fit, against unseen moves)")
     parser.add_argument("--width", type=int, default=TransitionModelConfig.width,
                         help="hidden units per layer (the shipped networks': the default)")
+    parser.add_argument("--architecture", choices=("mlp", "chain"), default="mlp",
+                        help="the network: an MLP on the whole chain, or the chain-local "
+                             "network (latent_model.chain_network)")
+    parser.add_argument("--depth", type=int, default=None,
+                        help="the MLP's hidden layers or the chain network's residual blocks "
+                             "(None: 3 for the MLP, 7 for the chain network: a 20-point cord)")
     parser.add_argument("--reference", default=None,
                         help="a transition model file scored beside the curve (default: the "
                              "shipped model), placed on it as the training size of one network "
@@ -167,12 +173,20 @@ def main() -> None:
     out = Path(args.out) if args.out else runs
     tc = TransitionTrainConfig(steps=args.steps, eval_every=max(1, args.steps // 4),
                                seed=args.seed)
-    mc = TransitionModelConfig(members=1, contact_reach=0.03, width=args.width)
-    # a row is fitted with others only if they agree on all of these
+    depth = args.depth or (TransitionModelConfig.depth if args.architecture == "mlp" else 7)
+    if depth < 1:
+        parser.error(f"--depth must be >= 1, got {depth}")
+    mc = TransitionModelConfig(members=1, contact_reach=0.03, width=args.width,
+                               architecture=args.architecture, depth=depth)
+    # a row is fitted with others only if they agree on all of these (the MLP of the shipped
+    # depth keeps the settings and names of the runs made before the chain network)
+    design = {} if (args.architecture, depth) == ("mlp", TransitionModelConfig.depth) else {
+        "architecture": args.architecture, "depth": depth}
+    suffix = "".join(f"-{v}" if k == "architecture" else f"-d{v}" for k, v in design.items())
     settings = {"data": data_digest, "validation": validation_digest, "steps": args.steps,
-                "width": args.width, "seed": args.seed, "fit_sample": args.fit_sample}
+                "width": args.width, "seed": args.seed, "fit_sample": args.fit_sample, **design}
     for size in sorted(args.sizes):
-        run = runs / f"n{size}-s{args.steps}-w{args.width}-seed{args.seed}"
+        run = runs / f"n{size}-s{args.steps}-w{args.width}-seed{args.seed}{suffix}"
         scored = run / "scores.json"
         earlier = json.loads(scored.read_text()) if scored.is_file() else {}
         if earlier.get("data", data_digest) != data_digest:
@@ -199,11 +213,11 @@ def main() -> None:
     found = (json.loads(p.read_text()) for p in runs.glob("*/scores.json"))
     rows = sorted((r for r in found if all(r.get(k) == v for k, v in settings.items())),
                   key=lambda r: r["size"])
-    tag = f"s{args.steps}-w{args.width}-seed{args.seed}"
+    tag = f"s{args.steps}-w{args.width}-seed{args.seed}{suffix}"
     write_text_atomic(out / f"scaling-{tag}.json", json.dumps(rows, indent=1))
     sizes = np.array([r["size"] for r in rows], dtype=np.float64)
     print(f"\nmisses on unseen moves ~ N^b, fitted over {len(rows)} sizes "
-          f"({int(sizes.min())}-{int(sizes.max())} transitions, width {args.width}, "
+          f"({int(sizes.min())}-{int(sizes.max())} transitions, width {args.width}{suffix}, "
           f"{args.steps} steps each):")
     fits = {g: power_law(sizes, misses(rows, g)) for g in GRASP_NAMES}
     for g, fit in fits.items():
@@ -235,7 +249,7 @@ def main() -> None:
         sizes, {g: misses(rows, g) for g in GRASP_NAMES},
         {g: misses(rows, g, "train") for g in GRASP_NAMES},
         fits, WITHIN_FLOORS, out / f"scaling-{tag}.png",
-        f"one network of width {args.width}, {args.steps} steps each; dashed: the power law; "
+        f"one network of width {args.width}{suffix}, {args.steps} steps each; dashed: the power law; "
         "dash-dot: the floors",
         None if args.reference_size is None else (args.reference_size, reference_misses, name))
     print(f"wrote {out}/scaling-{tag}.json, scaling-fit-{tag}.json and scaling-{tag}.png")

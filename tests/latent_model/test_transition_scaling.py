@@ -111,6 +111,20 @@ def test_a_tiny_curve_runs_resumes_and_fits_its_own_settings_only(files, tmp_pat
     assert (curve.stat().st_mtime_ns, curve.read_text()) == before
 
 
+def test_a_chain_network_curve_is_its_own(files, tmp_path, monkeypatch, capsys):
+    scaling = _script()
+    out = tmp_path / "out"
+    monkeypatch.setattr(sys, "argv", _argv(files, out, "--steps", "2", "--sizes", "10", "20",
+                                           "--architecture", "chain", "--width", "8",
+                                           "--depth", "2"))
+    scaling.main()
+    rows = json.loads((out / "scaling-s2-w8-seed0-chain-d2.json").read_text())
+    assert [r["size"] for r in rows] == [10, 20]
+    assert all(r["architecture"] == "chain" and r["depth"] == 2 for r in rows)
+    assert (out / "runs" / "n10-s2-w8-seed0-chain-d2" / "transition.pt").is_file()
+    assert "width 8-chain-d2" in capsys.readouterr().out
+
+
 @pytest.mark.parametrize("extra, message", [
     (["--sizes", "10", "1000"], "--sizes: 1000 is more than --data's"),
     (["--sizes", "0"], "--sizes must all be >= 1"),
