@@ -21,11 +21,11 @@ from latent_model.shape_model import ShapeModel
 FLOORS = {
     "cov": (">=", 0.85),
     "mmd": ("<=", 0.015),
-    "nna": ("<=", 0.75),
+    "nna": ("<=", 0.70),
     "spacing_cv": ("<=", 0.05),
     "length_error": ("<=", 0.03),
     "inversion": (">=", 0.95),
-    "foreign_inversion": (">=", 0.80),
+    "foreign_inversion": (">=", 0.90),
 }
 #: Largest curvature of the foreign shapes, 1/m (an arc of 1 m at 6/m turns by 344 degrees).
 FOREIGN_MAX_CURVATURE = 6.0
