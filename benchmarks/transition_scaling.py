@@ -249,8 +249,8 @@ def main() -> None:
         sizes, {g: misses(rows, g) for g in GRASP_NAMES},
         {g: misses(rows, g, "train") for g in GRASP_NAMES},
         fits, WITHIN_FLOORS, out / f"scaling-{tag}.png",
-        f"one network of width {args.width}{suffix}, {args.steps} steps each; dashed: the power law; "
-        "dash-dot: the floors",
+        f"one network of width {args.width}{suffix}, {args.steps} steps each; dashed: the "
+        "power law; dash-dot: the floors",
         None if args.reference_size is None else (args.reference_size, reference_misses, name))
     print(f"wrote {out}/scaling-{tag}.json, scaling-fit-{tag}.json and scaling-{tag}.png")
 

@@ -9,6 +9,7 @@ The interfaces they share are ``typing.Protocol``s in :mod:`planners.interfaces`
 
 from __future__ import annotations
 
+from planners.adaptive_mpc import AdaptConfig, AdaptiveLatentMPCPolicy
 from planners.cem import CEMConfig, CEMPolicy
 from planners.interfaces import EpisodeStats, Plan, PlanningPolicy, Policy, ShapeSurrogate
 from planners.interpolation import interpolate
@@ -19,6 +20,8 @@ from planners.policy import PlannerPolicy
 from planners.straight_line import StraightLinePolicy
 
 __all__ = [
+    "AdaptConfig",
+    "AdaptiveLatentMPCPolicy",
     "CEMConfig",
     "CEMPolicy",
     "EpisodeStats",

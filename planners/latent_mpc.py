@@ -142,13 +142,17 @@ class LatentMPCPolicy(CEMPolicy):
         for k in range(candidates.shape[1]):
             moves = candidates[:, k].reshape(len(candidates), -1)
             if cfg.spread_weight > 0:
-                shapes, spread = self.model.predict(shapes, self.grasp, moves, return_std=True,
-                                                    members=self.members,
-                                                    inextensible=cfg.inextensible)
+                shapes, spread = self._predict(shapes, moves, return_std=True,
+                                               members=self.members,
+                                               inextensible=cfg.inextensible)
             else:
-                shapes = self.model.predict(shapes, self.grasp, moves, members=self.members,
-                                            inextensible=cfg.inextensible)
+                shapes = self._predict(shapes, moves, members=self.members,
+                                       inextensible=cfg.inextensible)
         return self._distance(shapes, goal) + cfg.spread_weight * spread
+
+    def _predict(self, shapes: np.ndarray, moves: np.ndarray, **kw: Any) -> Any:
+        """The model's prediction of ``moves`` from ``shapes`` (its default cord)."""
+        return self.model.predict(shapes, self.grasp, moves, **kw)
 
     def _execute(self, plan: np.ndarray) -> list[np.ndarray]:
         """The first move, then zero actions while the cord comes to rest."""

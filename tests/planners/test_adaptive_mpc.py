@@ -1,0 +1,72 @@
+"""latent-mpc-adaptive: the cord fitted to the moves of the episode (planners.adaptive_mpc)."""
+
+from __future__ import annotations
+
+import gymnasium as gym
+import numpy as np
+import pytest
+import torch
+
+import dlo_env  # noqa: F401  (registers the environments)
+from dlo_env import CordParams
+from dlo_env.shapes import random_cord_shape
+from latent_model.transition_model import TransitionModel, TransitionModelConfig
+from planners.adaptive_mpc import AdaptConfig, AdaptiveLatentMPCPolicy, _Move
+from planners.latent_mpc import LatentMPCConfig
+
+SMALL = LatentMPCConfig(samples=16, elites=4, iterations=1, far_moves=0)
+
+
+def _model(cord_inputs: bool = True) -> TransitionModel:
+    torch.manual_seed(0)
+    model = TransitionModel(TransitionModelConfig(width=32, depth=2, members=1,
+                                                  cord_inputs=cord_inputs), device="cpu").eval()
+    with torch.no_grad():  # outputs of full size, so that the cord's inputs matter
+        model.net.weights[-1].mul_(10.0)
+    return model
+
+
+def test_a_model_of_one_cord_is_refused():
+    with pytest.raises(ValueError, match="model must be a transition model conditioned"):
+        AdaptiveLatentMPCPolicy(_model(cord_inputs=False))
+
+
+def test_the_fit_finds_the_cord_that_made_the_moves():
+    model = _model()
+    policy = AdaptiveLatentMPCPolicy(model, config=SMALL, adapt=AdaptConfig(
+        ranges={"bending_stiffness": (0.003, 0.03)}, candidates=64, rounds=4))
+    rng = np.random.default_rng(1)
+    true = CordParams(bending_stiffness=0.022)
+    moves = []
+    for _ in range(3):
+        start = random_cord_shape(rng).astype(np.float32)
+        shift = rng.uniform(-0.1, 0.1, 2).astype(np.float32)
+        end = model.predict(start, "head", shift, params=true, inextensible=False)
+        moves.append(_Move(start, shift, end))
+    row, err = policy.fit(moves)
+    default_err = policy._errors(policy.default_row[None], moves)[0]
+    assert err < 0.2 * default_err
+    assert row[1] == pytest.approx(0.022, rel=0.1)
+    assert row[[0, 2, 3]].tolist() == policy.default_row[[0, 2, 3]].tolist()
+    assert policy.fit(moves)[0].tolist() == row.tolist()  # seeded: the same cord again
+
+
+def test_an_episode_records_its_moves_refits_and_reset_forgets_them():
+    model = _model()
+    with gym.make("dlo_env/DLOEndpoint-v0") as env:
+        policy = AdaptiveLatentMPCPolicy.for_env(env, config=SMALL,
+                                                 model=model, adapt=AdaptConfig(candidates=8,
+                                                                                rounds=1))
+        obs, _ = env.reset(seed=3, options={"difficulty": 3,
+                                            "params": CordParams(bending_stiffness=0.02)})
+        for _ in range(3 * (SMALL.settle_actions + 8)):
+            action, _ = policy.predict(obs, deterministic=True)
+            obs, _, terminated, truncated, _ = env.step(action)
+            if terminated or truncated:
+                break
+        assert len(policy.moves_seen) >= 1 and len(policy.adapt_stats.cords) >= 1
+        assert policy.cord_row.tolist() == policy.adapt_stats.cords[-1]
+        policy.reset()
+        assert policy.moves_seen == [] and policy.cord_row.tolist() == policy.default_row.tolist()
+    with pytest.raises(ValueError, match="model is required"):
+        AdaptiveLatentMPCPolicy.for_env(env)
