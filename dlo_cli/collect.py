@@ -24,7 +24,8 @@ _share = number_in(float, 0.0, 1.0, expected="a number in [0, 1]")
 _weight = number_in(float, 0.0, None, expected="a number >= 0")
 
 #: Flags of ``--kind transitions`` only: fields of ``TransitionCollectConfig`` of the same name.
-TRANSITION_FLAGS = ("wide_fraction", "wavy_fraction", "rim_fraction", "randomize")
+TRANSITION_FLAGS = ("wide_fraction", "wavy_fraction", "rim_fraction", "randomize",
+                    "test_cords")
 #: Flags of both kinds: fields of ``CollectConfig`` and ``TransitionCollectConfig``.
 SHARED_FLAGS = ("grasp_weights", "push_fraction")
 
@@ -99,6 +100,10 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help="--kind transitions: draw every episode's cord, NAME one of length, "
                              "bending_stiffness, friction, mass (dlo_env.randomize; each "
                              "transition records its cord)")
+    parser.add_argument("--test-cords", action="store_true", default=None,
+                        help="--kind transitions: every episode's cord is one of the held-out "
+                             "test cords (dlo_env.randomize.TEST_CORDS), to test a model of "
+                             "several cords; not with --randomize")
     parser.add_argument("--resume", action="store_true",
                         help="continue an interrupted run from OUT.parts/")
     add_backend(parser)

@@ -38,6 +38,9 @@ def run(args: argparse.Namespace) -> int:
     if (args.wide_fraction or 0) + (args.wavy_fraction or 0) > 1:
         raise ValueError("--wide-fraction and --wavy-fraction must have a sum <= 1, got "
                          f"{args.wide_fraction:g} and {args.wavy_fraction:g}")
+    if args.test_cords and args.randomize:
+        raise ValueError("--test-cords and --randomize are two ways to choose the cords; give "
+                         "one")
     given = {k: getattr(args, k) for k in (*TRANSITION_FLAGS, *SHARED_FLAGS)
              if getattr(args, k) is not None}
     if "randomize" in given:

@@ -40,6 +40,40 @@ DEFAULT_RANGES: dict[str, tuple[float, float]] = {
 }
 
 
+#: Cords held out for testing a model of several cords, inside ``DEFAULT_RANGES`` and away
+#: from the default cord: a cord a third as stiff and one three times as heavy as the default
+#: (the cases users report), and four that change every parameter at once. Training leaves
+#: out the cords near them (:func:`near_test_cords`); ``dlo collect --kind transitions --cords
+#: test`` collects moves of these cords alone.
+TEST_CORDS: tuple[dict[str, float], ...] = (
+    {"length": 1.0, "bending_stiffness": 0.0033, "friction": 0.4, "mass": 0.1},
+    {"length": 1.0, "bending_stiffness": 0.01, "friction": 0.4, "mass": 0.3},
+    {"length": 0.85, "bending_stiffness": 0.0045, "friction": 0.5, "mass": 0.2},
+    {"length": 1.15, "bending_stiffness": 0.02, "friction": 0.3, "mass": 0.08},
+    {"length": 0.8, "bending_stiffness": 0.015, "friction": 0.45, "mass": 0.06},
+    {"length": 1.2, "bending_stiffness": 0.006, "friction": 0.25, "mass": 0.25},
+)
+#: A cord is near a test cord when each of its parameters is within this factor's logarithm
+#: of the test cord's (0.2: within -18 % .. +22 %).
+TEST_MARGIN = 0.2
+
+
+def near_test_cords(rows: np.ndarray, columns: tuple[str, ...] = tuple(SUPPORTED),
+                    margin: float = TEST_MARGIN) -> np.ndarray:
+    """``(T,)`` bool: which cords ``rows`` ``(T, len(columns))`` (values of the parameters
+    ``columns``) lie near one of ``TEST_CORDS``, every parameter within ``margin`` in
+    logarithm."""
+    rows = np.asarray(rows, dtype=np.float64)
+    test = np.array([[cord[k] for k in columns] for cord in TEST_CORDS])
+    gaps = np.abs(np.log(rows[:, None, :]) - np.log(test[None]))  # (T, cords, params)
+    return (gaps <= margin).all(axis=-1).any(axis=-1)
+
+
+def test_cord(index: int, base: CordParams) -> CordParams:
+    """``base`` with the parameters of ``TEST_CORDS[index]``."""
+    return replace(base, **TEST_CORDS[index])
+
+
 def _finite(value: object) -> bool:
     return (isinstance(value, (int, float, np.integer, np.floating))
             and not isinstance(value, bool) and math.isfinite(float(value)))

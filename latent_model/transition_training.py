@@ -37,7 +37,13 @@ import torch
 
 from dlo_env.atomic import atomic_path
 from dlo_env.checks import non_negative, positive, positive_ints
-from dlo_env.dataset.transitions import GRASP_NAMES, TransitionDataset, split_transitions
+from dlo_env.dataset.transitions import (
+    GRASP_NAMES,
+    PARAM_COLUMNS,
+    TransitionDataset,
+    split_transitions,
+)
+from dlo_env.randomize import near_test_cords
 from latent_model.checkpoint import load_checkpoint, save_atomic
 from latent_model.config import LR_SCHEDULES, config_from_dict
 from latent_model.transition_model import (
@@ -336,6 +342,14 @@ def train_transition_model(
     conditioned = mc.cord_inputs or bool(
         tc.teacher and TransitionModel.load(tc.teacher, device="cpu").config.cord_inputs)
     cord = {} if conditioned else asdict(data.one_cord("data"))
+    # A model of several cords never trains on the cords near the held-out test cords.
+    left_out = near_test_cords(data.params, PARAM_COLUMNS) if conditioned \
+        else np.zeros(len(data), dtype=bool)
+    if left_out.all():
+        raise ValueError("data holds only cords near the held-out test cords "
+                         "(dlo_env.randomize.TEST_CORDS): nothing to train on")
+    if left_out.any():
+        data = data.subset(~left_out)
     mc = TransitionModelConfig(**{**asdict(mc), "n_points": int(data.start.shape[1]),
                                   "cord_length": float(cord.get("length", mc.cord_length)),
                                   "max_step": float(data.metadata.get("collect", {}).get(
@@ -423,6 +437,7 @@ def train_transition_model(
             "sources": data.metadata.get("sources"),
             "train_config": asdict(tc),
             "transitions": len(train), "data_transitions": len(data),
+            "test_cords_left_out": int(left_out.sum()),
             "env_steps": data.env_steps()}
     started = time.perf_counter()
     model.train()

@@ -67,7 +67,7 @@ from dlo_env.dataset.chunks import (
     run_chunks,
 )
 from dlo_env.dataset.npz_file import check_arrays, load_npz, save_npz
-from dlo_env.randomize import check_randomize, draw_params
+from dlo_env.randomize import TEST_CORDS, check_randomize, draw_params, test_cord
 from dlo_env.shapes import TABLE_HALF, random_cord_shape, wavy_cord_shape, wide_cord_shape
 from dlo_env.tasks import (
     DEFAULT_MAX_STEP,
@@ -133,6 +133,9 @@ class TransitionCollectConfig:
         cord: The cord simulated.
         randomize: Cord parameter -> ``[low, high]``: every episode's cord is ``cord`` with
             these drawn (``dlo_env.randomize``; empty: always ``cord``).
+        test_cords: Every episode's cord is one of ``dlo_env.randomize.TEST_CORDS`` (drawn
+            uniformly; with ``cord``'s other settings): data to test a model of several
+            cords on cords it was not trained on. Not with ``randomize``.
     """
 
     seed: int = 0
@@ -149,9 +152,13 @@ class TransitionCollectConfig:
     chunk_size: int = 500
     cord: CordParams = field(default_factory=CordParams)
     randomize: dict[str, list[float]] = field(default_factory=dict)
+    test_cords: bool = False
 
     def __post_init__(self) -> None:
         ranges = check_randomize(self.randomize)
+        if self.test_cords and ranges:
+            raise ValueError("test_cords and randomize are two ways to choose the cords; give "
+                             "one")
         object.__setattr__(self, "randomize", {k: list(v) for k, v in ranges.items()})
         if not isinstance(self.seed, (int, np.integer)) or self.seed < 0:
             raise ValueError(f"seed must be an integer >= 0, got {self.seed!r}")
@@ -353,8 +360,11 @@ def collect_transition_chunk(config: TransitionCollectConfig, index: int, size: 
         episode += 1
         grasp = int(rng.choice(3, p=weights))
         # A draw only when randomising: files collected before stay reproducible.
-        params = draw_params(config.cord, config.randomize, rng) if config.randomize \
-            else config.cord
+        if config.test_cords:
+            params = test_cord(int(rng.integers(len(TEST_CORDS))), config.cord)
+        else:
+            params = draw_params(config.cord, config.randomize, rng) if config.randomize \
+                else config.cord
         cord = Cord(params, grasp=GRASP_NAMES[grasp])
         row = [getattr(params, k) for k in PARAM_COLUMNS]
         draw = _start_family(rng, config)

@@ -170,10 +170,15 @@ def test_a_cord_conditioned_model_trains_on_several_cords_and_predicts_each(tmp_
               "--width", "16", "--members", "2"]
     assert main([*common, "--out", str(tmp_path / "one")]) == 2  # a model of one cord refuses
     assert "several cords" in capsys.readouterr().err
+    test = tmp_path / "test-cords.npz"
+    assert main(["collect", "--kind", "transitions", "--num-transitions", "20", "--seed", "6",
+                 "--test-cords", "--out", str(test)]) == 0
     out = tmp_path / "cords"
+    common[common.index("--data") + 1:common.index("--data") + 2] = [str(data), str(test)]
     assert main([*common, "--out", str(out), "--cord-inputs"]) == 0
     model = TransitionModel.load(out)
     assert model.config.cord_inputs
+    assert model.info["test_cords_left_out"] >= 20  # the test cords' moves, never trained on
     moves = load_transitions(data)
     shapes, d = moves.start[:3], np.full((3, 2), 0.05, np.float32)
     stiff, soft = (CordParams(bending_stiffness=b) for b in (0.03, 0.003))

@@ -140,3 +140,33 @@ def test_a_given_task_keeps_its_length_when_lengths_are_drawn():
     _, info = env.reset(seed=0, options={"task": make_task(0, 1)})
     assert info["params"].length == pytest.approx(1.0, abs=1e-6)
     assert 0.2 <= info["params"].friction <= 0.6
+
+
+def test_the_test_cords_lie_inside_the_ranges_and_only_they_are_near_themselves():
+    from dlo_env.randomize import DEFAULT_RANGES, TEST_CORDS, near_test_cords
+
+    columns = tuple(DEFAULT_RANGES)
+    rows = np.array([[cord[k] for k in columns] for cord in TEST_CORDS])
+    for cord in TEST_CORDS:
+        assert all(DEFAULT_RANGES[k][0] <= v <= DEFAULT_RANGES[k][1] for k, v in cord.items())
+    assert near_test_cords(rows, columns).all()
+    assert near_test_cords(rows * 1.15, columns).all()  # within the margin
+    assert not near_test_cords(rows * 1.3, columns).any()
+    default = CordParams()
+    assert not near_test_cords(np.array([[getattr(default, k) for k in columns]]), columns)[0]
+
+
+def test_transitions_of_the_test_cords_only(tmp_path):
+    from dlo_env.dataset.transitions import (
+        PARAM_COLUMNS,
+        TransitionCollectConfig,
+        collect_transition_chunk,
+    )
+    from dlo_env.randomize import TEST_CORDS
+
+    data = collect_transition_chunk(TransitionCollectConfig(seed=2, test_cords=True), 0, 40)
+    test = {tuple(np.float32(cord[k]) for k in PARAM_COLUMNS) for cord in TEST_CORDS}
+    seen = {tuple(row) for row in data.params}
+    assert seen <= test and len(seen) >= 2
+    with pytest.raises(ValueError, match="test_cords and randomize"):
+        TransitionCollectConfig(test_cords=True, randomize={"mass": (0.1, 0.2)})
