@@ -60,6 +60,11 @@ class AgentSpec:
         extra: The ``pip install "dlo[EXTRA]"`` it needs beyond the core ("" for none).
         shape_model: Whether it plans on a shape model (``options.model``).
         transition_model: Whether it plans on a transition model (``options.transition_model``).
+        cords: Whether it is an agent of cords that differ: its transition model is by default
+            the shipped model of several cords, and the benchmark runs it in its ``cords``
+            section only (the cord suites, ``dlo_env.cord_suites``).
+        train: How its trained model or policy is made, for messages about a missing one
+            (``{env}``: the environment id).
         defaults: ``AgentOptions`` fields this agent sets differently.
     """
 
@@ -70,6 +75,8 @@ class AgentSpec:
     extra: str = ""
     shape_model: bool = False
     transition_model: bool = False
+    cords: bool = False
+    train: str = ""
     defaults: Mapping[str, Any] = field(default_factory=dict)
 
 
@@ -103,8 +110,9 @@ def load_shape_model(model: ShapeSurrogate | str | Path | None) -> ShapeSurrogat
     return _loaded_or_file(model, ShapeSurrogate, load, "shape model", "dlo train")
 
 
-def load_transition_model(model: Any) -> Any:
-    """``model`` itself when it is loaded, else ``TransitionModel.load_or_pretrained(model)``.
+def load_transition_model(model: Any, cords: bool = False) -> Any:
+    """``model`` itself when it is loaded, else ``TransitionModel.load_or_pretrained(model,
+    cords=cords)`` (``cords``: the shipped model of several cords when ``model`` is None).
 
     Raises:
         FileNotFoundError: Saying "no transition model" and where, when the file is missing.
@@ -112,8 +120,10 @@ def load_transition_model(model: Any) -> Any:
     from latent_model import TransitionModel
 
     return _loaded_or_file(model, TransitionModel,
-                           lambda m: TransitionModel.load_or_pretrained(m, device="cpu"),
-                           "transition model", "dlo train --stage transition")
+                           lambda m: TransitionModel.load_or_pretrained(m, device="cpu",
+                                                                       cords=cords),
+                           "transition model", "dlo train --stage transition"
+                           + (" --cord-inputs" if cords else ""))
 
 
 def _goal_for(config: Any, env: Any) -> Any:
@@ -183,12 +193,29 @@ def _latent_mpc(env: Any, options: AgentOptions) -> Policy:
                                    model=load_transition_model(options.transition_model))
 
 
-def _sb3(algo: str) -> Callable[[Any, AgentOptions], Policy]:
+def _latent_mpc_adaptive(env: Any, options: AgentOptions) -> Policy:
+    from planners.adaptive_mpc import AdaptiveLatentMPCPolicy
+    from planners.latent_mpc import LatentMPCConfig
+
+    return AdaptiveLatentMPCPolicy.for_env(
+        env, LatentMPCConfig(seed=options.seed),
+        model=load_transition_model(options.transition_model, cords=True))
+
+
+def _physics_mpc_true_cord(env: Any, options: AgentOptions) -> Policy:
+    from planners.physics_mpc import PhysicsMPCConfig, TrueCordPhysicsMPCPolicy
+
+    return TrueCordPhysicsMPCPolicy(env, PhysicsMPCConfig(seed=options.seed))
+
+
+def _sb3(algo: str, shipped: str = "") -> Callable[[Any, AgentOptions], Policy]:
+    """The builder of an SB3 agent ``algo``; ``shipped``: its shipped folder's name when it
+    is not ``algo`` (``sac-her-cords``)."""
     def build(env: Any, options: AgentOptions) -> Policy:
         from dlo_bench.baselines import load_baseline
 
         folder = (options.baseline if options.baseline is not None
-                  else shipped_baseline(algo, env.unwrapped.spec.id))
+                  else shipped_baseline(shipped or algo, env.unwrapped.spec.id))
         return load_baseline(folder, device=options.device, algo=algo)
 
     return build
@@ -223,11 +250,25 @@ AGENTS: dict[str, AgentSpec] = {spec.name: spec for spec in (
               _latent_mpc, environments=(ENDPOINT, DUAL_ENDPOINT), extra="model",
               transition_model=True),
     AgentSpec("ppo", "the shipped PPO baseline (Stable-Baselines3)", _sb3("ppo"),
-              environments=(ENDPOINT, DUAL_ENDPOINT), extra="rl"),
+              environments=(ENDPOINT, DUAL_ENDPOINT), extra="rl",
+              train="dlo baseline --algo ppo --env {env}"),
     AgentSpec("sac-her", "the shipped SAC + HER baseline (Stable-Baselines3)", _sb3("sac-her"),
-              environments=(ENDPOINT, DUAL_ENDPOINT), extra="rl"),
+              environments=(ENDPOINT, DUAL_ENDPOINT), extra="rl",
+              train="dlo baseline --algo sac-her --env {env}"),
     AgentSpec("bc", "behaviour cloning of the oracle demonstrations (Minari datasets)", _bc,
-              environments=(ENDPOINT, DUAL_ENDPOINT), extra="rl"),
+              environments=(ENDPOINT, DUAL_ENDPOINT), extra="rl",
+              train="dlo_bench.behaviour_cloning.train_bc for {env}"),
+    AgentSpec("latent-mpc-adaptive", "latent-mpc on the model of several cords, fitting the "
+              "cord to the episode's moves after each one", _latent_mpc_adaptive,
+              environments=(ENDPOINT, DUAL_ENDPOINT), extra="model", transition_model=True,
+              cords=True),
+    AgentSpec("physics-mpc-true-cord", "physics-mpc told each episode's cord (the oracle of "
+              "unknown cords)", _physics_mpc_true_cord, environments=(ENDPOINT, DUAL_ENDPOINT),
+              cords=True),
+    AgentSpec("sac-her-cords", "SAC + HER trained on randomised cords (Stable-Baselines3)",
+              _sb3("sac-her", "sac-her-cords"), environments=(ENDPOINT, DUAL_ENDPOINT),
+              extra="rl", cords=True,
+              train="dlo baseline --algo sac-her --cords train --env {env}"),
 )}
 
 

@@ -25,6 +25,8 @@ import numpy as np
 from dlo_env.atomic import atomic_path, write_text_atomic
 
 ALGOS = ("ppo", "sac", "sac-her")
+#: The cords a baseline trains on (``BaselineConfig.cords``).
+CORDS = ("default", "train")
 FORMAT_VERSION = 1
 #: Episode length of the registered ``dlo_env`` environments (their ``max_episode_steps``).
 EPISODE_STEPS = 100
@@ -61,6 +63,9 @@ class BaselineConfig:
         sac_gradient_steps: Gradient steps per environment step of every environment.
         her_n_sampled_goal: Relabelled goals per real transition (HER, strategy "future").
         checkpoint_every: Environment steps between checkpoints (0: none).
+        cords: ``"default"``: every episode on the environment's cord; ``"train"``: every
+            episode on a cord drawn from ``dlo_env.randomize.DEFAULT_RANGES`` away from the
+            held-out test cords (``draw_train_cord``), which the policy is not told.
     """
 
     algo: str = "ppo"
@@ -86,10 +91,13 @@ class BaselineConfig:
     sac_gradient_steps: int = 1
     her_n_sampled_goal: int = 4
     checkpoint_every: int = 20_000
+    cords: str = "default"
 
     def __post_init__(self) -> None:
         if self.algo not in ALGOS:
             raise ValueError(f"algo must be one of {ALGOS}, got {self.algo!r}")
+        if self.cords not in CORDS:
+            raise ValueError(f"cords must be one of {CORDS}, got {self.cords!r}")
         if self.timesteps < 1 or self.n_envs < 1:
             raise ValueError(
                 f"timesteps and n_envs must be >= 1, got {self.timesteps} and {self.n_envs}"
@@ -121,6 +129,26 @@ class ResumeMismatch(ValueError):
     """A resumed run was given another config than the interrupted one."""
 
 
+class RandomCords(gym.Wrapper):
+    """Adds ``options["params"]``, a cord drawn by ``draw_train_cord``, to every reset that
+    names none (a reset seed reseeds the draw, so runs repeat exactly)."""
+
+    def __init__(self, env: gym.Env, seed: int = 0) -> None:
+        super().__init__(env)
+        self._rng = np.random.default_rng(seed)
+
+    def reset(self, *, seed: int | None = None, options: dict | None = None):
+        """Reset on a drawn cord unless ``options`` names one."""
+        from dlo_env.randomize import draw_train_cord
+
+        if seed is not None:
+            self._rng = np.random.default_rng(seed)
+        options = dict(options or {})
+        if "params" not in options:
+            options["params"] = draw_train_cord(self.env.unwrapped.params, self._rng)
+        return self.env.reset(seed=seed, options=options)
+
+
 class RandomDifficulty(gym.Wrapper):
     """Passes ``options={"difficulty": d}``, ``d`` drawn from ``difficulties``, to every reset
     that gives no options (a reset seed reseeds the draw, so runs repeat exactly)."""
@@ -147,6 +175,8 @@ def _make_env(config: BaselineConfig, rank: int, monitor_dir: str | None,
     import dlo_env  # noqa: F401  (registers the environments in the worker process)
 
     env = gym.make(config.env_id, reward_type=config.reward_type)
+    if config.cords == "train":
+        env = RandomCords(env, seed=config.seed + 1000 * rank + 7)
     env = RandomDifficulty(env, config.difficulties, seed=config.seed + 1000 * rank)
     path = None if monitor_dir is None else os.path.join(monitor_dir, str(rank))
     return Monitor(env, path, info_keywords=("is_success",), override_existing=not append)

@@ -8,7 +8,9 @@ both (fixed tasks, so every agent sees the same episodes) with
 on the cord at rest; the planners take their stopping rules from it). The designed suites
 (``shapes-curves``: drawn goals, scored direction-free) run once, at the headline threshold,
 in every environment; their rows add the errors per curve family beside the reference errors
-of :mod:`dlo_bench.reference`. An agent that does not act
+of :mod:`dlo_bench.reference`. The ``cords`` section runs the cord suites (``cords-3``: each
+task on a held-out cord the agents are not told, :mod:`dlo_env.cord_suites`) with the agents
+of ``CORD_AGENTS``, at the headline threshold. An agent that does not act
 in an environment, or whose model is missing, gets a row that says so, never silently none.
 Every row states the agent's sample cost: the data its model or policy was trained on. Every
 finished (agent, environment, suite, threshold) cell is written at once, so an interrupted
@@ -56,6 +58,7 @@ from dlo_bench.paths import (
 )
 from dlo_bench.report import json_ready, threshold_label, write_evaluation
 from dlo_env.atomic import file_digest
+from dlo_env.cord_suites import CORD_SUITES
 from dlo_env.designed_suites import DESIGNED_SUITES
 from dlo_env.envs import ENVIRONMENTS
 from dlo_env.tasks import SPLIT_SIZES, SUITES
@@ -72,6 +75,13 @@ THRESHOLDS = (0.02, 0.01, 0.005)
 HEADLINE_THRESHOLD = 0.01
 #: The designed suites the benchmark runs in every environment.
 DEFAULT_DESIGNED = ("shapes-curves",)
+#: The cord suites of the ``cords`` section (tasks on held-out cords the agents are not told).
+DEFAULT_CORDS = ("cords-3",)
+#: The agents of the ``cords`` section, in table order.
+CORD_AGENTS = ("straight-line", "latent-mpc", "latent-mpc-adaptive", "physics-mpc",
+               "physics-mpc-true-cord", "sac-her-cords")
+#: The environments of the ``cords`` section.
+CORD_ENVS = (ENDPOINT,)
 #: Episodes of every cell in ``--quick`` runs.
 QUICK_EPISODES = 2
 #: Subfolder of the output folder holding one CSV/JSON of episodes per cell.
@@ -91,6 +101,11 @@ class BenchmarkConfig:
             environment's ``success_threshold``).
         designed: Designed suites (``dlo_env.designed_suites``) run in every environment,
             once, at the headline threshold (or the first of ``thresholds`` without it).
+        cords: Cord suites (``dlo_env.cord_suites``: every task on its own held-out cord, not
+            told to the agents) of the ``cords`` section, run at the designed threshold.
+        cord_agents: The agents of the ``cords`` section (the agents marked ``cords`` in the
+            registry run only there).
+        cord_envs: The environments of the ``cords`` section.
         episodes: Episodes per cell (the first tasks of the split; the split has 50).
         seed: Seed of the planners' sampling.
         baselines: Folder with one ``dlo baseline`` output folder per RL agent and environment
@@ -99,33 +114,51 @@ class BenchmarkConfig:
         model: Shape model file or folder of the latent-tree agents (None: the shipped one).
         transition_model: Transition model file or folder of latent-mpc and latent-tree-kino
             (None: the shipped one).
+        cords_transition_model: Transition model of several cords of the agents marked
+            ``cords`` (latent-mpc-adaptive; None: the shipped ``transition-cords.pt``).
         replan_every: Steps between replans of ``latent-tree-closed``.
         max_seconds: Time budget of one latent-tree plan (None: the planner's default).
         fidelity: Compute the transition fidelity of each first latent-tree plan.
     """
 
-    agents: tuple[str, ...] = tuple(AGENTS)
+    agents: tuple[str, ...] = tuple(name for name, spec in AGENTS.items() if not spec.cords)
     envs: tuple[str, ...] = tuple(DEFAULT_DIFFICULTIES)
     difficulties: tuple[int, ...] | None = None
     thresholds: tuple[float, ...] = THRESHOLDS
     designed: tuple[str, ...] = DEFAULT_DESIGNED
+    cords: tuple[str, ...] = DEFAULT_CORDS
+    cord_agents: tuple[str, ...] = CORD_AGENTS
+    cord_envs: tuple[str, ...] = CORD_ENVS
     episodes: int = SPLIT_SIZES["test"]
     seed: int = 0
     baselines: str | None = None
     model: str | None = None
     transition_model: str | None = None
+    cords_transition_model: str | None = None
     replan_every: int = DEFAULT_REPLAN_EVERY
     max_seconds: float | None = None
     fidelity: bool = True
 
     def __post_init__(self) -> None:
         unknown = [a for a in self.agents if a not in AGENTS]
-        if unknown or not self.agents:
-            raise ValueError(f"agents must be a non-empty tuple of {tuple(AGENTS)}, "
-                             f"got {self.agents!r}")
-        bad_envs = [e for e in self.envs if e not in ENVIRONMENTS]
+        if unknown or not (self.agents or self.cord_agents):
+            raise ValueError(f"agents must be a tuple of {tuple(AGENTS)} (with cord_agents, "
+                             f"not both empty), got {self.agents!r}")
+        cords_only = [a for a in self.agents if AGENTS[a].cords]
+        if cords_only:
+            raise ValueError(f"agents must not name agents of the cords section only "
+                             f"({', '.join(cords_only)}): give them as cord_agents")
+        if any(a not in AGENTS for a in self.cord_agents):
+            raise ValueError(f"cord_agents must be some of {tuple(AGENTS)}, "
+                             f"got {self.cord_agents!r}")
+        bad_envs = [e for e in (*self.envs, *self.cord_envs) if e not in ENVIRONMENTS]
         if bad_envs or not self.envs:
-            raise ValueError(f"envs must be some of {tuple(ENVIRONMENTS)}, got {self.envs!r}")
+            raise ValueError(f"envs and cord_envs must be some of {tuple(ENVIRONMENTS)} (envs "
+                             f"not empty), got {self.envs!r} and {self.cord_envs!r}")
+        if any(c not in CORD_SUITES for c in self.cords) or len(set(self.cords)) < len(
+                self.cords):
+            raise ValueError(f"cords must be distinct suites of {tuple(CORD_SUITES)}, "
+                             f"got {self.cords!r}")
         if self.difficulties is not None:
             bad = [d for d in self.difficulties if d not in SUITE_OF_DIFFICULTY]
             if bad or not self.difficulties:
@@ -145,13 +178,27 @@ class BenchmarkConfig:
             raise ValueError(f"episodes must be an int in 1..{size} (the test split), "
                              f"got {self.episodes!r}")
 
-    def cells(self) -> list[tuple[str, str, float]]:
-        """``(env_id, suite, threshold)`` of every cell, in table order: the linear suites at
-        every threshold, then the designed ones at the headline threshold."""
-        linear = [(env, SUITE_OF_DIFFICULTY[d], t) for t in self.thresholds for env in self.envs
-                  for d in (self.difficulties or DEFAULT_DIFFICULTIES.get(env, (1, 2, 3)))]
-        return linear + [(env, suite, self.designed_threshold) for suite in self.designed
-                         for env in self.envs]
+    def cells(self, agent: str | None = None) -> list[tuple[str, str, float]]:
+        """``(env_id, suite, threshold)`` of every cell (of ``agent``'s, when given), in table
+        order: the linear suites at every threshold, the designed ones at the headline
+        threshold, then the cord suites of the ``cords`` section."""
+        cells: list[tuple[str, str, float]] = []
+        if agent is None or agent in self.agents:
+            cells += [(env, SUITE_OF_DIFFICULTY[d], t) for t in self.thresholds
+                      for env in self.envs
+                      for d in (self.difficulties or DEFAULT_DIFFICULTIES.get(env, (1, 2, 3)))]
+            cells += [(env, suite, self.designed_threshold) for suite in self.designed
+                      for env in self.envs]
+        if agent is None or agent in self.cord_agents:
+            cells += [(env, suite, self.designed_threshold) for suite in self.cords
+                      for env in self.cord_envs]
+        return cells
+
+    @property
+    def all_agents(self) -> tuple[str, ...]:
+        """Every agent of the run, in table order: ``agents``, then the rest of
+        ``cord_agents``."""
+        return tuple(dict.fromkeys((*self.agents, *self.cord_agents)))
 
     @property
     def designed_threshold(self) -> float:
@@ -252,7 +299,7 @@ def load_agent(name: str, config: BenchmarkConfig, env: Any,
         except FileNotFoundError:
             return LoadedAgent(name, None, missing=(
                 f"no trained model for {env_id} in {baseline_folder_name(name, env_id)}/ (train "
-                f"one with `dlo baseline --algo {name} --env {env_id}`)"))
+                f"one with `{spec.train.format(env=env_id)}`)"))
         except ValueError as exc:
             return LoadedAgent(name, None, missing=f"no usable model for {env_id}: "
                                                    f"{exc}".splitlines()[0])
@@ -276,12 +323,13 @@ def load_agent(name: str, config: BenchmarkConfig, env: Any,
         shapes = getattr(shape_model, "info", {}).get("n_train")
         costs.append(f"{_steps(shapes)} simulated shapes" if shapes else "simulated shapes")
     if spec.transition_model:
+        path = config.cords_transition_model if spec.cords else config.transition_model
         try:
-            transition = load_transition_model(config.transition_model)
+            transition = load_transition_model(path, cords=spec.cords)
         except (FileNotFoundError, ValueError) as exc:
             return LoadedAgent(name, None, missing=str(exc).splitlines()[0])
         options.update(transition_model=transition)
-        models.append(str(transition_model_file(config.transition_model)))
+        models.append(str(transition_model_file(path, cords=spec.cords)))
         steps = transition.info.get("env_steps")
         moves = transition.info.get("data_transitions")
         costs.insert(0, "unknown (the model does not record its data)" if not steps
@@ -310,8 +358,9 @@ def cell_key(config: BenchmarkConfig, agent: LoadedAgent, env_id: str,
              suite: str, threshold: float) -> dict[str, Any]:
     """What a cell's result depends on; a saved cell is reused only when its key matches."""
     key = asdict(config)
-    for name in ("agents", "envs", "difficulties", "thresholds", "designed"):
-        key.pop(name)
+    for name in ("agents", "envs", "difficulties", "thresholds", "designed", "cords",
+                 "cord_agents", "cord_envs", "cords_transition_model"):
+        key.pop(name)  # the model file used is in the key by its digest
     where = {"difficulty": SUITES[suite]} if suite in SUITES else {"suite": suite}
     return {**key, "agent": agent.name, "env_id": env_id, **where, "threshold": threshold,
             "model_digest": "+".join(file_digest(m) for m in agent.models),
@@ -373,7 +422,25 @@ def row_of(agent: LoadedAgent, env_id: str, suite: str, threshold: float,
         if suite in DESIGNED_SUITES:
             row["median_rest_error"] = s["median_rest_direction_free_error"]
             row["designed"] = designed_summary(suite, env_id, records)
+        if suite in CORD_SUITES:
+            row["cords"] = cords_summary(records)
     return row
+
+
+def cords_summary(records: list[EpisodeRecord]) -> dict[str, dict[str, float]]:
+    """Per held-out cord of a cord suite's test split (episode ``i`` runs on
+    ``TEST_CORDS[i % 6]``; keys its index as text): episodes, success rate and median error
+    at rest, metres."""
+    from dlo_env.randomize import TEST_CORDS
+
+    out: dict[str, dict[str, float]] = {}
+    for i in range(len(TEST_CORDS)):
+        group = [r for r in records if r.episode % len(TEST_CORDS) == i]
+        if group:
+            out[str(i)] = {"episodes": len(group),
+                           "success_rate": float(np.mean([r.success for r in group])),
+                           "median_rest_error": float(np.median([r.rest_error for r in group]))}
+    return out
 
 
 @functools.lru_cache(maxsize=16)
@@ -571,20 +638,19 @@ def run_cell(name: str, env_id: str, suite: str | int, config: BenchmarkConfig, 
             raise FileNotFoundError(f"no shape model: {why}")
     if not isinstance(suite, str):
         suite = SUITE_OF_DIFFICULTY[suite]
-    # The agent is built for the environment the suite's episodes run in (its threshold and
-    # success metric), and warmed up there.
+    # The agent is built for the environment the suite's episodes run in (its threshold, its
+    # success metric, and for an agent told the cord, its cord), warmed up and evaluated there.
     kwargs = {**task_env_kwargs(suite=suite), "success_threshold": threshold}
     with gym.make(env_id, **kwargs) as env:
         agent = load_agent(name, config, env, shape_model)
         if agent.policy is None:
             raise ValueError(f"agent {name!r} is missing in {env_id}: {agent.missing}")
         _warm_up(agent.policy, env)
-    t0 = time.perf_counter()
-    result = evaluate(agent.policy, env_id, suite=suite,
-                      episodes=config.episodes, seed=config.seed, split="test", agent=name,
-                      fidelity=config.fidelity, progress=progress,
-                      env_kwargs={"success_threshold": threshold})
-    return result, time.perf_counter() - t0
+        t0 = time.perf_counter()
+        result = evaluate(agent.policy, env, suite=suite, episodes=config.episodes,
+                          seed=config.seed, split="test", agent=name, fidelity=config.fidelity,
+                          progress=progress)
+        return result, time.perf_counter() - t0
 
 
 def run_benchmark(config: BenchmarkConfig, out_dir: str | os.PathLike, *,
@@ -605,7 +671,8 @@ def run_benchmark(config: BenchmarkConfig, out_dir: str | os.PathLike, *,
             :func:`new_run_id`); reused cells keep the id of the run that timed them.
 
     Returns:
-        The rows: agents in ``config.agents`` order, then the cells in ``config.cells()`` order.
+        The rows: agents in ``config.all_agents`` order, then each agent's cells in
+        ``config.cells(agent)`` order.
     """
     import gymnasium as gym
 
@@ -617,19 +684,19 @@ def run_benchmark(config: BenchmarkConfig, out_dir: str | os.PathLike, *,
     # folder (``--out benchmarks``) must not mark its own later cells "+dirty".
     version = code_version()
     shape_model, why = (None, "")
-    if any(AGENTS[a].shape_model for a in config.agents):
+    if any(AGENTS[a].shape_model for a in config.all_agents):
         shape_model, why = load_shape_model(config.model)
     rows: list[dict[str, Any]] = []
     todo: list[tuple[int, str, str, str, float, LoadedAgent, dict[str, Any]]] = []
-    for name in config.agents:
+    for name in config.all_agents:
         agents: dict[str, LoadedAgent] = {}
-        for env_id in config.envs:
+        for env_id in dict.fromkeys(env for env, _, _ in config.cells(name)):
             with gym.make(env_id) as env:
                 agent = load_agent(name, config, env, shape_model)
             if agent.missing.startswith("no shape model") and why:
                 agent = LoadedAgent(name, None, missing=f"no shape model: {why}")
             agents[env_id] = agent
-        for env_id, suite, threshold in config.cells():
+        for env_id, suite, threshold in config.cells(name):
             agent = agents[env_id]
             cell = cell_name(name, env_id, suite, threshold)
             if agent.policy is None:
@@ -655,7 +722,7 @@ def run_benchmark(config: BenchmarkConfig, out_dir: str | os.PathLike, *,
     # The headline threshold's cells first.
     cells = config.cells()
     order = {cell: (cell[2] != HEADLINE_THRESHOLD, i) for i, cell in enumerate(cells)}
-    ranks = {name: i for i, name in enumerate(config.agents)}
+    ranks = {name: i for i, name in enumerate(config.all_agents)}
     todo.sort(key=lambda item: (order[(item[2], item[3], item[4])], ranks[item[1]]))
 
     def finish(k: int, result: Evaluation, seconds: float) -> None:
@@ -696,7 +763,7 @@ def absolute_paths(config: BenchmarkConfig) -> BenchmarkConfig:
     """``config`` with its model and baseline paths made absolute."""
     from dataclasses import replace
 
-    fields_ = ("model", "transition_model", "baselines")
+    fields_ = ("model", "transition_model", "cords_transition_model", "baselines")
     return replace(config, **{f: str(Path(getattr(config, f)).resolve()) for f in fields_
                               if getattr(config, f)})
 

@@ -150,6 +150,7 @@ def headline_first(thresholds: list[float | None]) -> list[float | None]:
 def success_table(rows: list[dict[str, Any]], threshold: float | None = None) -> list[str]:
     """Markdown: one row per agent, one column per cell, success rate (– when missing), of the
     rows at ``threshold`` (None: rows without one, or all when they have a single one)."""
+    rows = [r for r in rows if not is_cords_row(r)]  # their own section: cords_section
     if threshold is not None or len(thresholds_of(rows)) > 1:
         rows = [r for r in rows if r.get("threshold") == threshold]
     cells = list(dict.fromkeys(cell_label(r) for r in rows))
@@ -171,6 +172,61 @@ def success_table(rows: list[dict[str, Any]], threshold: float | None = None) ->
 def _suite(row: dict[str, Any]) -> str:
     """The suite of a row without its split: ``linear-3``, ``shapes-curves``."""
     return str(row.get("suite", f"linear-{row['difficulty']}")).split("/")[0]
+
+
+def is_cords_row(row: dict[str, Any]) -> bool:
+    """Whether ``row`` is a cell of the ``cords`` section (a cord suite)."""
+    from dlo_env.cord_suites import CORD_SUITES
+
+    return _suite(row) in CORD_SUITES
+
+
+def cords_section(rows: list[dict[str, Any]]) -> list[str]:
+    """Markdown: per cord suite and environment, each agent's success and median error at
+    rest, over all tasks and per held-out cord; [] without cord rows."""
+    cords = [r for r in rows if is_cords_row(r)]
+    if not cords:
+        return []
+    from dlo_env.randomize import TEST_CORDS
+
+    def label(cord: dict[str, float]) -> str:
+        return (f"{cord['length']:g} m, {cord['bending_stiffness'] * 1e3:g}e-3 N m², "
+                f"μ {cord['friction']:g}, {cord['mass'] * 1e3:g} g")
+
+    lines = [
+        "## Unknown cords",
+        "",
+        "Each task of `cords-K` is a `linear-K` task made on one of six held-out cords "
+        "(`dlo_env.randomize.TEST_CORDS`, in turn), whose parameters the agents are not told; "
+        "physics-mpc simulates the default cord (what an untuned simulator gives), "
+        "physics-mpc-true-cord the task's own. Success at the threshold, judged at rest; per "
+        "cord: success (median error at rest, cm). Cords: "
+        + "; ".join(f"{i} = {label(c)}" for i, c in enumerate(TEST_CORDS)) + ".",
+        "",
+    ]
+    for key in dict.fromkeys((_suite(r), r["env"], r.get("threshold")) for r in cords):
+        group = [r for r in cords if (_suite(r), r["env"], r.get("threshold")) == key]
+        t = "–" if key[2] is None else threshold_label(key[2])
+        lines += [f"**{key[0]}, {key[1]}, {t}**", "",
+                  "| agent | success | median rest error (cm) | seconds/episode | "
+                  + " | ".join(f"cord {i}" for i in range(len(TEST_CORDS)))
+                  + " | sample cost |", "|---|" + "---|" * (len(TEST_CORDS) + 4)]
+        for r in group:
+            if r["status"] != "ok":
+                lines.append(f"| {r['agent']} | missing | – | – | "
+                             + " | ".join("–" for _ in TEST_CORDS) + " | – |")
+                continue
+            per = r.get("cords", {})
+            lines.append(
+                f"| {r['agent']} | {_fmt(r['success_rate'], '{:.0%}')} | "
+                f"{_fmt(r.get('median_rest_error'), '{:.2f}', 100)} | "
+                f"{_fmt(r['seconds_per_episode'], '{:.2f}')} | " + " | ".join(
+                    f"{_fmt(per[str(i)]['success_rate'], '{:.0%}')} "
+                    f"({_fmt(per[str(i)]['median_rest_error'], '{:.2f}', 100)})"
+                    if str(i) in per else "–" for i in range(len(TEST_CORDS)))
+                + f" | {r.get('sample_cost') or '–'} |")
+        lines.append("")
+    return lines
 
 
 def designed_section(rows: list[dict[str, Any]]) -> list[str]:
@@ -343,6 +399,7 @@ def results_markdown(rows: list[dict[str, Any]], machine: dict[str, Any], comman
         )
     lines.append("")
     lines += designed_section(rows)
+    lines += cords_section(rows)
     ratios = ratio_lines(rows)
     lines += ratios if ratios else ["Planning time ratios: not measured (physics-mpc did not "
                                     "run with a cheaper planner)."]

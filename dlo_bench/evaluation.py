@@ -217,15 +217,18 @@ def _episode_options(
     difficulty: int | None, suite: str | None, split: str, episodes: int, grasp: str
 ) -> list[dict[str, Any] | None]:
     if suite is not None:
+        from dlo_env.cord_suites import CORD_SUITES, load_cord_suite
         from dlo_env.designed_suites import DESIGNED_SUITES, load_designed_suite
         from dlo_env.tasks import load_suite
 
-        if suite in DESIGNED_SUITES:
-            designed = load_designed_suite(suite, split, grasp=grasp, limit=episodes)
-            if len(designed) < episodes:
-                raise ValueError(f"episodes must be at most the {len(designed)} tasks of suite "
-                                 f"{suite!r} split {split!r}, got {episodes}")
-            return [t.options() for t in designed]
+        for names, load in ((DESIGNED_SUITES, load_designed_suite),
+                            (CORD_SUITES, load_cord_suite)):
+            if suite in names:
+                made = load(suite, split, grasp=grasp, limit=episodes)
+                if len(made) < episodes:
+                    raise ValueError(f"episodes must be at most the {len(made)} tasks of suite "
+                                     f"{suite!r} split {split!r}, got {episodes}")
+                return [t.options() for t in made]
         tasks = load_suite(suite, split, grasp=grasp, limit=episodes)
         if len(tasks) < episodes:
             raise ValueError(
@@ -311,11 +314,14 @@ def task_env_kwargs(difficulty: int | None = None, suite: str | None = None
     run in: episodes of ``dlo_env.tasks.suite_max_steps`` / ``difficulty_max_steps`` steps;
     a designed suite's drawn goals get ``DESIGNED_MAX_STEPS`` steps and are scored
     direction-free."""
+    from dlo_env.cord_suites import CORD_SUITES
     from dlo_env.designed_suites import DESIGNED_MAX_STEPS, DESIGNED_SUITES
     from dlo_env.tasks import difficulty_max_steps, suite_max_steps
 
     if suite in DESIGNED_SUITES:
         return {"max_episode_steps": DESIGNED_MAX_STEPS, "success_metric": "direction_free_error"}
+    if suite in CORD_SUITES:
+        return {"max_episode_steps": difficulty_max_steps(CORD_SUITES[suite])}
     if suite is not None:
         return {"max_episode_steps": suite_max_steps(suite)}
     if difficulty is not None:
@@ -348,8 +354,9 @@ def evaluate(
             ``dlo_env.tasks.suite_max_steps`` or ``difficulty_max_steps`` steps unless
             ``env_kwargs`` says otherwise) is closed at the end.
         difficulty: Straight moves per task (the environment's default if None).
-        suite: A named suite (``linear-1``, ..., or a designed one such as ``shapes-curves``,
-            scored direction-free in an environment made from an id) instead of
+        suite: A named suite (``linear-1``, ..., a designed one such as ``shapes-curves``,
+            scored direction-free in an environment made from an id, or a cord suite such as
+            ``cords-3``, each task on its own cord) instead of
             ``difficulty``: its fixed tasks.
         episodes: Number of episodes.
         seed: Episode ``i`` resets with seed ``seed + i`` (random tasks).

@@ -9,7 +9,7 @@ from dlo_cli.flags import add_difficulty, add_env, add_seed, add_threads, positi
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     """Flags of ``dlo baseline``; defaults are ``dlo_bench.baselines.BaselineConfig``'s."""
-    from dlo_bench.baselines import ALGOS, BaselineConfig
+    from dlo_bench.baselines import ALGOS, CORDS, BaselineConfig
 
     parser.add_argument("--algo", choices=ALGOS, required=True, help="the algorithm")
     parser.add_argument("--timesteps", type=positive_int, default=BaselineConfig.timesteps,
@@ -25,6 +25,11 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         default=BaselineConfig.reward_type, help="the environment's reward")
     add_env(parser, BaselineConfig.env_id, "the environment it trains in", dest="env_id",
             alias=True)
+    parser.add_argument("--cords", choices=CORDS, default=BaselineConfig.cords,
+                        help="default: every episode on the environment's cord; train: every "
+                             "episode on a cord drawn from dlo_env.randomize.DEFAULT_RANGES away "
+                             "from the held-out test cords, not told to the policy (the "
+                             "shipped sac-her-cords)")
     parser.add_argument("--set", nargs="+", default=[], metavar="FIELD=VALUE",
                         help="other BaselineConfig fields, values in JSON "
                              "(e.g. ppo_n_steps=512 net_arch=[64,64])")
@@ -40,7 +45,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 #: checks always apply.
 FLAG_FIELDS = {"algo": "--algo", "env_id": "--env", "difficulties": "--difficulty",
                "reward_type": "--reward-type", "timesteps": "--timesteps", "n_envs": "--n-envs",
-               "subprocess": "--subprocess", "seed": "--seed"}
+               "subprocess": "--subprocess", "seed": "--seed", "cords": "--cords"}
 
 
 def _overrides(items: list[str]) -> dict:
@@ -81,7 +86,7 @@ def run(args: argparse.Namespace) -> int:
     settings = dict(
         algo=args.algo, env_id=args.env_id, difficulties=list(args.difficulty),
         reward_type=args.reward_type, timesteps=args.timesteps, n_envs=args.n_envs,
-        subprocess=args.subprocess, seed=args.seed,
+        subprocess=args.subprocess, seed=args.seed, cords=args.cords,
     )
     settings.update(_overrides(args.set))
     try:
@@ -89,7 +94,8 @@ def run(args: argparse.Namespace) -> int:
     except TypeError as exc:  # a --set value of the wrong type
         raise ValueError(f"--set: {exc}") from exc
     out = Path(args.out) if args.out else default_out("baseline") / config.algo
-    print(f"training {config.algo} on {config.env_id} (difficulties {config.difficulties}) for "
+    print(f"training {config.algo} on {config.env_id} (difficulties {config.difficulties}, "
+          f"{config.cords} cords) for "
           f"{config.timesteps} steps with {config.n_envs} envs -> {out}")
     print("config: " + json.dumps(asdict(config)), flush=True)
     path = train_baseline(config, out, device=args.device, resume=args.resume,

@@ -43,7 +43,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                              "every cell compares with the published table's 50 tasks per "
                              f"cell, unlike the quick looks of dlo evaluate; {QUICK_EPISODES} "
                              "with --quick)")
-    add_agent(parser, default=list(BenchmarkConfig.agents), sb3=False)
+    add_agent(parser, default=list(BenchmarkConfig().all_agents), sb3=False)
     add_env(parser, list(BenchmarkConfig.envs), "environments, one or several", several=True)
     defaults = "; ".join(f"{e.split('/')[-1]}: {' '.join(map(str, d))}"
                          for e, d in DEFAULT_DIFFICULTIES.items())
@@ -65,6 +65,17 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                              "(default: " + " ".join(
                                  BenchmarkConfig.designed) + "; none with --quick or "
                              "--difficulty; `--designed` alone: none)")
+    from dlo_env.cord_suites import CORD_SUITES
+
+    parser.add_argument("--cords", nargs="*", metavar="SUITE", default=None,
+                        choices=tuple(CORD_SUITES),
+                        help="cord suites of the cords section (every task on its own held-out "
+                             "cord, not told to the agents), run in " + " ".join(
+                                 e.split("/")[-1] for e in BenchmarkConfig.cord_envs)
+                             + " at the headline threshold by the agents of that section ("
+                             + " ".join(BenchmarkConfig.cord_agents) + ") among --agent "
+                             "(default: " + " ".join(BenchmarkConfig.cords) + "; none with "
+                             "--quick or --difficulty; `--cords` alone: none)")
     parser.add_argument("--baselines", default=BenchmarkConfig.baselines,
                         help="folder with one `dlo baseline` output folder per RL agent and "
                              "environment (BASELINES/ppo, BASELINES/sac-her, BASELINES/bc; "
@@ -72,6 +83,10 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                              "shipped ones)")
     add_model(parser)
     add_transition_model(parser)
+    parser.add_argument("--cords-transition-model", default=None, metavar="FILE",
+                        help="transition model of several cords (dlo train --stage transition "
+                             "--cord-inputs), file or folder, for latent-mpc-adaptive (None: "
+                             "the shipped latent_model/pretrained/transition-cords.pt)")
     add_planner_flags(parser)
     add_seed(parser, "the planners' sampling (the tasks are the suites')",
              default=BenchmarkConfig.seed)
@@ -123,14 +138,33 @@ def _command(args: argparse.Namespace, parser_defaults: dict) -> str:
     return " ".join(parts)
 
 
-def designed_suites(args: argparse.Namespace) -> list[str]:
-    """The designed suites to run: ``--designed`` as given (alone: none); by default the
-    config's, or none with ``--quick`` or ``--difficulty`` (a smoke test, a subset of cells)."""
+def designed_suites(args: argparse.Namespace, flag: str = "designed") -> list[str]:
+    """The designed (or with ``flag="cords"``, cord) suites to run: ``--designed`` as given
+    (alone: none); by default the config's, or none with ``--quick`` or ``--difficulty`` (a
+    smoke test, a subset of cells)."""
     from dlo_bench.benchmark import BenchmarkConfig
 
-    if args.designed is not None:
-        return list(dict.fromkeys(args.designed))
-    return [] if args.quick or args.difficulty else list(BenchmarkConfig.designed)
+    given = getattr(args, flag)
+    if given is not None:
+        return list(dict.fromkeys(given))
+    return [] if args.quick or args.difficulty else list(getattr(BenchmarkConfig, flag))
+
+
+def split_agents(names: list[str], cords: bool) -> tuple[tuple[str, ...], tuple[str, ...]]:
+    """``--agent`` as the config's ``agents`` (every name but the agents of the cords section
+    only) and ``cord_agents`` (the names of ``CORD_AGENTS`` and of those, when cord suites
+    run)."""
+    from dlo_bench.agents import AGENTS
+    from dlo_bench.benchmark import CORD_AGENTS
+
+    names = list(dict.fromkeys(names))
+    agents = tuple(a for a in names if not AGENTS[a].cords)
+    cord_agents = tuple(a for a in names if AGENTS[a].cords or a in CORD_AGENTS) if cords \
+        else ()
+    if not agents and not cord_agents:
+        raise ValueError(f"--agent names only agents of the cords section ({' '.join(names)}), "
+                         "but no cord suite runs: add --cords SUITE")
+    return agents, cord_agents
 
 
 def run(args: argparse.Namespace) -> int:
@@ -161,15 +195,19 @@ def run(args: argparse.Namespace) -> int:
 
     torch.set_num_threads(args.threads)
     designed = designed_suites(args)
+    cords = designed_suites(args, "cords")
+    agents, cord_agents = split_agents(args.agent, bool(cords))
     episodes = args.episodes if args.episodes is not None else (
         QUICK_EPISODES if args.quick else BenchmarkConfig.episodes)
     config = BenchmarkConfig(
-        agents=tuple(args.agent), envs=tuple(args.env),
+        agents=agents, cord_agents=cord_agents, envs=tuple(args.env),
         difficulties=tuple(args.difficulty) if args.difficulty else None,
         thresholds=tuple(thresholds), designed=tuple(dict.fromkeys(designed)),
+        cords=tuple(cords),
         episodes=episodes,
         seed=args.seed, baselines=args.baselines, model=args.model,
         transition_model=args.transition_model,
+        cords_transition_model=args.cords_transition_model,
         replan_every=args.replan_every, max_seconds=args.max_seconds,
         fidelity=not args.no_fidelity,
     )
@@ -186,7 +224,7 @@ def run(args: argparse.Namespace) -> int:
     for env, suite, t in config.cells():
         groups.setdefault(t, []).append(f"{env.split('/')[-1]} {suite_label(suite)}")
     cells = "; ".join(f"{threshold_label(t)}: {', '.join(names)}" for t, names in groups.items())
-    print(f"benchmark run {run_id}: {len(config.agents)} agents x {config.episodes} episodes "
+    print(f"benchmark run {run_id}: {len(config.all_agents)} agents x {config.episodes} episodes "
           f"x {len(config.cells())} cells ({cells}) -> {args.out}", flush=True)
     t0 = time.perf_counter()
     rows = run_benchmark(config, args.out, resume=args.resume, progress=True,
@@ -195,11 +233,20 @@ def run(args: argparse.Namespace) -> int:
     parser = argparse.ArgumentParser()
     add_arguments(parser)
     paths = write_results(rows, args.out, _command(args, vars(parser.parse_args([]))), seconds)
-    from dlo_bench.benchmark_report import headline_first, success_table, thresholds_of
+    from dlo_bench.benchmark_report import (
+        cords_section,
+        headline_first,
+        is_cords_row,
+        success_table,
+        thresholds_of,
+    )
 
-    for t in headline_first(thresholds_of(rows)):
+    for t in headline_first(thresholds_of([r for r in rows if not is_cords_row(r)])):
         print(f"success at {threshold_label(t)}, judged at rest:")
         print("\n".join(success_table(rows, t)))
+    cords = cords_section(rows)
+    if cords:
+        print("\n".join(line for line in cords[4:] if line))  # the tables, not the prose
     print("\n".join(ratio_lines(rows)) or "planning time ratios not measured: physics-mpc did "
                                           "not run with a cheaper planner")
     missing = sorted({r["agent"] for r in rows if r["status"] != "ok"})

@@ -24,6 +24,7 @@ from dlo_cli.flags import (
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     """Flags of ``dlo evaluate``."""
+    from dlo_env.cord_suites import CORD_SUITES
     from dlo_env.designed_suites import DESIGNED_SUITES
     from dlo_env.tasks import SPLIT_SIZES, SUCCESS_THRESHOLD, SUITES
 
@@ -31,10 +32,11 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     which = parser.add_mutually_exclusive_group()
     add_difficulty(which, [1], "random tasks (reset seeds SEED, SEED+1, ...); several give "
                                "several rows")
-    suites = [*SUITES, *DESIGNED_SUITES]
+    suites = [*SUITES, *DESIGNED_SUITES, *CORD_SUITES]
     which.add_argument("--suite", nargs="+", metavar="NAME", choices=suites,
                        help=f"named task suites instead of random tasks: {', '.join(suites)} "
-                            "(designed goals are scored direction-free)")
+                            "(designed goals are scored direction-free; cords-K tasks each "
+                            "run on their own cord, not told to the agent)")
     parser.add_argument("--split", default="test", choices=tuple(SPLIT_SIZES),
                         help="split of the suites")
     add_episodes(parser, f"episodes per row (default {DEFAULT_EPISODES}: a quick look; a "
@@ -80,21 +82,20 @@ def evaluate_row(agent: str, difficulty: int | None, suite: str | None,
         torch.set_num_threads(settings["threads"])
     if model is None and agent_spec(agent).shape_model:
         model = load_shape_model(settings["model"])
-    from dlo_env.designed_suites import DESIGNED_SUITES
+    from dlo_bench.evaluation import task_env_kwargs
 
-    env_kwargs = {"success_threshold": settings["threshold"]}
-    if suite in DESIGNED_SUITES:  # the agent is built for the environment evaluate makes
-        env_kwargs["success_metric"] = "direction_free_error"
+    # The agent is built for, and evaluated in, one environment: its threshold and success
+    # metric, and (for an agent told the cord, such as physics-mpc-true-cord) its cord.
+    env_kwargs = {**task_env_kwargs(difficulty, suite), "success_threshold": settings["threshold"]}
     with gym.make(settings["env_id"], **env_kwargs) as env:
         policy = build_agent(agent, env, model=model, seed=settings["seed"],
                              transition_model=settings["transition_model"],
                              replan_every=settings["replan_every"],
                              max_seconds=settings["max_seconds"])
-    return evaluate(policy, settings["env_id"], difficulty=difficulty, suite=suite,
-                    episodes=settings["episodes"], seed=settings["seed"],
-                    split=settings["split"], agent=agent,
-                    fidelity=not settings["no_fidelity"], progress=settings["progress"],
-                    env_kwargs=env_kwargs)
+        return evaluate(policy, env, difficulty=difficulty, suite=suite,
+                        episodes=settings["episodes"], seed=settings["seed"],
+                        split=settings["split"], agent=agent,
+                        fidelity=not settings["no_fidelity"], progress=settings["progress"])
 
 
 def run(args: argparse.Namespace) -> int:

@@ -69,6 +69,16 @@ def near_test_cords(rows: np.ndarray, columns: tuple[str, ...] = tuple(SUPPORTED
     return (gaps <= margin).all(axis=-1).any(axis=-1)
 
 
+def draw_train_cord(base: CordParams, rng: np.random.Generator) -> CordParams:
+    """A cord like ``base`` drawn from ``DEFAULT_RANGES`` (``draw_params``), redrawn while it
+    lies near a test cord: the cords an agent or model of several cords trains on."""
+    columns = tuple(DEFAULT_RANGES)
+    while True:
+        params = draw_params(base, DEFAULT_RANGES, rng)
+        if not near_test_cords(np.array([[getattr(params, k) for k in columns]]), columns)[0]:
+            return params
+
+
 def test_cord(index: int, base: CordParams) -> CordParams:
     """``base`` with the parameters of ``TEST_CORDS[index]``."""
     return replace(base, **TEST_CORDS[index])

@@ -57,6 +57,8 @@ FORMAT = "dlo-transition-model"
 FORMAT_VERSION = 1
 #: File name of the model in a training folder and in ``pretrained/``.
 MODEL_FILE = "transition.pt"
+#: The shipped model of several cords (``cord_inputs``), beside ``MODEL_FILE``.
+CORDS_MODEL_FILE = "transition-cords.pt"
 #: Predictions per network call in ``predict`` (keeps activations in cache).
 PREDICT_CHUNK = 4096
 #: Values of config fields added after the first files were written, for files without them.
@@ -784,21 +786,27 @@ class TransitionModel(nn.Module):
         return cls.from_state(data, device, name=str(path))
 
     @classmethod
-    def load_pretrained(cls, device: str | torch.device = "auto") -> TransitionModel:
-        """The shipped model for the default cord (``latent_model/pretrained/transition.pt``)."""
-        with resources.as_file(resources.files("latent_model") / "pretrained" / MODEL_FILE) as p:
+    def load_pretrained(cls, device: str | torch.device = "auto", *,
+                        cords: bool = False) -> TransitionModel:
+        """The shipped model for the default cord (``latent_model/pretrained/transition.pt``),
+        or with ``cords`` the shipped model of several cords (``transition-cords.pt``,
+        ``predict(params=...)``)."""
+        name = CORDS_MODEL_FILE if cords else MODEL_FILE
+        with resources.as_file(resources.files("latent_model") / "pretrained" / name) as p:
             return cls.load(p, device)
 
     @classmethod
     def load_or_pretrained(cls, path: str | os.PathLike | None = None,
-                           device: str | torch.device = "auto") -> TransitionModel:
-        """``load(path)`` when a path is given (not ``None`` or ""), else ``load_pretrained()``.
+                           device: str | torch.device = "auto", *,
+                           cords: bool = False) -> TransitionModel:
+        """``load(path)`` when a path is given (not ``None`` or ""), else
+        ``load_pretrained(cords=cords)``.
 
         The one call for code whose model argument defaults to the shipped model (a CLI flag,
         an agent option): ``load_pretrained()`` always loads the shipped file, ``load(path)``
         always the given one.
         """
-        return cls.load(path, device) if path else cls.load_pretrained(device)
+        return cls.load(path, device) if path else cls.load_pretrained(device, cords=cords)
 
     def extra_repr(self) -> str:
         c = self.config

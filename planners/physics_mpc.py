@@ -126,3 +126,38 @@ class PhysicsMPCPolicy(CEMPolicy):
             return self._actions(plan)[: cfg.replan_every]
         zero = np.zeros(2 * len(self.ends), dtype=np.float32)
         return self._actions(plan[:1]) + [zero] * cfg.settle_actions
+
+
+class TrueCordPhysicsMPCPolicy(PhysicsMPCPolicy):
+    """physics-mpc told every episode's cord: the oracle of the benchmark on unknown cords.
+
+    It reads the environment's current cord (``env.unwrapped.cord.params``, which the agents
+    are otherwise never given) each time it plans, and simulates that cord; everything else is
+    ``PhysicsMPCPolicy``. With one fixed cord it is ``PhysicsMPCPolicy.for_env``.
+
+    Args:
+        env: The environment it acts in (wrapped or not).
+        config: CEM parameters.
+    """
+
+    def __init__(self, env: object, config: PhysicsMPCConfig | None = None) -> None:
+        base = getattr(env, "unwrapped", env)
+        self._env = base
+        super().__init__(params=base.cord.params, grasp=base.cord.grasp,
+                         max_step=base.max_step, success_threshold=base.success_threshold,
+                         config=config, success_metric=base.success_metric)
+
+    def check_env(self, env: object) -> None:
+        """Raise ``ValueError`` unless ``env`` is the environment this policy reads."""
+        if getattr(env, "unwrapped", env) is not self._env:
+            raise ValueError("TrueCordPhysicsMPCPolicy reads the cord of the environment it "
+                             "was made for: build it with TrueCordPhysicsMPCPolicy(env)")
+        self._check_threshold(self._env)
+
+    def plan(self, shape: np.ndarray, goal: np.ndarray) -> tuple[np.ndarray, float]:
+        """Simulate the environment's current cord, then plan as ``PhysicsMPCPolicy``."""
+        params = self._env.cord.params
+        if params != self.params:
+            self.params = params
+            self._cord = Cord(params, grasp=self.grasp)
+        return super().plan(shape, goal)

@@ -124,3 +124,36 @@ def test_quick_runs_the_headline_threshold_only(tmp_path):
     rows = json.loads((out / "results.json").read_text())
     assert [r["threshold"] for r in rows] == [0.01]
     assert "--threshold" not in (out / "results.md").read_text()
+
+
+def test_the_cords_section_runs_its_agents_on_held_out_cords(tmp_path, capsys):
+    """--cords runs the cord suites with the agents of the cords section among --agent; the
+    agents of that section alone never run the linear cells; rows break success down by
+    cord."""
+    out = tmp_path / "bench"
+    assert main(["benchmark", "--agent", "straight-line", "latent-tree", "latent-mpc-adaptive",
+                 "--difficulty", "1", "--threshold", "0.02", "--cords", "cords-1",
+                 "--designed", "--episodes", "7", "--env", "dlo_env/DLOEndpoint-v0",
+                 "--cords-transition-model", str(tmp_path / "none.pt"), "--allow-dirty",
+                 "--out", str(out)]) == 0
+    rows = json.loads((out / "results.json").read_text())
+    assert [(r["agent"], r["suite"], r["status"]) for r in rows] == [
+        ("straight-line", "linear-1/test", "ok"), ("straight-line", "cords-1/test", "ok"),
+        ("latent-tree", "linear-1/test", "ok"),
+        ("latent-mpc-adaptive", "cords-1/test", "missing")]
+    cords = rows[1]["cords"]
+    assert sorted(cords) == [str(i) for i in range(6)]
+    assert [c["episodes"] for c in cords.values()] == [2, 1, 1, 1, 1, 1]
+    assert rows[3]["note"].startswith("no transition model")
+    assert "--cord-inputs" in rows[3]["note"]
+    table = (out / "results.md").read_text()
+    assert "## Unknown cords" in table and "**cords-1, endpoint, 2 cm**" in table
+    assert "| cords-1" not in table.split("## Every cell")[0].split("## Unknown")[0]
+    printed = capsys.readouterr().out
+    assert "| straight-line |" in printed.split("cords-1, endpoint")[1]
+
+
+def test_agents_of_the_cords_section_alone_need_a_cord_suite(tmp_path, capsys):
+    assert main(["benchmark", "--agent", "physics-mpc-true-cord", "--quick", "--allow-dirty",
+                 "--out", str(tmp_path)]) == 2
+    assert "add --cords SUITE" in capsys.readouterr().err

@@ -70,3 +70,22 @@ def test_an_episode_records_its_moves_refits_and_reset_forgets_them():
         assert policy.moves_seen == [] and policy.cord_row.tolist() == policy.default_row.tolist()
     with pytest.raises(ValueError, match="model is required"):
         AdaptiveLatentMPCPolicy.for_env(env)
+
+
+def test_physics_mpc_true_cord_simulates_each_episode_cord():
+    from dlo_env.cord_suites import cord_task
+    from planners.physics_mpc import PhysicsMPCConfig, TrueCordPhysicsMPCPolicy
+
+    small = PhysicsMPCConfig(samples=4, elites=2, iterations=1, moves=1)
+    with gym.make("dlo_env/DLOEndpoint-v0") as env, gym.make("dlo_env/DLOEndpoint-v0") as other:
+        policy = TrueCordPhysicsMPCPolicy(env, small)
+        policy.check_env(env)
+        with pytest.raises(ValueError, match="reads the cord of the environment it was made"):
+            policy.check_env(other)
+        task = cord_task("cords-1", "test", 1)  # three times as heavy
+        obs, _ = env.reset(options=task.options())
+        policy.predict(obs, episode_start=np.array([True]), deterministic=True)
+        assert policy.params == task.params and policy._cord.params == task.params
+        obs, _ = env.reset(seed=0)
+        policy.predict(obs, episode_start=np.array([True]), deterministic=True)
+        assert policy.params == CordParams()
