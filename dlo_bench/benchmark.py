@@ -96,7 +96,8 @@ class BenchmarkConfig:
         agents: Agent names (keys of ``dlo_bench.agents.AGENTS``), in table order.
         envs: Environment ids, in table order.
         difficulties: Difficulties of every environment, each the test split of its suite
-            ``linear-K``; None: ``DEFAULT_DIFFICULTIES`` of each environment.
+            ``linear-K``; None: ``DEFAULT_DIFFICULTIES`` of each environment; empty: no
+            linear cells.
         thresholds: Success thresholds, metres: every linear cell runs once at each (the
             environment's ``success_threshold``).
         designed: Designed suites (``dlo_env.designed_suites``) run in every environment,
@@ -161,9 +162,9 @@ class BenchmarkConfig:
                              f"got {self.cords!r}")
         if self.difficulties is not None:
             bad = [d for d in self.difficulties if d not in SUITE_OF_DIFFICULTY]
-            if bad or not self.difficulties:
-                raise ValueError(f"difficulties must be some of {tuple(SUITE_OF_DIFFICULTY)}, "
-                                 f"got {self.difficulties!r}")
+            if bad:
+                raise ValueError(f"difficulties must be some of {tuple(SUITE_OF_DIFFICULTY)} "
+                                 f"(or none: no linear cells), got {self.difficulties!r}")
         ok = [isinstance(t, (int, float)) and not isinstance(t, bool) and math.isfinite(t)
               and t > 0 for t in self.thresholds]
         if not self.thresholds or not all(ok) or len(set(self.thresholds)) < len(ok):
@@ -173,6 +174,9 @@ class BenchmarkConfig:
                 set(self.designed)) < len(self.designed):
             raise ValueError(f"designed must be distinct suites of {tuple(DESIGNED_SUITES)}, "
                              f"got {self.designed!r}")
+        if not self.cells():
+            raise ValueError("the benchmark has no cell to run: give difficulties, designed or "
+                             "cord suites (with agents of the cords section)")
         size = SPLIT_SIZES["test"]
         if not (isinstance(self.episodes, int) and 1 <= self.episodes <= size):
             raise ValueError(f"episodes must be an int in 1..{size} (the test split), "
@@ -183,13 +187,14 @@ class BenchmarkConfig:
         order: the linear suites at every threshold, the designed ones at the headline
         threshold, then the cord suites of the ``cords`` section."""
         cells: list[tuple[str, str, float]] = []
-        if agent is None or agent in self.agents:
+        if (agent is None and self.agents) or agent in self.agents:
             cells += [(env, SUITE_OF_DIFFICULTY[d], t) for t in self.thresholds
                       for env in self.envs
-                      for d in (self.difficulties or DEFAULT_DIFFICULTIES.get(env, (1, 2, 3)))]
+                      for d in (self.difficulties if self.difficulties is not None
+                                else DEFAULT_DIFFICULTIES.get(env, (1, 2, 3)))]
             cells += [(env, suite, self.designed_threshold) for suite in self.designed
                       for env in self.envs]
-        if agent is None or agent in self.cord_agents:
+        if (agent is None and self.cord_agents) or agent in self.cord_agents:
             cells += [(env, suite, self.designed_threshold) for suite in self.cords
                       for env in self.cord_envs]
         return cells

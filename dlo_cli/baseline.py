@@ -26,10 +26,10 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     add_env(parser, BaselineConfig.env_id, "the environment it trains in", dest="env_id",
             alias=True)
     parser.add_argument("--cords", choices=CORDS, default=BaselineConfig.cords,
-                        help="default: every episode on the environment's cord; train: every "
-                             "episode on a cord drawn from dlo_env.randomize.DEFAULT_RANGES away "
-                             "from the held-out test cords, not told to the policy (the "
-                             "shipped sac-her-cords)")
+                        help="the cords it trains on: the environment's own in every episode, "
+                             "or (train) a cord drawn each episode from the ranges of "
+                             "docs/cords.md away from the held-out test cords, not told to the "
+                             "policy (the shipped sac-her-cords)")
     parser.add_argument("--set", nargs="+", default=[], metavar="FIELD=VALUE",
                         help="other BaselineConfig fields, values in JSON "
                              "(e.g. ppo_n_steps=512 net_arch=[64,64])")

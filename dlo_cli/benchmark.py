@@ -48,7 +48,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     defaults = "; ".join(f"{e.split('/')[-1]}: {' '.join(map(str, d))}"
                          for e, d in DEFAULT_DIFFICULTIES.items())
     add_difficulty(parser, None, "each runs the test split of suite linear-K in every "
-                                 f"--env (None: {defaults})", suites=True)
+                                 f"--env (None: {defaults}; `--difficulty` alone: none, to run "
+                                 "the designed or cord suites alone)", suites=True, nargs="*")
     parser.add_argument("--threshold", nargs="+", metavar="METRES", default=None,
                         type=number_in(float, 1e-4, 1.0, expected="a number of metres in "
                                                                   "[0.0001, 1]"),
@@ -147,7 +148,8 @@ def designed_suites(args: argparse.Namespace, flag: str = "designed") -> list[st
     given = getattr(args, flag)
     if given is not None:
         return list(dict.fromkeys(given))
-    return [] if args.quick or args.difficulty else list(getattr(BenchmarkConfig, flag))
+    return [] if args.quick or args.difficulty is not None else list(
+        getattr(BenchmarkConfig, flag))
 
 
 def split_agents(names: list[str], cords: bool) -> tuple[tuple[str, ...], tuple[str, ...]]:
@@ -201,7 +203,7 @@ def run(args: argparse.Namespace) -> int:
         QUICK_EPISODES if args.quick else BenchmarkConfig.episodes)
     config = BenchmarkConfig(
         agents=agents, cord_agents=cord_agents, envs=tuple(args.env),
-        difficulties=tuple(args.difficulty) if args.difficulty else None,
+        difficulties=tuple(args.difficulty) if args.difficulty is not None else None,
         thresholds=tuple(thresholds), designed=tuple(dict.fromkeys(designed)),
         cords=tuple(cords),
         episodes=episodes,

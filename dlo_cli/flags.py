@@ -213,10 +213,11 @@ def difficulty_type(suites: bool = False, maximum: int | None = None) -> Callabl
 
 def add_difficulty(parser: argparse.ArgumentParser | argparse._MutuallyExclusiveGroup,
                    default: list[int] | None, what: str, *, suites: bool = False,
-                   maximum: int | None = None) -> None:
+                   maximum: int | None = None, nargs: str = "+") -> None:
     """``--difficulty``: one or several task difficulties (straight moves from start to goal);
-    with ``suites``, only those of the named suites; at most ``maximum``."""
-    parser.add_argument("--difficulty", type=difficulty_type(suites, maximum), nargs="+",
+    with ``suites``, only those of the named suites; at most ``maximum``; ``nargs="*"``: or
+    none."""
+    parser.add_argument("--difficulty", type=difficulty_type(suites, maximum), nargs=nargs,
                         default=default, metavar="K",
                         help=f"difficulty, one or several: K straight moves from start to goal; "
                              f"{what}")

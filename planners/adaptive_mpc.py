@@ -9,7 +9,9 @@ and the shape at rest after it, and the fitted cord is the one whose predictions
 moves are nearest the observed shapes. The fit is a seeded random search in the logarithm
 of the parameters inside the ranges the model was trained on (``AdaptConfig``): candidates
 drawn over the whole box, then rounds of candidates around the best so far, every round one
-batched ``predict`` call. The plan then scores its candidates with the fitted cord.
+batched ``predict`` call. The cord's length is not fitted but read off the observed shape (a
+cord at rest is as long as its polyline), from the first plan on. The plan then scores its
+candidates with the fitted cord.
 """
 
 from __future__ import annotations
@@ -38,8 +40,11 @@ class AdaptConfig:
             else ``dlo_env.randomize.DEFAULT_RANGES``.
         candidates: Cords scored per round.
         rounds: Rounds after the first, each around the best cord so far with half the spread.
-        min_moves: Moves seen before the first fit (before it: the default cord).
+        min_moves: Moves seen before the first fit (before it: the default cord, with the
+            observed length).
         seed: Seed of the search (the same moves give the same cord).
+        observe_length: Read the length off the observed shape (its polyline length, the
+            length of a cord at rest) at every plan instead of fitting it.
     """
 
     ranges: Mapping[str, tuple[float, float]] | None = None
@@ -47,6 +52,7 @@ class AdaptConfig:
     rounds: int = 3
     min_moves: int = 1
     seed: int = 0
+    observe_length: bool = True
 
     def __post_init__(self) -> None:
         positive_ints(self, "candidates", "min_moves")
@@ -128,7 +134,8 @@ class AdaptiveLatentMPCPolicy(LatentMPCPolicy):
         what the cord did, and its mean error there (metres)."""
         cfg = self.adapt
         rng = np.random.default_rng(cfg.seed)
-        names = [k for k in PARAM_COLUMNS if k in self.ranges]
+        names = [k for k in PARAM_COLUMNS if k in self.ranges
+                 and not (k == "length" and cfg.observe_length)]
         cols = [PARAM_COLUMNS.index(k) for k in names]
         low = np.log([self.ranges[k][0] for k in names])
         high = np.log([self.ranges[k][1] for k in names])
@@ -164,6 +171,9 @@ class AdaptiveLatentMPCPolicy(LatentMPCPolicy):
     # ------------------------------------------------------------------ planning
     def plan(self, shape: np.ndarray, goal: np.ndarray) -> tuple[np.ndarray, float]:
         """Record the move that brought the cord here, refit the cord, then plan with it."""
+        if self.adapt.observe_length:
+            length = PARAM_COLUMNS.index("length")
+            self.cord_row[length] = float(np.linalg.norm(np.diff(shape, axis=0), axis=1).sum())
         if self._pending is not None:
             start, ends_before = self._pending
             moved = (self._end_points(shape) - ends_before).reshape(-1)

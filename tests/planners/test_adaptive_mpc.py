@@ -72,6 +72,21 @@ def test_an_episode_records_its_moves_refits_and_reset_forgets_them():
         AdaptiveLatentMPCPolicy.for_env(env)
 
 
+def test_the_length_is_read_off_the_observed_cord_not_fitted():
+    model = _model()
+    with gym.make("dlo_env/DLOEndpoint-v0") as env:
+        policy = AdaptiveLatentMPCPolicy.for_env(env, config=SMALL, model=model,
+                                                 adapt=AdaptConfig(candidates=8, rounds=1))
+        obs, _ = env.reset(seed=3, options={"params": CordParams(length=0.85)})
+        policy.predict(obs, episode_start=np.array([True]), deterministic=True)
+        assert policy.cord_row[0] == pytest.approx(0.85, rel=1e-4)
+        assert policy.cord_row[1:].tolist() == policy.default_row[1:].tolist()
+        blind = AdaptiveLatentMPCPolicy.for_env(env, config=SMALL, model=model, adapt=AdaptConfig(
+            candidates=8, rounds=1, observe_length=False))
+        blind.predict(obs, episode_start=np.array([True]), deterministic=True)
+        assert blind.cord_row[0] == 1.0
+
+
 def test_physics_mpc_true_cord_simulates_each_episode_cord():
     from dlo_env.cord_suites import cord_task
     from planners.physics_mpc import PhysicsMPCConfig, TrueCordPhysicsMPCPolicy
