@@ -26,7 +26,7 @@ from dlo_env.atomic import atomic_path, write_text_atomic
 
 ALGOS = ("ppo", "sac", "sac-her")
 #: The cords a baseline trains on (``BaselineConfig.cords``).
-CORDS = ("default", "train")
+CORDS = ("fixed", "train")
 FORMAT_VERSION = 1
 #: Episode length of the registered ``dlo_env`` environments (their ``max_episode_steps``).
 EPISODE_STEPS = 100
@@ -63,7 +63,7 @@ class BaselineConfig:
         sac_gradient_steps: Gradient steps per environment step of every environment.
         her_n_sampled_goal: Relabelled goals per real transition (HER, strategy "future").
         checkpoint_every: Environment steps between checkpoints (0: none).
-        cords: ``"default"``: every episode on the environment's cord; ``"train"``: every
+        cords: ``"fixed"``: every episode on the environment's cord; ``"train"``: every
             episode on a cord drawn from ``dlo_env.randomize.DEFAULT_RANGES`` away from the
             held-out test cords (``draw_train_cord``), which the policy is not told.
     """
@@ -91,7 +91,7 @@ class BaselineConfig:
     sac_gradient_steps: int = 1
     her_n_sampled_goal: int = 4
     checkpoint_every: int = 20_000
-    cords: str = "default"
+    cords: str = "fixed"
 
     def __post_init__(self) -> None:
         if self.algo not in ALGOS:

@@ -26,8 +26,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     add_env(parser, BaselineConfig.env_id, "the environment it trains in", dest="env_id",
             alias=True)
     parser.add_argument("--cords", choices=CORDS, default=BaselineConfig.cords,
-                        help="the cords it trains on: the environment's own in every episode, "
-                             "or (train) a cord drawn each episode from the ranges of "
+                        help="the cords it trains on: fixed, the environment's own in every "
+                             "episode; train, a cord drawn each episode from the ranges of "
                              "docs/cords.md away from the held-out test cords, not told to the "
                              "policy (the shipped sac-her-cords)")
     parser.add_argument("--set", nargs="+", default=[], metavar="FIELD=VALUE",
