@@ -382,19 +382,29 @@ def train_transition_model(
                 mine.copy_(theirs)
     elif tc.init:
         start = TransitionModel.load(tc.init, device="cpu")
-        # A network that learnt both handednesses is a fine start for one that sees one, and
-        # one without contact vectors for one with them (their weights start at zero).
+        # A network that learnt both handednesses is a fine start for one that sees one, one
+        # without contact vectors for one with them, and one of the default cord for one of
+        # several cords (the new inputs' weights start at zero: it first predicts every cord
+        # as the default, exactly as before).
         seen = replace(start.config, mean_network=False, mean_by_grasp=False, mean_width=None,
                        mirror=mc.mirror)
-        grow = not seen.contact_reach and mc.contact_reach
-        differ = [f"{k}={v!r} (this run {getattr(mc, k)!r})" for k, v in asdict(
-            replace(seen, contact_reach=mc.contact_reach) if grow else seen).items()
-            if getattr(mc, k) != v]
+        grow_contact = not seen.contact_reach and mc.contact_reach
+        grow_cord = not seen.cord_inputs and mc.cord_inputs
+        grown = replace(seen, contact_reach=mc.contact_reach if grow_contact
+                        else seen.contact_reach, cord_inputs=seen.cord_inputs or grow_cord)
+        differ = [f"{k}={v!r} (this run {getattr(mc, k)!r})" for k, v in asdict(grown).items()
+                  if getattr(mc, k) != v]
         if differ:
             raise ValueError(f"init {tc.init!r} is a model of another architecture or cord: "
                              f"{', '.join(differ)}")
-        model.net.load_state_dict((start.net.with_inputs(
-            seen.contact_at, mc.inputs - seen.inputs) if grow else start.net).state_dict())
+        first_net = start.net
+        if grow_contact:
+            after = replace(seen, contact_reach=mc.contact_reach)
+            first_net = first_net.with_inputs(seen.contact_at, after.inputs - seen.inputs)
+            seen = after
+        if grow_cord:  # the cord's features come before the move's four inputs
+            first_net = first_net.with_inputs(seen.inputs - 4, mc.cord_features)
+        model.net.load_state_dict(first_net.state_dict())
         # What fine-tuning started from: its weights' fingerprint and its own provenance.
         init_record = {"fingerprint": fingerprint(start.net), "info": start.info}
     net = None if teacher is None else trained  # what the losses run

@@ -805,3 +805,33 @@ def test_a_widened_ensemble_predicts_exactly_as_before_and_fine_tunes_at_its_wid
     tuned = train_transition_model(data, tmp_path / "run", tc, replace(TINY, width=48),
                                    device="cpu")
     assert tuned.net.weights[0].shape[-1] == 48
+
+
+def test_a_model_of_one_cord_starts_a_model_of_several_cords(data, tmp_path):
+    """--init of a one-cord model with --cord-inputs: the cord's inputs start at zero weight,
+    so the grown model first predicts every cord as the one-cord model predicts its own."""
+    from dlo_env import CordParams
+
+    tc = TransitionTrainConfig(steps=20, batch_size=64, chain_batch=16, eval_every=20,
+                               validation_fraction=0.2)
+    first = train_transition_model(data, tmp_path / "a", tc, replace(TINY, contact_reach=0.03),
+                                   device="cpu")
+    still = TransitionTrainConfig(**{**tc.__dict__, "steps": 1, "lr": 1e-12,
+                                     "init": str(tmp_path / "a" / "transition.pt")})
+    grown = train_transition_model(data, tmp_path / "b", still,
+                                   replace(TINY, contact_reach=0.03, cord_inputs=True),
+                                   device="cpu")
+    assert grown.config.cord_inputs
+    shapes = data.start[:5]
+    d = np.random.default_rng(3).uniform(-0.2, 0.2, size=(5, 4)).astype(np.float32)
+    other = CordParams(bending_stiffness=0.004, mass=0.25)
+    for end, move in (("head", d[:, :2]), ("both", d)):
+        base = first.predict(shapes, end, move, inextensible=False)
+        assert np.allclose(grown.predict(shapes, end, move, inextensible=False), base, atol=1e-3)
+        assert np.allclose(grown.predict(shapes, end, move, params=other, inextensible=False),
+                           base, atol=1e-3)
+    with pytest.raises(ValueError, match=r"another architecture or cord: cord_inputs=True "
+                       r"\(this run False\)$"):  # not the other way round
+        train_transition_model(data, tmp_path / "c", TransitionTrainConfig(
+            **{**still.__dict__, "init": str(tmp_path / "b" / "transition.pt")}),
+            replace(TINY, contact_reach=0.03), device="cpu")
