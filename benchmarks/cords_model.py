@@ -81,7 +81,8 @@ def report(model: TransitionModel, data: TransitionDataset, default: TransitionD
         sel = cords == i
         if sel.any():
             rows[f"cord {i}"] = summary(e[sel], data.grasp[sel])
-    rows["test cords"] = summary(e, data.grasp)
+    on_test = cords >= 0
+    rows["test cords"] = summary(e[on_test], data.grasp[on_test])
     if default is not None:
         rows["default cord"] = summary(errors(model, default), default.grasp)
     return rows

@@ -19,7 +19,7 @@ benchmarks/transition_scaling``::
     python benchmarks/transition_scaling.py --data data/transitions-scale-20.npz \\
         --validation data/transitions-val-4.npz \\
         [--sizes 6250 12500 25000 50000 100000 200000] [--steps 100000] [--width 256] \\
-        [--threads 1] [--reference-size 840000]
+        [--threads 1] [--reference-size 840000] [--architecture chain] [--cord-inputs]
 """
 
 from __future__ import annotations
@@ -146,6 +146,10 @@ def main() -> None:
     parser.add_argument("--reference-size", type=float, default=None,
                         help="transitions the reference model was trained on: it is drawn "
                              "there (the shipped model: 840000, of several kinds)")
+    parser.add_argument("--cord-inputs", action="store_true",
+                        help="networks that see each move's cord, for --data of several cords "
+                             "(dlo collect --randomize); --validation may then be moves of the "
+                             "held-out test cords (dlo collect --test-cords)")
     parser.add_argument("--threads", type=int, default=1)
     parser.add_argument("--seed", type=int, default=0)
     parser.add_argument("--runs", default="runs/transition-scaling",
@@ -177,12 +181,16 @@ def main() -> None:
     if depth < 1:
         parser.error(f"--depth must be >= 1, got {depth}")
     mc = TransitionModelConfig(members=1, contact_reach=0.03, width=args.width,
-                               architecture=args.architecture, depth=depth)
+                               architecture=args.architecture, depth=depth,
+                               cord_inputs=args.cord_inputs)
     # a row is fitted with others only if they agree on all of these (the MLP of the shipped
     # depth keeps the settings and names of the runs made before the chain network)
     design = {} if (args.architecture, depth) == ("mlp", TransitionModelConfig.depth) else {
         "architecture": args.architecture, "depth": depth}
-    suffix = "".join(f"-{v}" if k == "architecture" else f"-d{v}" for k, v in design.items())
+    if args.cord_inputs:
+        design["cord_inputs"] = True
+    suffix = "".join({"architecture": f"-{v}", "depth": f"-d{v}", "cord_inputs": "-cords"}[k]
+                     for k, v in design.items())
     settings = {"data": data_digest, "validation": validation_digest, "steps": args.steps,
                 "width": args.width, "seed": args.seed, "fit_sample": args.fit_sample, **design}
     for size in sorted(args.sizes):

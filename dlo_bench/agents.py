@@ -208,15 +208,16 @@ def _physics_mpc_true_cord(env: Any, options: AgentOptions) -> Policy:
     return TrueCordPhysicsMPCPolicy(env, PhysicsMPCConfig(seed=options.seed))
 
 
-def _sb3(algo: str, shipped: str = "") -> Callable[[Any, AgentOptions], Policy]:
+def _sb3(algo: str, shipped: str = "", cords: str = "") -> Callable[[Any, AgentOptions], Policy]:
     """The builder of an SB3 agent ``algo``; ``shipped``: its shipped folder's name when it
-    is not ``algo`` (``sac-her-cords``)."""
+    is not ``algo`` (``sac-her-cords``); ``cords``: the cords its model must have trained on
+    (``BaselineConfig.cords``; "" any)."""
     def build(env: Any, options: AgentOptions) -> Policy:
         from dlo_bench.baselines import load_baseline
 
         folder = (options.baseline if options.baseline is not None
                   else shipped_baseline(shipped or algo, env.unwrapped.spec.id))
-        return load_baseline(folder, device=options.device, algo=algo)
+        return load_baseline(folder, device=options.device, algo=algo, cords=cords)
 
     return build
 
@@ -266,8 +267,8 @@ AGENTS: dict[str, AgentSpec] = {spec.name: spec for spec in (
               "unknown cords)", _physics_mpc_true_cord, environments=(ENDPOINT, DUAL_ENDPOINT),
               cords=True),
     AgentSpec("sac-her-cords", "SAC + HER trained on randomised cords (Stable-Baselines3)",
-              _sb3("sac-her", "sac-her-cords"), environments=(ENDPOINT, DUAL_ENDPOINT),
-              extra="rl", cords=True,
+              _sb3("sac-her", "sac-her-cords", cords="train"),
+              environments=(ENDPOINT, DUAL_ENDPOINT), extra="rl", cords=True,
               train="dlo baseline --algo sac-her --cords train --env {env}"),
 )}
 

@@ -27,6 +27,8 @@ from dlo_env.atomic import atomic_path, write_text_atomic
 ALGOS = ("ppo", "sac", "sac-her")
 #: The cords a baseline trains on (``BaselineConfig.cords``).
 CORDS = ("fixed", "train")
+#: The spawn key of ``RandomCords``' random stream.
+CORDS_STREAM = 7
 FORMAT_VERSION = 1
 #: Episode length of the registered ``dlo_env`` environments (their ``max_episode_steps``).
 EPISODE_STEPS = 100
@@ -135,14 +137,20 @@ class RandomCords(gym.Wrapper):
 
     def __init__(self, env: gym.Env, seed: int = 0) -> None:
         super().__init__(env)
-        self._rng = np.random.default_rng(seed)
+        self._rng = self._stream(seed)
+
+    @staticmethod
+    def _stream(seed: int) -> np.random.Generator:
+        """The cords' own stream for ``seed``: not the one the environment and
+        ``RandomDifficulty`` draw from with the same seed."""
+        return np.random.default_rng(np.random.SeedSequence(seed, spawn_key=(CORDS_STREAM,)))
 
     def reset(self, *, seed: int | None = None, options: dict | None = None):
         """Reset on a drawn cord unless ``options`` names one."""
         from dlo_env.randomize import draw_train_cord
 
         if seed is not None:
-            self._rng = np.random.default_rng(seed)
+            self._rng = self._stream(seed)
         options = dict(options or {})
         if "params" not in options:
             options["params"] = draw_train_cord(self.env.unwrapped.params, self._rng)
@@ -176,7 +184,7 @@ def _make_env(config: BaselineConfig, rank: int, monitor_dir: str | None,
 
     env = gym.make(config.env_id, reward_type=config.reward_type)
     if config.cords == "train":
-        env = RandomCords(env, seed=config.seed + 1000 * rank + 7)
+        env = RandomCords(env, seed=config.seed + 1000 * rank)
     env = RandomDifficulty(env, config.difficulties, seed=config.seed + 1000 * rank)
     path = None if monitor_dir is None else os.path.join(monitor_dir, str(rank))
     return Monitor(env, path, info_keywords=("is_success",), override_existing=not append)
@@ -411,20 +419,23 @@ def read_baseline_metadata(path: str | os.PathLike) -> dict[str, Any]:
     return meta
 
 
-def load_baseline(path: str | os.PathLike, device: str = "cpu", algo: str = "") -> Any:
+def load_baseline(path: str | os.PathLike, device: str = "cpu", algo: str = "",
+                  cords: str = "") -> Any:
     """Load a folder written by ``train_baseline`` (or its ``model.zip``).
 
     Args:
         path: The folder (or its ``model.zip``).
         device: Torch device.
         algo: The algorithm the folder must hold ("" accepts any of ``ALGOS``).
+        cords: The cords it must have trained on (``BaselineConfig.cords``; "" accepts any).
 
     Returns:
         The SB3 model; it has ``predict(obs, state, episode_start, deterministic)``.
 
     Raises:
         FileNotFoundError: If the folder holds no baseline.
-        ValueError: If it holds another algorithm than ``algo`` or another format version.
+        ValueError: If it holds another algorithm than ``algo``, was trained on other cords
+            than ``cords``, or has another format version.
     """
     from stable_baselines3 import PPO, SAC
 
@@ -433,6 +444,9 @@ def load_baseline(path: str | os.PathLike, device: str = "cpu", algo: str = "") 
     config = BaselineConfig.from_dict(read_baseline_metadata(folder)["config"])
     if algo and config.algo != algo:
         raise ValueError(f"baseline {str(folder)!r} holds a {config.algo} model, not {algo}")
+    if cords and config.cords != cords:
+        raise ValueError(f"baseline {str(folder)!r} was trained with --cords {config.cords}, "
+                         f"not --cords {cords}")
     model_path = folder / "model.zip"
     if config.algo == "ppo":
         return PPO.load(model_path, device=device)

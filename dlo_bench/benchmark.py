@@ -103,9 +103,10 @@ class BenchmarkConfig:
         designed: Designed suites (``dlo_env.designed_suites``) run in every environment,
             once, at the headline threshold (or the first of ``thresholds`` without it).
         cords: Cord suites (``dlo_env.cord_suites``: every task on its own held-out cord, not
-            told to the agents) of the ``cords`` section, run at the designed threshold.
-        cord_agents: The agents of the ``cords`` section (the agents marked ``cords`` in the
-            registry run only there).
+            told to the agents) of the ``cords`` section, run at the designed threshold (none
+            by default here; ``dlo benchmark`` runs ``DEFAULT_CORDS``).
+        cord_agents: The agents of the ``cords`` section, when it runs (the agents marked
+            ``cords`` in the registry run only there).
         cord_envs: The environments of the ``cords`` section.
         episodes: Episodes per cell (the first tasks of the split; the split has 50).
         seed: Seed of the planners' sampling.
@@ -127,7 +128,7 @@ class BenchmarkConfig:
     difficulties: tuple[int, ...] | None = None
     thresholds: tuple[float, ...] = THRESHOLDS
     designed: tuple[str, ...] = DEFAULT_DESIGNED
-    cords: tuple[str, ...] = DEFAULT_CORDS
+    cords: tuple[str, ...] = ()
     cord_agents: tuple[str, ...] = CORD_AGENTS
     cord_envs: tuple[str, ...] = CORD_ENVS
     episodes: int = SPLIT_SIZES["test"]
@@ -195,6 +196,7 @@ class BenchmarkConfig:
             cells += [(env, suite, self.designed_threshold) for suite in self.designed
                       for env in self.envs]
         if (agent is None and self.cord_agents) or agent in self.cord_agents:
+            # (no cells without cord suites)
             cells += [(env, suite, self.designed_threshold) for suite in self.cords
                       for env in self.cord_envs]
         return cells
@@ -202,8 +204,8 @@ class BenchmarkConfig:
     @property
     def all_agents(self) -> tuple[str, ...]:
         """Every agent of the run, in table order: ``agents``, then the rest of
-        ``cord_agents``."""
-        return tuple(dict.fromkeys((*self.agents, *self.cord_agents)))
+        ``cord_agents`` (when cord suites run)."""
+        return tuple(dict.fromkeys((*self.agents, *(self.cord_agents if self.cords else ()))))
 
     @property
     def designed_threshold(self) -> float:

@@ -354,7 +354,7 @@ def results_markdown(rows: list[dict[str, Any]], machine: dict[str, Any], comman
     """The Markdown report: success per cell, the detailed table, the speed ratios, missing
     agents, machine and command."""
     episodes = max((r["episodes"] for r in rows), default=0)
-    thresholds = headline_first(thresholds_of(rows))
+    thresholds = headline_first(thresholds_of([r for r in rows if not is_cords_row(r)]))
     lines = [
         "# Benchmark results",
         "",
@@ -431,8 +431,9 @@ def results_markdown(rows: list[dict[str, Any]], machine: dict[str, Any], comman
 
 def write_results(rows: list[dict[str, Any]], out_dir: str | os.PathLike, command: str,
                   seconds: float) -> dict[str, Path]:
-    """Write ``results.json``, ``results.md`` and ``results.png`` into ``out_dir`` atomically,
-    and ``results_designed.png`` (designed goals and the shapes reached) with designed cells.
+    """Write ``results.json``, ``results.md`` and ``results.png`` (the cells outside the
+    section on unknown cords; none without any) into ``out_dir`` atomically, and
+    ``results_designed.png`` (designed goals and the shapes reached) with designed cells.
 
     Returns:
         The paths, by kind (``json``, ``md``, ``png``, ``designed_png``).
@@ -440,12 +441,15 @@ def write_results(rows: list[dict[str, Any]], out_dir: str | os.PathLike, comman
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     machine = machine_description()
-    paths = {"json": out / "results.json", "md": out / "results.md", "png": out / "results.png"}
+    paths = {"json": out / "results.json", "md": out / "results.md"}
     write_text_atomic(paths["json"], json.dumps(json_ready(rows), indent=2) + "\n")
     write_text_atomic(paths["md"], results_markdown(rows, machine, command, seconds))
     from dlo_bench.charts import plot_designed, plot_results
 
-    plot_results(rows, paths["png"])
+    charted = [r for r in rows if not is_cords_row(r)]
+    if charted:
+        paths["png"] = out / "results.png"
+        plot_results(charted, paths["png"])
     panels = designed_panels(rows, out)
     if panels:
         paths["designed_png"] = out / "results_designed.png"

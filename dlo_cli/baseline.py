@@ -34,7 +34,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help="other BaselineConfig fields, values in JSON "
                              "(e.g. ppo_n_steps=512 net_arch=[64,64])")
     parser.add_argument("--out", default=None,
-                        help="output folder (None: runs/baseline/ALGO)")
+                        help="output folder (None: runs/baseline/ALGO, or ALGO-cords with "
+                             "--cords train)")
     parser.add_argument("--resume", action="store_true",
                         help="continue an interrupted run from OUT/checkpoint.zip")
     parser.add_argument("--device", default="cpu", help="torch device: cpu or cuda")
@@ -93,7 +94,8 @@ def run(args: argparse.Namespace) -> int:
         config = BaselineConfig.from_dict(settings)
     except TypeError as exc:  # a --set value of the wrong type
         raise ValueError(f"--set: {exc}") from exc
-    out = Path(args.out) if args.out else default_out("baseline") / config.algo
+    suffix = "-cords" if config.cords == "train" else ""  # the benchmark's folder names
+    out = Path(args.out) if args.out else default_out("baseline") / f"{config.algo}{suffix}"
     print(f"training {config.algo} on {config.env_id} (difficulties {config.difficulties}, "
           f"{config.cords} cords) for "
           f"{config.timesteps} steps with {config.n_envs} envs -> {out}")

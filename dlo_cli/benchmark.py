@@ -23,6 +23,7 @@ from dlo_cli.flags import (
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     """Flags of ``dlo benchmark``; defaults are ``BenchmarkConfig``'s (the published table)."""
     from dlo_bench.benchmark import (
+        DEFAULT_CORDS,
         DEFAULT_DIFFICULTIES,
         HEADLINE_THRESHOLD,
         QUICK_EPISODES,
@@ -43,7 +44,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                              "every cell compares with the published table's 50 tasks per "
                              f"cell, unlike the quick looks of dlo evaluate; {QUICK_EPISODES} "
                              "with --quick)")
-    add_agent(parser, default=list(BenchmarkConfig().all_agents), sb3=False)
+    add_agent(parser, default=list(BenchmarkConfig(cords=DEFAULT_CORDS).all_agents), sb3=False)
     add_env(parser, list(BenchmarkConfig.envs), "environments, one or several", several=True)
     defaults = "; ".join(f"{e.split('/')[-1]}: {' '.join(map(str, d))}"
                          for e, d in DEFAULT_DIFFICULTIES.items())
@@ -75,7 +76,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                                  e.split("/")[-1] for e in BenchmarkConfig.cord_envs)
                              + " at the headline threshold by the agents of that section ("
                              + " ".join(BenchmarkConfig.cord_agents) + ") among --agent "
-                             "(default: " + " ".join(BenchmarkConfig.cords) + "; none with "
+                             "(default: " + " ".join(DEFAULT_CORDS) + "; none with "
                              "--quick or --difficulty; `--cords` alone: none)")
     parser.add_argument("--baselines", default=BenchmarkConfig.baselines,
                         help="folder with one `dlo baseline` output folder per RL agent and "
@@ -143,13 +144,13 @@ def designed_suites(args: argparse.Namespace, flag: str = "designed") -> list[st
     """The designed (or with ``flag="cords"``, cord) suites to run: ``--designed`` as given
     (alone: none); by default the config's, or none with ``--quick`` or ``--difficulty`` (a
     smoke test, a subset of cells)."""
-    from dlo_bench.benchmark import BenchmarkConfig
+    from dlo_bench.benchmark import DEFAULT_CORDS, BenchmarkConfig
 
     given = getattr(args, flag)
     if given is not None:
         return list(dict.fromkeys(given))
-    return [] if args.quick or args.difficulty is not None else list(
-        getattr(BenchmarkConfig, flag))
+    defaults = {"designed": BenchmarkConfig.designed, "cords": DEFAULT_CORDS}[flag]
+    return [] if args.quick or args.difficulty is not None else list(defaults)
 
 
 def split_agents(names: list[str], cords: bool) -> tuple[tuple[str, ...], tuple[str, ...]]:

@@ -61,7 +61,8 @@ def cord_task(suite: str, split: str, index: int, grasp: str = "head") -> CordTa
     """Task ``index`` of a cord suite's split."""
     _check(suite, split)
     seeds = suite_seeds(f"linear-{CORD_SUITES[suite]}", split)
-    if not (isinstance(index, (int, np.integer)) and 0 <= index < len(seeds)):
+    if not (isinstance(index, (int, np.integer)) and not isinstance(index, bool)
+            and 0 <= index < len(seeds)):
         raise ValueError(f"index must be an int in 0..{len(seeds) - 1}, got {index!r}")
     seed = int(seeds[index])
     if split == "test":
@@ -87,7 +88,7 @@ def load_cord_suite(suite: str, split: str = "test", *, grasp: str = "head",
     _check(suite, split)
     count = SPLIT_SIZES[split]
     if limit is not None:
-        if not (isinstance(limit, int) and limit >= 0):
+        if not (isinstance(limit, int) and not isinstance(limit, bool) and limit >= 0):
             raise ValueError(f"limit must be an int >= 0 or None, got {limit!r}")
         count = min(count, limit)
     return [cord_task(suite, split, i, grasp) for i in range(count)]

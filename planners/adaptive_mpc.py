@@ -113,7 +113,8 @@ class AdaptiveLatentMPCPolicy(LatentMPCPolicy):
         """Build the policy for a ``dlo_env`` environment (the cord's parameters are not read:
         they are what the policy fits)."""
         if model is None:
-            raise ValueError("model is required: no cord-conditioned transition model ships")
+            raise ValueError("model is required: a transition model of several cords "
+                             "(TransitionModel.load_pretrained(cords=True) is the shipped one)")
         base = getattr(env, "unwrapped", env)
         policy = cls(model, grasp=base.cord.grasp, success_threshold=base.success_threshold,
                      config=config, success_metric=base.success_metric, adapt=adapt)

@@ -12,7 +12,7 @@ each candidate costs a full simulation. That cost is what the latent-tree planne
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -52,6 +52,11 @@ class PhysicsMPCConfig(CEMConfig):
         non_negative_ints(self, "settle_actions")
 
 
+#: Relative difference between the observed length (the shape's polyline at rest) and
+#: ``params.length`` above which physics-mpc simulates the observed length.
+LENGTH_TOLERANCE = 0.01
+
+
 class PhysicsMPCPolicy(CEMPolicy):
     """CEM model-predictive control with the cord simulator as the model.
 
@@ -62,6 +67,11 @@ class PhysicsMPCPolicy(CEMPolicy):
         max_step: The environment's ``max_step`` (metres per unit action).
         success_threshold: Shape error (metres) below which the policy holds still.
         config: CEM parameters.
+
+    A cord observed at another length than ``params.length`` (by more than
+    ``LENGTH_TOLERANCE``) is simulated at its observed length, the other parameters kept: a
+    shape cannot be reset onto a cord of another length, and a cord's length is seen, unlike
+    its stiffness, friction or mass.
     """
 
     def __init__(
@@ -104,6 +114,17 @@ class PhysicsMPCPolicy(CEMPolicy):
                 "with PhysicsMPCPolicy.for_env(env)"
             )
         self._check_threshold(base)
+
+    def plan(self, shape: np.ndarray, goal: np.ndarray) -> tuple[np.ndarray, float]:
+        """Simulate the cord at its observed length when that differs from ``params``'s, then
+        plan (CEM over straight moves)."""
+        length = float(np.linalg.norm(np.diff(shape, axis=0), axis=1).sum())
+        params = self.params
+        if abs(length - params.length) > LENGTH_TOLERANCE * params.length:
+            params = replace(params, length=length)
+        if params != self._cord.params:
+            self._cord = Cord(params, grasp=self.grasp)
+        return super().plan(shape, goal)
 
     def _rollout(self, shape: np.ndarray, plan: np.ndarray) -> np.ndarray:
         """Simulate one candidate ``(moves, ends, 2)`` from ``shape``; return the final shape."""
@@ -156,8 +177,11 @@ class TrueCordPhysicsMPCPolicy(PhysicsMPCPolicy):
 
     def plan(self, shape: np.ndarray, goal: np.ndarray) -> tuple[np.ndarray, float]:
         """Simulate the environment's current cord, then plan as ``PhysicsMPCPolicy``."""
-        params = self._env.cord.params
-        if params != self.params:
-            self.params = params
-            self._cord = Cord(params, grasp=self.grasp)
+        self.params = self._env.cord.params
         return super().plan(shape, goal)
+
+    def _copies(self, size: int) -> list:
+        if size > 1:
+            raise ValueError("TrueCordPhysicsMPCPolicy reads the cord of the one environment "
+                             f"it was made for: it takes a batch of 1, got {size} observations")
+        return super()._copies(size)

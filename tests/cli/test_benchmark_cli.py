@@ -148,9 +148,27 @@ def test_the_cords_section_runs_its_agents_on_held_out_cords(tmp_path, capsys):
     assert "--cord-inputs" in rows[3]["note"]
     table = (out / "results.md").read_text()
     assert "## Unknown cords" in table and "**cords-1, endpoint, 2 cm**" in table
+    only = tmp_path / "cords-only"
+    assert main(["benchmark", "--agent", "straight-line", "--difficulty", "--designed",
+                 "--cords", "cords-1", "--threshold", "0.02", "--episodes", "1",
+                 "--allow-dirty", "--out", str(only)]) == 0
+    alone = (only / "results.md").read_text()
+    assert "## Success" not in alone and "## Unknown cords" in alone  # no empty table
     assert "| cords-1" not in table.split("## Every cell")[0].split("## Unknown")[0]
     printed = capsys.readouterr().out
     assert "| straight-line |" in printed.split("cords-1, endpoint")[1]
+
+
+def test_a_config_made_in_code_runs_no_cords_section_unless_asked():
+    from dlo_bench.benchmark import CORD_AGENTS, BenchmarkConfig
+
+    config = BenchmarkConfig(agents=("straight-line",), designed=())
+    assert config.all_agents == ("straight-line",)
+    assert all(suite.startswith("linear-") for _, suite, _ in config.cells())
+    asked = BenchmarkConfig(agents=("straight-line",), designed=(), cords=("cords-3",))
+    assert asked.all_agents == ("straight-line", *CORD_AGENTS[1:])
+    assert asked.cells("physics-mpc-true-cord") == [
+        ("dlo_env/DLOEndpoint-v0", "cords-3", 0.01)]
 
 
 def test_agents_of_the_cords_section_alone_need_a_cord_suite(tmp_path, capsys):

@@ -128,6 +128,27 @@ def test_random_difficulty_draws_only_the_given_difficulties_and_repeats_with_a_
     assert env.reset(options={"difficulty": 1})[1]["difficulty"] == 1
 
 
+def test_random_cords_draw_train_cords_from_a_stream_of_their_own():
+    from dlo_bench.baselines import RandomCords, _make_env
+    from dlo_env import CordParams
+    from dlo_env.randomize import DEFAULT_RANGES, draw_train_cord, near_test_cords
+
+    env = RandomCords(gym.make(ENV_ID), seed=0)
+    drawn = [env.reset(seed=5 if i == 0 else None)[1]["params"] for i in range(6)]
+    again = [env.reset(seed=5 if i == 0 else None)[1]["params"] for i in range(6)]
+    assert drawn == again and len(set(drawn)) == 6
+    rows = [[getattr(p, k) for k in DEFAULT_RANGES] for p in drawn]
+    assert not near_test_cords(rows, tuple(DEFAULT_RANGES)).any()
+    # not the stream the environment and RandomDifficulty draw from with the same seed
+    assert drawn[0] != draw_train_cord(CordParams(), np.random.default_rng(5))
+    told = CordParams(mass=0.2)
+    assert env.reset(options={"params": told})[1]["params"] == told
+    plain = _make_env(BaselineConfig(), 0, None)
+    assert plain.reset(seed=1)[1]["params"] == CordParams()  # --cords fixed: the env's cord
+    trained = _make_env(BaselineConfig(cords="train"), 0, None)
+    assert trained.reset(seed=1)[1]["params"] != CordParams()
+
+
 def test_baseline_config_rejects_bad_settings():
     with pytest.raises(ValueError, match="algo"):
         BaselineConfig(algo="dqn")
@@ -137,6 +158,8 @@ def test_baseline_config_rejects_bad_settings():
         BaselineConfig(difficulties=(0,))
     with pytest.raises(ValueError, match="unknown keys"):
         BaselineConfig.from_dict({"algo": "ppo", "learning_rte": 1e-3})
+    with pytest.raises(ValueError, match="cords must be one of"):
+        BaselineConfig(cords="random")
 
 
 @pytest.mark.slow
@@ -153,6 +176,8 @@ def test_training_writes_model_hyperparameters_logs_and_curve_and_reloads(tiny_m
     assert len(logs["length"]) >= 1 and logs["timesteps"][-1] <= meta["trained_timesteps"]
     model = load_baseline(folder)
     assert model.num_timesteps == meta["trained_timesteps"]
+    with pytest.raises(ValueError, match="trained with --cords fixed, not --cords train"):
+        load_baseline(folder, cords="train")
     _assert_within_bounds(_actions(model, steps=10))
     agent = build_agent(f"sb3:{folder}", gym.make(ENV_ID))
     obs, _ = gym.make(ENV_ID).reset(seed=0)

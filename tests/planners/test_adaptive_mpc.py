@@ -104,3 +104,30 @@ def test_physics_mpc_true_cord_simulates_each_episode_cord():
         obs, _ = env.reset(seed=0)
         policy.predict(obs, episode_start=np.array([True]), deterministic=True)
         assert policy.params == CordParams()
+
+
+def test_physics_mpc_simulates_a_cord_of_another_length_at_its_observed_length():
+    """A cord of another length cannot be reset onto the default cord: physics-mpc simulates
+    the default cord's other parameters at the observed length (one test cord is 0.85 m)."""
+    from dataclasses import replace as with_fields
+
+    from dlo_env.cord_suites import cord_task
+    from planners.physics_mpc import PhysicsMPCConfig, PhysicsMPCPolicy, TrueCordPhysicsMPCPolicy
+
+    small = PhysicsMPCConfig(samples=4, elites=2, iterations=1, moves=1)
+    task = cord_task("cords-1", "test", 2)
+    assert task.params.length == 0.85
+    with gym.make("dlo_env/DLOEndpoint-v0") as env:
+        policy = PhysicsMPCPolicy.for_env(env, small)
+        obs, _ = env.reset(options=task.options())
+        policy.predict(obs, episode_start=np.array([True]), deterministic=True)
+        simulated = policy._cord.params
+        assert simulated.length == pytest.approx(0.85, rel=1e-4)
+        assert with_fields(simulated, length=1.0) == CordParams()  # the rest: the default
+        assert policy.params == CordParams()  # what it was told stays the default cord
+        obs, _ = env.reset(seed=0)
+        policy.predict(obs, episode_start=np.array([True]), deterministic=True)
+        assert policy._cord.params == CordParams()  # the default length: exactly the default
+        oracle = TrueCordPhysicsMPCPolicy(env, small)
+        with pytest.raises(ValueError, match="takes a batch of 1, got 2 observations"):
+            oracle.predict({k: np.stack([v, v]) for k, v in obs.items()}, deterministic=True)
