@@ -61,9 +61,20 @@ MODEL_FILE = "transition.pt"
 CORDS_MODEL_FILE = "transition-cords.pt"
 #: Predictions per network call in ``predict`` (keeps activations in cache).
 PREDICT_CHUNK = 4096
-#: Values of config fields added after the first files were written, for files without them.
-LEGACY_CONFIG = {"rim_targets": 1, "mean_network": False, "mirror": False,
-                 "mean_by_grasp": False, "contact_reach": 0.0}
+#: Config fields every file must state: files from before they existed are no longer read
+#: (no shipped model is one); fields added since (``architecture``, ``cord_inputs``) default
+#: to what such files behaved by.
+REQUIRED_CONFIG = ("rim_targets", "mean_network", "mirror", "mean_by_grasp", "contact_reach")
+
+
+def check_config_keys(config: dict[str, Any], name: str) -> None:
+    """Raise a one-line ``ValueError`` when a saved config lacks a ``REQUIRED_CONFIG`` field
+    (a file written before it existed)."""
+    missing = [k for k in REQUIRED_CONFIG if k not in config]
+    if missing:
+        raise ValueError(f"{name}: a transition model file from before {', '.join(missing)} "
+                         "existed, which this version no longer reads: train it again with "
+                         "dlo train --stage transition")
 
 
 def _grasp_argument(grasp: str | None, end: str | None) -> str:
@@ -754,10 +765,10 @@ class TransitionModel(nn.Module):
     def from_state(cls, data: dict[str, Any], device: str | torch.device = "auto",
                    name: str = "path") -> TransitionModel:
         """Rebuild a model from a checkpoint dict (as written by ``save``)."""
+        if isinstance(data.get("config"), dict):
+            check_config_keys(data["config"], name)
         try:
-            # Fields added later take the value that files written before them behaved by.
-            values = {**LEGACY_CONFIG, **data["config"]}
-            config = config_from_dict(TransitionModelConfig, values, "config")
+            config = config_from_dict(TransitionModelConfig, data["config"], "config")
             model = cls(config, device="cpu", info=data.get("info"))
             model.net.load_state_dict({k: v.float() for k, v in data["net"].items()})
             if model.mean_net is not None:

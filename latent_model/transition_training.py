@@ -47,10 +47,10 @@ from dlo_env.randomize import near_test_cords
 from latent_model.checkpoint import load_checkpoint, save_atomic
 from latent_model.config import LR_SCHEDULES, config_from_dict
 from latent_model.transition_model import (
-    LEGACY_CONFIG,
     EnsembleMLP,
     TransitionModel,
     TransitionModelConfig,
+    check_config_keys,
     cord_features,
 )
 
@@ -413,8 +413,8 @@ def train_transition_model(
     step = 0
     if resume and checkpoint.is_file():
         saved = load_checkpoint(checkpoint, str(checkpoint), kind=CHECKPOINT_FORMAT, version=1)
-        saved_mc = config_from_dict(TransitionModelConfig,
-                                    {**LEGACY_CONFIG, **saved["model_config"]}, "model_config")
+        check_config_keys(saved["model_config"], str(checkpoint))
+        saved_mc = config_from_dict(TransitionModelConfig, saved["model_config"], "model_config")
         saved_tc = config_from_json(saved["train_config"])
         if saved_tc != tc or saved_mc != mc:
             differ = [f"{k}={a!r} (now {b!r})" for old, new in ((saved_tc, tc), (saved_mc, mc))

@@ -335,14 +335,17 @@ def test_save_and_load_round_trip_and_a_corrupt_file_is_refused(model, tmp_path)
         TransitionModel.load(tmp_path / "missing.pt")
 
 
-def test_a_file_from_before_rim_targets_loads_with_the_leading_ends_target_only():
+def test_a_file_from_before_rim_targets_is_refused_in_one_line():
     old = TransitionModel(TransitionModelConfig(width=16, depth=1, members=2, rim_targets=1,
                                                 mirror=False), device="cpu")
     state = old.state()
     del state["config"]["rim_targets"]  # as the files written before the field existed
     del state["config"]["mirror"]
-    loaded = TransitionModel.from_state(state, device="cpu")
-    assert loaded.config.rim_targets == 1 and loaded.config == old.config
+    with pytest.raises(ValueError, match=r"^path: a transition model file from before "
+                       r"rim_targets, mirror existed, which this version no longer reads: "
+                       r"train it again with dlo train --stage transition$"):
+        TransitionModel.from_state(state, device="cpu")
+    assert TransitionModel.from_state(old.state(), device="cpu").config == old.config
 
 
 def test_chain_starts_only_link_consecutive_moves_of_one_cord():
@@ -418,15 +421,13 @@ def test_training_can_start_from_a_saved_model(data, tmp_path):
     wider = TransitionModelConfig(**{**TINY.__dict__, "width": 16})
     with pytest.raises(ValueError, match="another architecture"):
         train_transition_model(data, tmp_path / "c", still, wider, device="cpu")
-    # A model from before mirror (it learnt both handednesses) starts a mirrored one.
-    legacy = first.state()
-    del legacy["config"]["mirror"]
-    torch.save(legacy, tmp_path / "legacy.pt")
-    assert not TransitionModel.load(tmp_path / "legacy.pt").config.mirror
-    from_legacy = TransitionTrainConfig(**{**still.__dict__, "init": str(tmp_path / "legacy.pt")})
-    tuned = train_transition_model(data, tmp_path / "d", from_legacy, TINY, device="cpu")
+    # A model of both handednesses (mirror=False) starts a mirrored one.
+    both = TransitionModel(replace(TINY, mirror=False), device="cpu")
+    both.save(tmp_path / "both.pt")
+    from_both = TransitionTrainConfig(**{**still.__dict__, "init": str(tmp_path / "both.pt")})
+    tuned = train_transition_model(data, tmp_path / "d", from_both, TINY, device="cpu")
     assert tuned.config.mirror
-    for mine, theirs in zip(tuned.net.parameters(), first.net.parameters()):
+    for mine, theirs in zip(tuned.net.parameters(), both.net.parameters()):
         assert torch.allclose(mine, theirs, atol=1e-3)  # its weights, trained at lr 1e-12
 
 
@@ -452,8 +453,10 @@ def test_contact_vectors_tell_a_point_at_the_wall_and_a_model_without_them_start
     with pytest.raises(ValueError, match="contact_reach must be >= 0"):
         TransitionModelConfig(contact_reach=-0.01)
     old = TransitionModel(TINY, device="cpu").state()
-    del old["config"]["contact_reach"]  # a file from before contact vectors
-    assert TransitionModel.from_state(old).config.contact_reach == 0.0
+    del old["config"]["contact_reach"]  # a file from before contact vectors: no longer read
+    with pytest.raises(ValueError, match="a transition model file from before contact_reach "
+                       "existed, which this version no longer reads"):
+        TransitionModel.from_state(old)
     # Fine-tuning a model without contact vectors into one with them: same predictions first.
     tc = TransitionTrainConfig(steps=20, batch_size=64, chain_batch=16, eval_every=20,
                                validation_fraction=0.2)
@@ -733,7 +736,7 @@ def test_a_fine_tuning_resumes_only_from_the_model_it_started_from(data, tmp_pat
         train_transition_model(data, tmp_path / "tuned", tune, TINY, device="cpu", resume=True)
 
 
-def test_a_checkpoint_from_before_distillation_existed_still_resumes(data, tmp_path):
+def test_a_checkpoint_from_before_distillation_existed_is_refused_on_resume(data, tmp_path):
     tc = TransitionTrainConfig(steps=20, batch_size=32, chain_batch=8, eval_every=10,
                                validation_fraction=0.2)
 
@@ -745,13 +748,10 @@ def test_a_checkpoint_from_before_distillation_existed_still_resumes(data, tmp_p
         train_transition_model(data, tmp_path, tc, TINY, device="cpu", progress=stop_at_15)
     path = tmp_path / "transition-checkpoint.pt"
     saved = torch.load(path, weights_only=True)
-    for key in ("teacher", "teacher_weight"):  # as the files written before these fields
-        del saved["train_config"][key]
-    del saved["model_config"]["mean_network"]
-    del saved["teacher_ensemble"]
+    del saved["model_config"]["mean_network"]  # as the files written before the field
     torch.save(saved, path)
-    done = train_transition_model(data, tmp_path, tc, TINY, device="cpu", resume=True)
-    assert done.info["steps"] == 20
+    with pytest.raises(ValueError, match="from before mean_network existed"):
+        train_transition_model(data, tmp_path, tc, TINY, device="cpu", resume=True)
 
 
 def test_mean_interval_covers_the_true_mean_and_narrows_with_more_moves():
