@@ -37,6 +37,43 @@ from latent_model.transition_model import TransitionModel
 FLOORS = {"one end": 0.003, "both": 0.005}
 #: Share within this of the observed shape, metres.
 WITHIN = 0.01
+#: The model must predict at least this many times faster than the simulator.
+SPEED_FLOOR = 1000.0
+
+
+def speed(model: TransitionModel, data: TransitionDataset, batch: int, repeats: int
+          ) -> dict[str, dict[str, float]]:
+    """Per grasp: seconds per transition of the model (a batch of ``batch`` moves, median of
+    ``repeats`` calls after one warm-up) and of the simulator (the same moves, each on its
+    own cord), and their ratio."""
+    import time
+
+    from dlo_env.cord import Cord, CordParams
+    from dlo_env.dataset.transitions import carry_out
+    from dlo_env.tasks import DEFAULT_MAX_STEP
+
+    out = {}
+    for code, name in enumerate(GRASP_NAMES):
+        idx = np.resize(np.flatnonzero(data.grasp == code), batch)
+        starts, moves = data.start[idx], data.end_displacement(idx)
+        params = cords_of(model, data, idx)
+        model.predict(starts, name, moves, params=params)
+        times = []
+        for _ in range(repeats):
+            t = time.perf_counter()
+            model.predict(starts, name, moves, params=params)
+            times.append(time.perf_counter() - t)
+        t = time.perf_counter()
+        for i, start, move in zip(idx, starts, moves):
+            row = dict(zip(PARAM_COLUMNS, map(float, data.params[i])))
+            cord = Cord(CordParams(**row), grasp=name)
+            cord.reset(start)
+            carry_out(cord, move, DEFAULT_MAX_STEP)
+        simulator = (time.perf_counter() - t) / batch
+        predicted = float(np.median(times)) / batch
+        out[name] = {"model_s": predicted, "simulator_s": simulator,
+                     "ratio": simulator / predicted}
+    return out
 
 
 def errors(model: TransitionModel, data: TransitionDataset) -> np.ndarray:
@@ -105,9 +142,17 @@ def main() -> None:
                              "--test-cords)")
     parser.add_argument("--default", default=None,
                         help="moves of the default cord (dlo collect --kind transitions)")
+    parser.add_argument("--speed", type=int, default=0,
+                        help="time each model over this many calls (0: no timing)")
+    parser.add_argument("--batch", type=int, default=1024, help="moves per timed call")
+    parser.add_argument("--threads", type=int, default=1, help="torch threads")
     parser.add_argument("--out", default="runs/cords-model", help="results folder")
     args = parser.parse_args()
-    torch.set_num_threads(1)
+    for name in ("speed", "batch", "threads"):
+        if getattr(args, name) < (0 if name == "speed" else 1):
+            parser.error(f"--{name} must be >= {0 if name == 'speed' else 1}, "
+                         f"got {getattr(args, name)}")
+    torch.set_num_threads(args.threads)
     data = load_transitions(args.data)
     if not (cord_index(data) >= 0).any():
         raise SystemExit(f"--data must hold moves of the test cords (dlo collect --kind "
@@ -131,6 +176,14 @@ def main() -> None:
                   f"{'<=' if test[g]['mean'] <= f else '>'} {100 * f:g} cm"
                   for g, f in FLOORS.items() if g in test]
         print("floors on the test cords: " + "; ".join(checks))
+        if args.speed:
+            timed = speed(model, data, args.batch, args.speed)
+            results[-1]["speed"] = {"batch": args.batch, "threads": args.threads, **timed}
+            print(f"speed, batch {args.batch}, {args.threads} torch thread(s): " + "; ".join(
+                f"{g} {1e6 * r['model_s']:.1f} us/move against the simulator's "
+                f"{1e3 * r['simulator_s']:.1f} ms: {r['ratio']:.0f}x"
+                f" {'>=' if r['ratio'] >= SPEED_FLOOR else '<'} {SPEED_FLOOR:.0f}x"
+                for g, r in timed.items()))
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
     write_text_atomic(out / "cords_model.json", json.dumps(
