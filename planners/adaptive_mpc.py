@@ -62,6 +62,19 @@ class AdaptConfig:
             check_randomize(self.ranges, "AdaptConfig.ranges")
 
 
+def trained_ranges(info: Mapping[str, Any]) -> dict[str, tuple[float, float]]:
+    """The parameter ranges a transition model's training data were drawn from (``dlo collect
+    --randomize``), the union over its files (``info["sources"]``, else ``info["data"]``);
+    empty when none was randomised."""
+    sources = info.get("sources") or [{"collect": info.get("data") or {}}]
+    out: dict[str, tuple[float, float]] = {}
+    for source in sources:
+        for name, (low, high) in ((source.get("collect") or {}).get("randomize") or {}).items():
+            lo, hi = out.get(name, (low, high))
+            out[name] = (min(lo, low), max(hi, high))
+    return out
+
+
 @dataclass
 class _Move:
     start: np.ndarray  # (n, 2) at rest
@@ -103,7 +116,7 @@ class AdaptiveLatentMPCPolicy(LatentMPCPolicy):
     def _ranges(model: Any, adapt: AdaptConfig) -> dict[str, tuple[float, float]]:
         if adapt.ranges is not None:
             return dict(check_randomize(adapt.ranges, "AdaptConfig.ranges"))
-        trained = (getattr(model, "info", {}) or {}).get("data", {}).get("randomize")
+        trained = trained_ranges(getattr(model, "info", {}) or {})
         return dict(check_randomize(trained, "the model's training ranges")) if trained \
             else dict(DEFAULT_RANGES)
 

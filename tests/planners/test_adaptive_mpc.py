@@ -131,3 +131,16 @@ def test_physics_mpc_simulates_a_cord_of_another_length_at_its_observed_length()
         oracle = TrueCordPhysicsMPCPolicy(env, small)
         with pytest.raises(ValueError, match="takes a batch of 1, got 2 observations"):
             oracle.predict({k: np.stack([v, v]) for k, v in obs.items()}, deterministic=True)
+
+
+def test_the_fitted_ranges_are_the_union_of_the_model_files_ranges():
+    from planners.adaptive_mpc import trained_ranges
+
+    info = {"sources": [{"collect": {"randomize": {"mass": [0.05, 0.2],
+                                                   "friction": [0.2, 0.6]}}},
+                        {"collect": {"randomize": {"mass": [0.1, 0.3]}}},
+                        {"collect": {}}]}  # a file of the default cord
+    assert trained_ranges(info) == {"mass": (0.05, 0.3), "friction": (0.2, 0.6)}
+    assert trained_ranges({"data": {"randomize": {"length": [0.8, 1.2]}}}) == {
+        "length": (0.8, 1.2)}
+    assert trained_ranges({}) == {}
