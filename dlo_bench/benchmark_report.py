@@ -204,8 +204,12 @@ def cords_section(rows: list[dict[str, Any]]) -> list[str]:
         + "; ".join(f"{i} = {label(c)}" for i, c in enumerate(TEST_CORDS)) + ".",
         "",
     ]
+    from dlo_bench.benchmark import CORD_AGENTS
+
+    order = {name: i for i, name in enumerate(CORD_AGENTS)}
     for key in dict.fromkeys((_suite(r), r["env"], r.get("threshold")) for r in cords):
-        group = [r for r in cords if (_suite(r), r["env"], r.get("threshold")) == key]
+        group = sorted((r for r in cords if (_suite(r), r["env"], r.get("threshold")) == key),
+                       key=lambda r: order.get(r["agent"], len(order)))
         t = "–" if key[2] is None else threshold_label(key[2])
         lines += [f"**{key[0]}, {key[1]}, {t}**", "",
                   "| agent | success | median rest error (cm) | seconds/episode | "
