@@ -337,8 +337,7 @@ def load_agent(name: str, config: BenchmarkConfig, env: Any,
             return LoadedAgent(name, None, missing=str(exc).splitlines()[0])
         options.update(transition_model=transition)
         models.append(str(transition_model_file(path, cords=spec.cords)))
-        steps = transition.info.get("env_steps")
-        moves = transition.info.get("data_transitions")
+        steps, moves = training_data(transition.info)
         costs.insert(0, "unknown (the model does not record its data)" if not steps
                      else f"{_steps(steps)} env steps" + (f" ({_steps(moves)} moves)" if moves
                                                            else ""))
@@ -349,6 +348,30 @@ def load_agent(name: str, config: BenchmarkConfig, env: Any,
     return LoadedAgent(name, policy, training_env_steps=steps,
                        sample_cost=" + ".join(costs) or "none (no learned model)",
                        models=tuple(models), settings=policy_settings(policy))
+
+
+def training_data(info: dict[str, Any]) -> tuple[int | None, int | None]:
+    """The environment steps and moves a transition model was trained on, counting the models
+    it was fine-tuned from (``info["init_model"]``, recursively): each file once (by digest),
+    a level's steps shared out over its files by their moves. ``(None, None)`` when the model
+    does not record its data."""
+    steps, moves = info.get("env_steps"), info.get("data_transitions")
+    if not info.get("init_model") or steps is None:
+        return steps, moves
+    seen: set[str] = set()
+    total_steps, total_moves = 0.0, 0
+    level: dict[str, Any] | None = info
+    while level:
+        sources = level.get("sources") or []
+        made = sum(int(src.get("transitions", 0)) for src in sources)
+        new = [src for src in sources if src.get("digest") not in seen]
+        fresh = sum(int(src.get("transitions", 0)) for src in new)
+        if made and level.get("env_steps"):
+            total_steps += level["env_steps"] * fresh / made
+        total_moves += fresh
+        seen.update(str(src.get("digest")) for src in sources)
+        level = (level.get("init_model") or {}).get("info")
+    return int(round(total_steps)), total_moves
 
 
 def load_shape_model(path: str | None) -> tuple[ShapeSurrogate | None, str]:

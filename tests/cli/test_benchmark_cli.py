@@ -175,3 +175,16 @@ def test_agents_of_the_cords_section_alone_need_a_cord_suite(tmp_path, capsys):
     assert main(["benchmark", "--agent", "physics-mpc-true-cord", "--quick", "--allow-dirty",
                  "--out", str(tmp_path)]) == 2
     assert "add --cords SUITE" in capsys.readouterr().err
+
+
+def test_a_fine_tuned_model_counts_the_data_of_the_model_it_started_from():
+    from dlo_bench.benchmark import training_data
+
+    base = {"env_steps": 1000, "data_transitions": 100,
+            "sources": [{"digest": "a", "transitions": 60}, {"digest": "b", "transitions": 40}]}
+    assert training_data(base) == (1000, 100)  # no init: as recorded
+    tuned = {"env_steps": 500, "data_transitions": 50, "init_model": {"info": base},
+             "sources": [{"digest": "b", "transitions": 40}, {"digest": "c", "transitions": 10}]}
+    # b once: the tuned level's 500 steps for its 50 moves, then a (600 of base's 1000)
+    assert training_data(tuned) == (1100, 110)
+    assert training_data({}) == (None, None)
