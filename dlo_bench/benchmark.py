@@ -352,26 +352,30 @@ def load_agent(name: str, config: BenchmarkConfig, env: Any,
 
 def training_data(info: dict[str, Any]) -> tuple[int | None, int | None]:
     """The environment steps and moves a transition model was trained on, counting the models
-    it was fine-tuned from (``info["init_model"]``, recursively): each file once (by digest),
-    a level's steps shared out over its files by their moves. ``(None, None)`` when the model
+    it came from (``info["init_model"]``, fine-tuned from, and ``info["ensemble"]``, distilled
+    from; recursively): each file once (by digest), a model's steps shared out over its files
+    by their moves. As recorded when those models add no file; ``(None, None)`` when the model
     does not record its data."""
     steps, moves = info.get("env_steps"), info.get("data_transitions")
-    if not info.get("init_model") or steps is None:
+    if steps is None:
         return steps, moves
     seen: set[str] = set()
-    total_steps, total_moves = 0.0, 0
-    level: dict[str, Any] | None = info
-    while level:
+    total_steps, total_moves, added = 0.0, 0, False
+    todo: list[dict[str, Any]] = [info]
+    while todo:
+        level = todo.pop(0)
         sources = level.get("sources") or []
         made = sum(int(src.get("transitions", 0)) for src in sources)
-        new = [src for src in sources if src.get("digest") not in seen]
+        new = [src for src in sources if str(src.get("digest")) not in seen]
         fresh = sum(int(src.get("transitions", 0)) for src in new)
         if made and level.get("env_steps"):
             total_steps += level["env_steps"] * fresh / made
         total_moves += fresh
+        added = added or (level is not info and fresh > 0)
         seen.update(str(src.get("digest")) for src in sources)
-        level = (level.get("init_model") or {}).get("info")
-    return int(round(total_steps)), total_moves
+        parents = [(level.get("init_model") or {}).get("info"), level.get("ensemble")]
+        todo += [p for p in parents if isinstance(p, dict)]
+    return (int(round(total_steps)), total_moves) if added else (steps, moves)
 
 
 def load_shape_model(path: str | None) -> tuple[ShapeSurrogate | None, str]:

@@ -187,4 +187,8 @@ def test_a_fine_tuned_model_counts_the_data_of_the_model_it_started_from():
              "sources": [{"digest": "b", "transitions": 40}, {"digest": "c", "transitions": 10}]}
     # b once: the tuned level's 500 steps for its 50 moves, then a (600 of base's 1000)
     assert training_data(tuned) == (1100, 110)
+    distilled = {"env_steps": 500, "data_transitions": 50, "ensemble": tuned,
+                 "sources": tuned["sources"]}  # a mean network distilled on the same files
+    assert training_data(distilled) == (1100, 110)
+    assert training_data({**base, "ensemble": base}) == (1000, 100)  # no new file: as recorded
     assert training_data({}) == (None, None)
