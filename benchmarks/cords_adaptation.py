@@ -4,12 +4,13 @@ For episodes of the held-out test cords (a file of ``dlo collect --kind transiti
 --test-cords``: episodes of a few moves, each episode one cord and one grasp), the cord is
 fitted as ``AdaptiveLatentMPCPolicy`` fits it (its length read off the first shape, the rest by
 ``AdaptiveLatentMPCPolicy.fit``) to the episode's first k moves, k = 0 (the default cord at the
-observed length) to the episode's length; the fitted cord then predicts ``--probe`` moves of
+observed length) to the episode's length, each k fitted afresh (the policy starts each fit from
+its last); the fitted cord then predicts ``--probe`` moves of
 the same cord and grasp from other episodes. Printed per k: the mean one-move error with the
 fitted cord, beside the same model told the true cord, and how far the fitted parameters lie
 from the true ones (mean absolute log ratio).
 
-    python benchmarks/cords_adaptation.py --data data/cords-test-22.npz \\
+    python benchmarks/cords_adaptation.py --data data/cords-test.npz \\
         [--model FILE] [--episodes 8] [--probe 200] [--out runs/cords-adaptation]
 """
 
@@ -64,6 +65,8 @@ def main() -> None:
                 grasp = GRASP_NAMES[int(data.grasp[idx[0]])]
                 probe = np.flatnonzero(mine & (data.episode != e) & (data.grasp == data.grasp[
                     idx[0]]))
+                if not len(probe):  # no other episode of this cord and grasp to predict
+                    continue
                 probe = rng.choice(probe, min(args.probe, len(probe)), replace=False)
                 policy = policies[grasp]
                 policy.reset()

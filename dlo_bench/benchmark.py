@@ -353,29 +353,32 @@ def load_agent(name: str, config: BenchmarkConfig, env: Any,
 def training_data(info: dict[str, Any]) -> tuple[int | None, int | None]:
     """The environment steps and moves a transition model was trained on, counting the models
     it came from (``info["init_model"]``, fine-tuned from, and ``info["ensemble"]``, distilled
-    from; recursively): each file once (by digest), a model's steps shared out over its files
-    by their moves. As recorded when those models add no file; ``(None, None)`` when the model
-    does not record its data."""
+    from; recursively): each file once (by digest), a model's recorded steps and moves shared
+    out over its files by their sizes. A model that records no files adds nothing (its files
+    cannot be told apart from its descendants'); the result is never below what the model
+    itself records. ``(None, None)`` when the model does not record its data."""
     steps, moves = info.get("env_steps"), info.get("data_transitions")
     if steps is None:
         return steps, moves
     seen: set[str] = set()
-    total_steps, total_moves, added = 0.0, 0, False
+    total_steps, total_moves = 0.0, 0.0
     todo: list[dict[str, Any]] = [info]
     while todo:
         level = todo.pop(0)
         sources = level.get("sources") or []
         made = sum(int(src.get("transitions", 0)) for src in sources)
-        new = [src for src in sources if str(src.get("digest")) not in seen]
-        fresh = sum(int(src.get("transitions", 0)) for src in new)
-        if made and level.get("env_steps"):
-            total_steps += level["env_steps"] * fresh / made
-        total_moves += fresh
-        added = added or (level is not info and fresh > 0)
+        fresh = sum(int(src.get("transitions", 0)) for src in sources
+                    if str(src.get("digest")) not in seen)
+        if made:
+            share = fresh / made
+            total_steps += (level.get("env_steps") or 0) * share
+            total_moves += (level.get("data_transitions") or fresh) * share
         seen.update(str(src.get("digest")) for src in sources)
         parents = [(level.get("init_model") or {}).get("info"), level.get("ensemble")]
         todo += [p for p in parents if isinstance(p, dict)]
-    return (int(round(total_steps)), total_moves) if added else (steps, moves)
+    return (max(int(round(total_steps)), int(steps)),
+            max(int(round(total_moves)), int(moves or 0)) if moves is not None or total_moves
+            else None)
 
 
 def load_shape_model(path: str | None) -> tuple[ShapeSurrogate | None, str]:

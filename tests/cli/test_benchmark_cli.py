@@ -191,4 +191,11 @@ def test_a_fine_tuned_model_counts_the_data_of_the_model_it_started_from():
                  "sources": tuned["sources"]}  # a mean network distilled on the same files
     assert training_data(distilled) == (1100, 110)
     assert training_data({**base, "ensemble": base}) == (1000, 100)  # no new file: as recorded
+    # moves are the recorded ones (after what training left out), shared out by file size
+    trimmed = {**tuned, "data_transitions": 45}
+    assert training_data(trimmed) == (1100, 105)
+    # a model without files of its own is never counted below what it records
+    assert training_data({"env_steps": 100, "data_transitions": 10, "init_model": {
+        "info": {"env_steps": 50, "data_transitions": 5, "sources": [
+            {"digest": "a", "transitions": 5}]}}}) == (100, 10)
     assert training_data({}) == (None, None)
