@@ -67,14 +67,16 @@ PREDICT_CHUNK = 4096
 REQUIRED_CONFIG = ("rim_targets", "mean_network", "mirror", "mean_by_grasp", "contact_reach")
 
 
-def check_config_keys(config: dict[str, Any], name: str) -> None:
+def check_config_keys(config: dict[str, Any], name: str, checkpoint: bool = False) -> None:
     """Raise a one-line ``ValueError`` when a saved config lacks a ``REQUIRED_CONFIG`` field
-    (a file written before it existed)."""
+    (a file written before it existed); ``checkpoint``: a training checkpoint's."""
     missing = [k for k in REQUIRED_CONFIG if k not in config]
     if missing:
-        raise ValueError(f"{name}: a transition model file from before {', '.join(missing)} "
-                         "existed, which this version no longer reads: train it again with "
-                         "dlo train --stage transition")
+        what, fix = (("training checkpoint", "give another --out or delete it") if checkpoint
+                     else ("transition model file",
+                           "train it again with dlo train --stage transition"))
+        raise ValueError(f"{name}: a {what} from before {', '.join(missing)} existed, which "
+                         f"this version no longer reads: {fix}")
 
 
 def _grasp_argument(grasp: str | None, end: str | None) -> str:

@@ -413,7 +413,7 @@ def train_transition_model(
     step = 0
     if resume and checkpoint.is_file():
         saved = load_checkpoint(checkpoint, str(checkpoint), kind=CHECKPOINT_FORMAT, version=1)
-        check_config_keys(saved["model_config"], str(checkpoint))
+        check_config_keys(saved["model_config"], str(checkpoint), checkpoint=True)
         saved_mc = config_from_dict(TransitionModelConfig, saved["model_config"], "model_config")
         saved_tc = config_from_json(saved["train_config"])
         if saved_tc != tc or saved_mc != mc:

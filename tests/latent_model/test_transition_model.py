@@ -750,7 +750,8 @@ def test_a_checkpoint_from_before_distillation_existed_is_refused_on_resume(data
     saved = torch.load(path, weights_only=True)
     del saved["model_config"]["mean_network"]  # as the files written before the field
     torch.save(saved, path)
-    with pytest.raises(ValueError, match="from before mean_network existed"):
+    with pytest.raises(ValueError, match="a training checkpoint from before mean_network "
+                       "existed, which this version no longer reads: give another --out"):
         train_transition_model(data, tmp_path, tc, TINY, device="cpu", resume=True)
 
 
