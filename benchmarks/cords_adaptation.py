@@ -25,7 +25,7 @@ import torch
 
 from dlo_env.atomic import write_text_atomic
 from dlo_env.dataset.transitions import GRASP_NAMES, PARAM_COLUMNS, load_transitions
-from dlo_env.shapes import error
+from dlo_env.shapes import cord_length, error
 from latent_model.transition_model import TransitionModel
 from planners.adaptive_mpc import AdaptiveLatentMPCPolicy, _Move
 
@@ -71,8 +71,7 @@ def main() -> None:
                 policy = policies[grasp]
                 policy.reset()
                 start = data.start[idx[0]]
-                policy.cord_row[length_col] = float(
-                    np.linalg.norm(np.diff(start, axis=0), axis=1).sum())
+                policy.cord_row[length_col] = cord_length(start)
                 moves = [_Move(data.start[i], data.end_displacement(i[None])[0], data.next[i])
                          for i in idx]
                 shifts = data.end_displacement(probe)

@@ -26,7 +26,7 @@ import numpy as np
 from dlo_env.checks import positive_ints
 from dlo_env.dataset.transitions import PARAM_COLUMNS
 from dlo_env.randomize import DEFAULT_RANGES, check_randomize
-from dlo_env.shapes import error
+from dlo_env.shapes import cord_length, error
 from planners.latent_mpc import LatentMPCConfig, LatentMPCPolicy
 
 
@@ -187,7 +187,7 @@ class AdaptiveLatentMPCPolicy(LatentMPCPolicy):
         """Record the move that brought the cord here, refit the cord, then plan with it."""
         if self.adapt.observe_length:
             length = PARAM_COLUMNS.index("length")
-            self.cord_row[length] = float(np.linalg.norm(np.diff(shape, axis=0), axis=1).sum())
+            self.cord_row[length] = cord_length(shape)
         if self._pending is not None:
             start, ends_before = self._pending
             moved = (self._end_points(shape) - ends_before).reshape(-1)

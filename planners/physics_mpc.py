@@ -18,6 +18,7 @@ import numpy as np
 
 from dlo_env.checks import non_negative_ints, positive_ints
 from dlo_env.cord import Cord, CordParams
+from dlo_env.shapes import cord_length
 from planners.cem import CEMConfig, CEMPolicy
 
 
@@ -118,7 +119,7 @@ class PhysicsMPCPolicy(CEMPolicy):
     def plan(self, shape: np.ndarray, goal: np.ndarray) -> tuple[np.ndarray, float]:
         """Simulate the cord at its observed length when that differs from ``params``'s, then
         plan (CEM over straight moves)."""
-        length = float(np.linalg.norm(np.diff(shape, axis=0), axis=1).sum())
+        length = cord_length(shape)
         params = self.params
         if abs(length - params.length) > LENGTH_TOLERANCE * params.length:
             params = replace(params, length=length)
