@@ -466,13 +466,14 @@ def row_of(agent: LoadedAgent, env_id: str, suite: str, threshold: float,
 
 def cords_summary(records: list[EpisodeRecord]) -> dict[str, dict[str, float]]:
     """Per held-out cord of a cord suite's test split (episode ``i`` runs on
-    ``TEST_CORDS[i % 6]``; keys its index as text): episodes, success rate and median error
-    at rest, metres."""
+    ``TEST_CORDS[test_cord_index(i)]``; keys its index as text): episodes, success rate and
+    median error at rest, metres."""
+    from dlo_env.cord_suites import test_cord_index
     from dlo_env.randomize import TEST_CORDS
 
     out: dict[str, dict[str, float]] = {}
     for i in range(len(TEST_CORDS)):
-        group = [r for r in records if r.episode % len(TEST_CORDS) == i]
+        group = [r for r in records if test_cord_index(r.episode) == i]
         if group:
             out[str(i)] = {"episodes": len(group),
                            "success_rate": float(np.mean([r.success for r in group])),

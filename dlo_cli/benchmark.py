@@ -140,7 +140,7 @@ def _command(args: argparse.Namespace, parser_defaults: dict) -> str:
     return " ".join(parts)
 
 
-def designed_suites(args: argparse.Namespace, flag: str = "designed") -> list[str]:
+def section_suites(args: argparse.Namespace, flag: str = "designed") -> list[str]:
     """The designed (or with ``flag="cords"``, cord) suites to run: ``--designed`` as given
     (alone: none); by default the config's, or none with ``--quick`` or ``--difficulty`` (a
     smoke test, a subset of cells)."""
@@ -197,8 +197,8 @@ def run(args: argparse.Namespace) -> int:
     from dlo_bench.report import threshold_label
 
     torch.set_num_threads(args.threads)
-    designed = designed_suites(args)
-    cords = designed_suites(args, "cords")
+    designed = section_suites(args)
+    cords = section_suites(args, "cords")
     agents, cord_agents = split_agents(args.agent, bool(cords))
     episodes = args.episodes if args.episodes is not None else (
         QUICK_EPISODES if args.quick else BenchmarkConfig.episodes)

@@ -50,6 +50,11 @@ def _check(suite: str, split: str) -> None:
         raise ValueError(f"split must be one of {tuple(SPLIT_SIZES)}, got {split!r}")
 
 
+def test_cord_index(index: int) -> int:
+    """The index into ``TEST_CORDS`` of test task ``index`` of a cord suite (they take turns)."""
+    return int(index) % len(TEST_CORDS)
+
+
 def train_cord(seed: int, base: CordParams | None = None) -> CordParams:
     """The cord of a train task: drawn from ``DEFAULT_RANGES`` with a generator seeded by
     ``seed``, redrawn while it lies near a test cord."""
@@ -66,7 +71,7 @@ def cord_task(suite: str, split: str, index: int, grasp: str = "head") -> CordTa
         raise ValueError(f"index must be an int in 0..{len(seeds) - 1}, got {index!r}")
     seed = int(seeds[index])
     if split == "test":
-        cord = int(index) % len(TEST_CORDS)
+        cord = test_cord_index(index)
         params = test_cord(cord, CordParams())
     else:
         cord, params = -1, train_cord(seed)

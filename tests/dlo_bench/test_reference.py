@@ -116,7 +116,7 @@ def test_designed_cells_report_families_beside_the_reference(tmp_path, monkeypat
     (["--designed", "shapes-curves", "shapes-curves"], ["shapes-curves"]),
 ])
 def test_which_designed_suites_a_benchmark_command_runs(flags, expected):
-    from dlo_cli.benchmark import designed_suites
+    from dlo_cli.benchmark import section_suites as designed_suites
     from dlo_cli.main import build_parser
 
     args = build_parser().parse_args(["benchmark", *flags])
