@@ -46,6 +46,8 @@ from dlo_bench.agents import (
 from dlo_bench.evaluation import (
     EpisodeRecord,
     Evaluation,
+    FidelityProfile,
+    divergence,
     evaluate,
     summarise,
     task_env_kwargs,
@@ -543,8 +545,10 @@ def designed_summary(suite: str, env_id: str, records: list[EpisodeRecord]
     return out
 
 
-def _load_cell(path: Path, key: dict[str, Any]) -> tuple[Evaluation, dict[str, Any]] | None:
-    """A cell written by an earlier run with the same key: its evaluation and run facts."""
+def _load_cell(path: Path, key: dict[str, Any], *, full: bool = False
+               ) -> tuple[Evaluation, dict[str, Any]] | None:
+    """A cell (or part of one) written by an earlier run with the same key: its evaluation and
+    run facts. ``full``: with the fidelity profiles, goals and rest shapes a part keeps."""
     from dataclasses import fields
 
     if not path.is_file():
@@ -564,7 +568,50 @@ def _load_cell(path: Path, key: dict[str, Any]) -> tuple[Evaluation, dict[str, A
         return None
     facts = {"wall_seconds": data.get("wall_seconds"), "commit": data.get("commit", ""),
              "run": data.get("run", "")}
-    return Evaluation(records, summarise(records, agent=key["agent"], env_id=key["env_id"])), facts
+    summary = summarise(records, agent=key["agent"], env_id=key["env_id"])
+    if not full:
+        return Evaluation(records, summary), facts
+    profiles = [FidelityProfile(p["episode"], *(np.asarray(p[k], dtype=float)
+                                                for k in ("errors", "travel", "move")))
+                for p in data.get("fidelity_profiles", [])]
+    shapes = [[np.asarray(x, dtype=np.float32) for x in data.get(k, [])]
+              for k in ("goals", "rest")]
+    return Evaluation(records, summary, profiles, *shapes), facts
+
+
+#: Subfolder of ``CELLS_DIR`` holding the finished parts of cells not finished yet.
+PARTS_DIR = "parts"
+
+
+def part_name(cell: str, first: int, count: int) -> str:
+    """A part's file name: ``physics-mpc-endpoint-d3-1cm.episodes-10-19``."""
+    return f"{cell}.episodes-{first}-{first + count - 1}"
+
+
+def split_episodes(episodes: int, part: int | None) -> list[tuple[int, int]]:
+    """``(first, count)`` of the parts of a cell of ``episodes`` episodes, ``part`` episodes
+    each (None: one part, the whole cell)."""
+    size = episodes if part is None else part
+    return [(a, min(size, episodes - a)) for a in range(0, episodes, size)]
+
+
+def merge_parts(parts: list[tuple[Evaluation, dict[str, Any]]], agent: str, env_id: str
+                ) -> tuple[Evaluation, dict[str, Any]]:
+    """One evaluation of a cell's parts (in episode order) and its facts: the summed wall
+    time, and the commits and runs of the parts (``+``-joined when they differ, so planning
+    times of a cell whose parts ran in several runs are not compared)."""
+    if len(parts) == 1:
+        return parts[0]
+    records = [r for e, _ in parts for r in e.records]
+    profiles = [p for e, _ in parts for p in e.profiles]
+    summary = summarise(records, agent=agent, env_id=env_id)
+    summary["divergence"] = divergence(profiles)
+    evaluation = Evaluation(records, summary, profiles, [g for e, _ in parts for g in e.goals],
+                            [r for e, _ in parts for r in e.rest_shapes])
+    walls = [f["wall_seconds"] for _, f in parts]
+    facts = {"wall_seconds": None if None in walls else float(sum(walls)),
+             **{k: "+".join(dict.fromkeys(f[k] for _, f in parts)) for k in ("commit", "run")}}
+    return evaluation, facts
 
 
 #: The folder holding the code's packages: a git checkout's root when run from a clone.
@@ -644,8 +691,10 @@ def _warm_up(policy: Policy, env: Any) -> None:
 
 def run_cell(name: str, env_id: str, suite: str | int, config: BenchmarkConfig, *,
              threshold: float = THRESHOLDS[0], shape_model: ShapeSurrogate | None = None,
-             threads: int | None = None, progress: bool = False) -> tuple[Evaluation, float]:
-    """Evaluate one cell with an agent built for it (and warmed up) from scratch.
+             threads: int | None = None, progress: bool = False, first: int = 0,
+             count: int | None = None) -> tuple[Evaluation, float]:
+    """Evaluate one cell, or part of one, with an agent built for it (and warmed up) from
+    scratch.
 
     A cell depends only on its arguments, so it gives the same result in any process, in any
     order, and after an interrupted run: what lets the benchmark resume cell by cell and run its
@@ -658,6 +707,8 @@ def run_cell(name: str, env_id: str, suite: str | int, config: BenchmarkConfig, 
         shape_model: The loaded shape model of the latent-tree agents (None: loaded here).
         threads: Torch threads (None: leave as they are).
         progress: Show a progress bar.
+        first, count: The part: episodes ``first`` .. ``first + count - 1`` (count None: to
+            the cell's last, ``config.episodes``).
 
     Returns:
         The evaluation and its wall time, seconds.
@@ -685,15 +736,17 @@ def run_cell(name: str, env_id: str, suite: str | int, config: BenchmarkConfig, 
             raise ValueError(f"agent {name!r} is missing in {env_id}: {agent.missing}")
         _warm_up(agent.policy, env)
         t0 = time.perf_counter()
-        result = evaluate(agent.policy, env, suite=suite, episodes=config.episodes,
+        result = evaluate(agent.policy, env, suite=suite,
+                          episodes=config.episodes - first if count is None else count,
                           seed=config.seed, split="test", agent=name, fidelity=config.fidelity,
-                          progress=progress)
+                          progress=progress, first=first)
         return result, time.perf_counter() - t0
 
 
 def run_benchmark(config: BenchmarkConfig, out_dir: str | os.PathLike, *,
                   resume: bool = False, progress: bool = True,
-                  backend: Any = None, run_id: str | None = None) -> list[dict[str, Any]]:
+                  backend: Any = None, run_id: str | None = None,
+                  part: int | None = None) -> list[dict[str, Any]]:
     """Evaluate every agent on every cell (environment, suite); write each as it finishes.
 
     Args:
@@ -707,6 +760,12 @@ def run_benchmark(config: BenchmarkConfig, out_dir: str | os.PathLike, *,
             a cell is self-contained, see :func:`run_cell`).
         run_id: The id recorded with every cell this call evaluates (None: a
             :func:`new_run_id`); reused cells keep the id of the run that timed them.
+        part: Episodes per part of a cell (None: whole cells). The parts run as separate
+            calls (on a backend, at once: one slow cell keeps every worker busy) and are
+            written to ``results_episodes/parts/`` as each finishes, so ``resume`` loses no
+            finished part; a cell is written when its last part finishes, and its parts
+            deleted. Every episode depends only on its task and the seed, so a cell is the
+            same in parts as whole, its wall time the sum of its parts'.
 
     Returns:
         The rows: agents in ``config.all_agents`` order, then each agent's cells in
@@ -763,10 +822,40 @@ def run_benchmark(config: BenchmarkConfig, out_dir: str | os.PathLike, *,
     ranks = {name: i for i, name in enumerate(config.all_agents)}
     todo.sort(key=lambda item: (order[(item[2], item[3], item[4])], ranks[item[1]]))
 
-    def finish(k: int, result: Evaluation, seconds: float) -> None:
-        slot, name, env_id, suite, threshold, agent, key = todo[k]
-        cell = cell_name(name, env_id, suite, threshold)
+    parts_folder = folder / PARTS_DIR
+    calls: list[tuple[int, int, int]] = []  # (todo index, first, count)
+    done: dict[int, dict[int, tuple[Evaluation, dict[str, Any]]]] = {}
+    for k, (_, name, env_id, suite, threshold, _, key) in enumerate(todo):
+        done[k] = {}
+        for first, count in split_episodes(config.episodes, part):
+            cell = cell_name(name, env_id, suite, threshold)
+            path = parts_folder / f"{part_name(cell, first, count)}.json"
+            loaded = _load_cell(path, key, full=True) if resume and part is not None else None
+            if loaded is not None and len(loaded[0].records) == count:
+                done[k][first] = loaded
+            else:
+                calls.append((k, first, count))
+
+    def finish(k: int, first: int, count: int, result: Evaluation, seconds: float) -> None:
+        """Keep a finished part (on disk when the cell has several) and complete its cell."""
+        _, name, env_id, suite, threshold, _, key = todo[k]
         facts = {"wall_seconds": seconds, "commit": version, "run": run_id}
+        if len(split_episodes(config.episodes, part)) > 1:
+            cell = cell_name(name, env_id, suite, threshold)
+            write_evaluation(result, parts_folder, part_name(cell, first, count), extra={
+                "benchmark_key": key, **facts, "goals": [g.tolist() for g in result.goals],
+                "rest": [r.tolist() for r in result.rest_shapes]})
+        done[k][first] = (result, facts)
+        complete(k)
+
+    def complete(k: int) -> None:
+        """Write cell ``k`` when all its parts are done, and delete its parts."""
+        slot, name, env_id, suite, threshold, agent, key = todo[k]
+        pieces = split_episodes(config.episodes, part)
+        if len(done[k]) < len(pieces):
+            return
+        cell = cell_name(name, env_id, suite, threshold)
+        result, facts = merge_parts([done[k][a] for a, _ in pieces], name, env_id)
         extra: dict[str, Any] = {"benchmark_key": key, **facts}
         if suite in DESIGNED_SUITES:  # for the figure of designed shapes
             tasks = designed_tasks(suite, env_id, len(result.records))
@@ -776,24 +865,31 @@ def run_benchmark(config: BenchmarkConfig, out_dir: str | os.PathLike, *,
         write_evaluation(result, folder, cell, extra=extra)
         rows[slot] = {**row_of(agent, env_id, suite, threshold, result, config.episodes),
                       **facts}
+        if len(pieces) > 1:
+            for a, n in pieces:
+                for suffix in (".json", ".csv"):
+                    (parts_folder / f"{part_name(cell, a, n)}{suffix}").unlink(missing_ok=True)
+            if parts_folder.is_dir() and not any(parts_folder.iterdir()):
+                parts_folder.rmdir()
+        if progress and backend is not None:
+            print(f"{cell}: success {result.summary['success_rate']:.0%}", flush=True)
 
+    for k in done:  # cells whose every part was reused
+        complete(k)
     if backend is None:
-        for k, (_, name, env_id, suite, threshold, _, _) in enumerate(todo):
+        for k, first, count in calls:
+            _, name, env_id, suite, threshold, _, _ = todo[k]
             result, seconds = run_cell(name, env_id, suite, config, threshold=threshold,
-                                       shape_model=shape_model, progress=progress)
-            finish(k, result, seconds)
+                                       shape_model=shape_model, progress=progress,
+                                       first=first, count=count)
+            finish(k, first, count, result, seconds)
     else:
         threads = _torch_threads()
         config = absolute_paths(config)  # the tasks may run in another folder or node
-        calls = [(name, env_id, suite, threshold, config, None, threads)
-                 for _, name, env_id, suite, threshold, _, _ in todo]
-        for done, (k, (result, seconds)) in enumerate(backend.map(_run_cell_task, calls), 1):
-            finish(k, result, seconds)
-            if progress:
-                _, name, env_id, suite, threshold, _, _ = todo[k]
-                print(f"{cell_name(name, env_id, suite, threshold)}: success "
-                      f"{result.summary['success_rate']:.0%} ({done}/{len(todo)} cells)",
-                      flush=True)
+        tasks = [(todo[k][1], todo[k][2], todo[k][3], todo[k][4], config, None, threads, first,
+                  count) for k, first, count in calls]
+        for i, (result, seconds) in backend.map(_run_cell_task, tasks):
+            finish(*calls[i], result, seconds)
     return rows
 
 
@@ -808,10 +904,11 @@ def absolute_paths(config: BenchmarkConfig) -> BenchmarkConfig:
 
 def _run_cell_task(name: str, env_id: str, suite: str, threshold: float,
                    config: BenchmarkConfig, shape_model: ShapeSurrogate | None,
-                   threads: int | None) -> tuple[Evaluation, float]:
+                   threads: int | None, first: int = 0,
+                   count: int | None = None) -> tuple[Evaluation, float]:
     """``run_cell`` with positional arguments, as a Ray task calls it."""
     return run_cell(name, env_id, suite, config, threshold=threshold,
-                    shape_model=shape_model, threads=threads)
+                    shape_model=shape_model, threads=threads, first=first, count=count)
 
 
 def _torch_threads() -> int | None:

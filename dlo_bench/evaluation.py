@@ -343,6 +343,7 @@ def evaluate(
     env_kwargs: dict[str, Any] | None = None,
     progress: bool = False,
     env_id: str | None = None,
+    first: int = 0,
 ) -> Evaluation:
     """Run ``episodes`` episodes of ``policy`` and score them against the real cord.
 
@@ -366,6 +367,10 @@ def evaluate(
         env_kwargs: Extra keyword arguments of ``gym.make``.
         progress: Show a tqdm progress bar.
         env_id: Deprecated name of ``env`` (an id).
+        first: Index of the first episode: run episodes ``first`` .. ``first + episodes - 1``
+            (the suite's tasks of those indices, or reset seeds ``seed + index``), numbered so
+            in the records. An episode depends only on its task, the seed and the policy's
+            settings, so the episodes of one evaluation can run in parts, in any order.
 
     Returns:
         The records and their summary.
@@ -378,6 +383,8 @@ def evaluate(
         raise ValueError(f"policy must have a predict() method, got {type(policy).__name__}")
     if not (isinstance(episodes, int) and episodes >= 1):
         raise ValueError(f"episodes must be an int >= 1, got {episodes!r}")
+    if not (isinstance(first, int) and not isinstance(first, bool) and first >= 0):
+        raise ValueError(f"first must be an int >= 0 (an episode index), got {first!r}")
     if difficulty is not None and suite is not None:
         raise ValueError("give difficulty or suite, not both")
     if env_id is not None:
@@ -403,10 +410,11 @@ def evaluate(
     try:
         if isinstance(policy, PlanningPolicy):
             policy.check_env(env)
-        options = _episode_options(difficulty, suite, split, episodes, env.unwrapped.cord.grasp)
+        options = _episode_options(difficulty, suite, split, first + episodes,
+                                   env.unwrapped.cord.grasp)[first:]
         bar = progress_bar(episodes, agent or "evaluate", "episode") if progress else None
         records, profiles, goals, rest_shapes = [], [], [], []
-        for i, opts in enumerate(options):
+        for i, opts in enumerate(options, first):
             reset_seed = seed + i if suite is None else None
             record, profile, goal, rest = _run_episode(policy, env, i, reset_seed, opts,
                                                        difficulty, fidelity)

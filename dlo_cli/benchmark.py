@@ -97,8 +97,15 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help="cells run at once, each in its own local process (every cell "
                              "the same as when run alone; with more jobs than idle cores the "
                              "timings include the contention)")
+    parser.add_argument("--part-episodes", type=positive_int, default=None, metavar="N",
+                        help="run each cell in parts of N episodes, each written to "
+                             "results_episodes/parts/ as it finishes (--resume loses no "
+                             "finished part; with --jobs the parts of one slow cell run at "
+                             "once); the cell is the same as when run whole (default: whole "
+                             "cells)")
     parser.add_argument("--resume", action="store_true",
-                        help="reuse the cells an interrupted run with the same settings wrote")
+                        help="reuse the cells (and parts) an interrupted run with the same "
+                             "settings wrote")
     parser.add_argument("--allow-dirty", action="store_true",
                         help="run even though tracked files of the code's git checkout have "
                              "uncommitted changes (its cells are then marked COMMIT+dirty); "
@@ -231,7 +238,7 @@ def run(args: argparse.Namespace) -> int:
           f"x {len(config.cells())} cells ({cells}) -> {args.out}", flush=True)
     t0 = time.perf_counter()
     rows = run_benchmark(config, args.out, resume=args.resume, progress=True,
-                         backend=backend, run_id=run_id)
+                         backend=backend, run_id=run_id, part=args.part_episodes)
     seconds = time.perf_counter() - t0
     parser = argparse.ArgumentParser()
     add_arguments(parser)

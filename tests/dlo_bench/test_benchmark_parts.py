@@ -1,0 +1,103 @@
+"""Benchmark cells run in parts of episodes (dlo benchmark --part-episodes): the same cell."""
+
+from __future__ import annotations
+
+import json
+
+import pytest
+
+from dlo_bench.agents import build_agent
+from dlo_bench.benchmark import (
+    PARTS_DIR,
+    BenchmarkConfig,
+    run_benchmark,
+    split_episodes,
+)
+from dlo_bench.evaluation import evaluate
+
+TIMINGS = {"seconds", "planning_seconds"}
+ENDPOINT = "dlo_env/DLOEndpoint-v0"
+
+
+def _untimed(records: list[dict]) -> list[dict]:
+    return [{k: v for k, v in r.items() if k not in TIMINGS} for r in records]
+
+
+def _cells(folder) -> dict[str, dict]:
+    return {p.stem: json.loads(p.read_text())
+            for p in (folder / "results_episodes").glob("*.json")}
+
+
+def test_evaluate_from_a_first_episode_runs_those_episodes_of_the_whole():
+    import gymnasium as gym
+
+    with gym.make(ENDPOINT) as env:
+        policy = build_agent("straight-line", env)
+        whole = evaluate(policy, env, suite="linear-2", episodes=4, fidelity=False)
+        tail = evaluate(policy, env, suite="linear-2", episodes=2, first=2, fidelity=False)
+        seeded = evaluate(policy, env, episodes=1, first=3, seed=5, fidelity=False)
+    assert [r.episode for r in tail.records] == [2, 3]
+    for a, b in zip(whole.records[2:], tail.records):
+        assert (a.task_seed, a.final_error, a.rest_error, a.steps) == \
+            (b.task_seed, b.final_error, b.rest_error, b.steps)
+    assert seeded.records[0].seed == 8  # seed + episode index
+    with pytest.raises(ValueError, match="first must be an int >= 0"):
+        evaluate(policy, ENDPOINT, episodes=1, first=-1)
+
+
+def test_split_episodes_covers_the_cell_in_order():
+    assert split_episodes(50, None) == [(0, 50)]
+    assert split_episodes(5, 2) == [(0, 2), (2, 2), (4, 1)]
+    assert split_episodes(4, 10) == [(0, 4)]
+
+
+class _StopAfter:
+    """A backend that runs calls in this process and stops (as Ctrl-C would) after some."""
+
+    def __init__(self, stop_after: int | None = None):
+        self.stop_after, self.calls = stop_after, 0
+
+    def map(self, function, calls):
+        for i, args in enumerate(calls):
+            if self.stop_after is not None and self.calls == self.stop_after:
+                raise KeyboardInterrupt
+            self.calls += 1
+            yield i, function(*args)
+
+
+def test_a_cell_in_parts_equals_the_whole_cell_and_resumes_from_its_finished_parts(tmp_path):
+    config = BenchmarkConfig(agents=("straight-line", "latent-mpc"), envs=(ENDPOINT,),
+                             difficulties=(2,), thresholds=(0.02,), designed=("shapes-curves",),
+                             episodes=3)
+    run_benchmark(config, tmp_path / "whole", progress=False)
+    whole = _cells(tmp_path / "whole")
+    assert len(whole) == 4
+
+    # Parts of 2 episodes: the run stops after three parts, then resumes from them.
+    with pytest.raises(KeyboardInterrupt):
+        run_benchmark(config, tmp_path / "parts", progress=False, part=2,
+                      backend=_StopAfter(3))
+    kept = sorted(p.name for p in (tmp_path / "parts" / "results_episodes" / PARTS_DIR)
+                  .glob("*.json"))
+    assert kept == ["latent-mpc-endpoint-d2-2cm.episodes-0-1.json"]
+    assert list(_cells(tmp_path / "parts")) == ["straight-line-endpoint-d2-2cm"]
+    resumed = _StopAfter()
+    rows = run_benchmark(config, tmp_path / "parts", progress=False, part=2, resume=True,
+                         backend=resumed)
+    assert resumed.calls == 8 - 3  # (2 agents x 2 cells x 2 parts) less the three kept
+    assert not (tmp_path / "parts" / "results_episodes" / PARTS_DIR).exists()
+    parts = _cells(tmp_path / "parts")
+    assert sorted(parts) == sorted(whole)
+    for cell, a in whole.items():
+        b = parts[cell]
+        assert _untimed(a["records"]) == _untimed(b["records"]), cell
+        assert a["summary"]["success_rate"] == b["summary"]["success_rate"]
+        assert a["summary"]["divergence"] == b["summary"]["divergence"]
+        assert a["fidelity_profiles"] == b["fidelity_profiles"]
+        assert a.get("shapes") == b.get("shapes")
+        assert a["benchmark_key"] == b["benchmark_key"]
+    # The resumed cell ran its parts in two runs (its planning times are compared with none).
+    resumed_cell = parts["latent-mpc-endpoint-d2-2cm"]
+    assert "+" in resumed_cell["run"] and resumed_cell["wall_seconds"] > 0
+    assert "+" not in parts["latent-mpc-endpoint-shapes-curves-2cm"]["run"]
+    assert [row["agent"] for row in rows] == ["straight-line"] * 2 + ["latent-mpc"] * 2
