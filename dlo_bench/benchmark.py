@@ -440,8 +440,7 @@ def row_of(agent: LoadedAgent, env_id: str, suite: str, threshold: float,
         "sample_cost": agent.sample_cost,
         "models": list(agent.models),
         "wall_seconds": None,
-        "commit": "",
-        "run": "",
+        **dict.fromkeys(RUN_FACTS, ""),
     }
     if evaluation is not None:
         records, s = evaluation.records, evaluation.summary
@@ -566,8 +565,8 @@ def _load_cell(path: Path, key: dict[str, Any], *, full: bool = False
                    for r in data["records"]]
     except TypeError:  # written by another version of EpisodeRecord: run the cell again
         return None
-    facts = {"wall_seconds": data.get("wall_seconds"), "commit": data.get("commit", ""),
-             "run": data.get("run", "")}
+    facts = {"wall_seconds": data.get("wall_seconds"),
+             **{k: data.get(k, "") for k in RUN_FACTS}}
     summary = summarise(records, agent=key["agent"], env_id=key["env_id"])
     if not full:
         return Evaluation(records, summary), facts
@@ -595,6 +594,26 @@ def split_episodes(episodes: int, part: int | None) -> list[tuple[int, int]]:
     return [(a, min(size, episodes - a)) for a in range(0, episodes, size)]
 
 
+#: What a cell records of the run that made it: the code's commit, the run, the machine.
+RUN_FACTS = ("commit", "run", "machine")
+
+
+def machine_label() -> str:
+    """This machine in a few words, recorded with every cell it times: the processor's model
+    (``/proc/cpuinfo`` where there is one) and the CPUs, ``Intel(R) Xeon(R) ... x 2 CPUs``."""
+    import platform
+
+    model = ""
+    try:
+        for line in Path("/proc/cpuinfo").read_text().splitlines():
+            if line.startswith("model name"):
+                model = line.split(":", 1)[1].strip()
+                break
+    except OSError:
+        pass
+    return f"{model or platform.processor() or platform.machine()} x {os.cpu_count()} CPUs"
+
+
 def merge_parts(parts: list[tuple[Evaluation, dict[str, Any]]], agent: str, env_id: str
                 ) -> tuple[Evaluation, dict[str, Any]]:
     """One evaluation of a cell's parts (in episode order) and its facts: the summed wall
@@ -610,7 +629,7 @@ def merge_parts(parts: list[tuple[Evaluation, dict[str, Any]]], agent: str, env_
                             [r for e, _ in parts for r in e.rest_shapes])
     walls = [f["wall_seconds"] for _, f in parts]
     facts = {"wall_seconds": None if None in walls else float(sum(walls)),
-             **{k: "+".join(dict.fromkeys(f[k] for _, f in parts)) for k in ("commit", "run")}}
+             **{k: "+".join(dict.fromkeys(f.get(k, "") for _, f in parts)) for k in RUN_FACTS}}
     return evaluation, facts
 
 
@@ -780,6 +799,7 @@ def run_benchmark(config: BenchmarkConfig, out_dir: str | os.PathLike, *,
     # The code that runs, read once before any cell is written: a run writing into a tracked
     # folder (``--out benchmarks``) must not mark its own later cells "+dirty".
     version = code_version()
+    machine = machine_label()
     shape_model, why = (None, "")
     if any(AGENTS[a].shape_model for a in config.all_agents):
         shape_model, why = load_shape_model(config.model)
@@ -839,7 +859,7 @@ def run_benchmark(config: BenchmarkConfig, out_dir: str | os.PathLike, *,
     def finish(k: int, first: int, count: int, result: Evaluation, seconds: float) -> None:
         """Keep a finished part (on disk when the cell has several) and complete its cell."""
         _, name, env_id, suite, threshold, _, key = todo[k]
-        facts = {"wall_seconds": seconds, "commit": version, "run": run_id}
+        facts = {"wall_seconds": seconds, "commit": version, "run": run_id, "machine": machine}
         if len(split_episodes(config.episodes, part)) > 1:
             cell = cell_name(name, env_id, suite, threshold)
             write_evaluation(result, parts_folder, part_name(cell, first, count), extra={

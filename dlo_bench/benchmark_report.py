@@ -126,13 +126,17 @@ def _ratio(value: float) -> str:
 
 
 def run_summary(rows: list[dict[str, Any]]) -> str:
-    """The runs that timed the cells and how many cells each: ``R1 (40 cells), R2 (8 cells)``."""
-    counts: dict[str, int] = {}
+    """The runs that timed the cells, how many cells each, by the machine they ran on:
+    ``R1 (40 cells), R2 (8 cells) on X; R3 (2 cells) on machine not recorded``."""
+    machines: dict[str, dict[str, int]] = {}
     for r in rows:
         if r["status"] == "ok":
+            counts = machines.setdefault(r.get("machine") or "machine not recorded", {})
             run = r.get("run") or "not recorded"
             counts[run] = counts.get(run, 0) + 1
-    return ", ".join(f"{run} ({n} cell{'s' * (n != 1)})" for run, n in sorted(counts.items()))
+    return "; ".join(", ".join(f"{run} ({n} cell{'s' * (n != 1)})"
+                               for run, n in sorted(counts.items())) + f" on {machine}"
+                     for machine, counts in sorted(machines.items()))
 
 
 def thresholds_of(rows: list[dict[str, Any]]) -> list[float | None]:

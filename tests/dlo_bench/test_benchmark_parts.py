@@ -10,6 +10,7 @@ from dlo_bench.agents import build_agent
 from dlo_bench.benchmark import (
     PARTS_DIR,
     BenchmarkConfig,
+    machine_label,
     run_benchmark,
     split_episodes,
 )
@@ -99,5 +100,17 @@ def test_a_cell_in_parts_equals_the_whole_cell_and_resumes_from_its_finished_par
     # The resumed cell ran its parts in two runs (its planning times are compared with none).
     resumed_cell = parts["latent-mpc-endpoint-d2-2cm"]
     assert "+" in resumed_cell["run"] and resumed_cell["wall_seconds"] > 0
+    assert resumed_cell["machine"] == machine_label() and " CPUs" in machine_label()
     assert "+" not in parts["latent-mpc-endpoint-shapes-curves-2cm"]["run"]
     assert [row["agent"] for row in rows] == ["straight-line"] * 2 + ["latent-mpc"] * 2
+
+
+def test_the_report_names_the_machine_of_each_run():
+    from dlo_bench.benchmark_report import run_summary
+
+    rows = [{"status": "ok", "run": "R1", "machine": "A x 2 CPUs"},
+            {"status": "ok", "run": "R1", "machine": "A x 2 CPUs"},
+            {"status": "ok", "run": "R2", "machine": "B x 16 CPUs"},
+            {"status": "ok", "run": "R0"}, {"status": "missing", "run": ""}]
+    assert run_summary(rows) == ("R1 (2 cells) on A x 2 CPUs; R2 (1 cell) on B x 16 CPUs; "
+                                 "R0 (1 cell) on machine not recorded")
