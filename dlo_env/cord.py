@@ -8,7 +8,10 @@ segment sticks until the net force exceeds friction and slides against a bounded
 otherwise. Grippers are kinematic bodies pinned to the head and/or the tail; they move at a
 bounded speed and are kept on the table. The table has a hard rim: static walls stop the
 cord, and a link the grippers force into a wall is shifted back, so no point ever leaves it.
-The cord may cross over itself: self-contact is not modelled.
+The cord may cross over itself: self-contact is not modelled. Pegs (fixed round posts of
+``peg_radius``, none by default) are static circles the links collide with: a gripper stops
+where it would touch one (:func:`reachable_targets`), and a link pressed into one is shifted
+out, so no point of the cord ever lies inside a peg.
 
 Time advances in control periods of ``dt`` seconds, each split into ``substeps`` equal
 physics steps; the solver is single-threaded, so the same inputs give the same numbers.
@@ -38,6 +41,11 @@ RIM_THICKNESS = 0.05
 COLLISION_SLOP = 5e-4
 #: Points are kept this far inside the edge (float32 rounding of a point on the edge).
 RIM_GUARD = 1e-6
+#: Radius of a peg, metres (the default of ``Cord`` and of the environments' ``peg_radius``).
+PEG_RADIUS = 0.02
+#: A point pressed into a peg is moved out to this far beyond its surface, metres; a gripper
+#: stops at ``LINK_RADIUS`` plus this from it.
+PEG_GUARD = 1e-4
 
 
 @dataclass(frozen=True)
@@ -98,16 +106,83 @@ class CordParams:
         return self.length / (self.n_points - 1)
 
 
-def reachable_targets(targets: np.ndarray, params: CordParams | None = None) -> np.ndarray:
+def check_pegs(pegs: object, name: str = "pegs") -> np.ndarray:
+    """``pegs`` as float64 ``(k, 2)`` peg centres on the table (metres), or ``ValueError``."""
+    arr = np.zeros((0, 2)) if pegs is None else np.asarray(pegs, dtype=np.float64)
+    if arr.size == 0:
+        return np.zeros((0, 2))
+    if arr.ndim != 2 or arr.shape[1] != 2 or not np.isfinite(arr).all():
+        raise ValueError(f"{name} must be a finite array of peg centres, shape (k, 2) metres, "
+                         f"got shape {arr.shape}")
+    if (np.abs(arr) >= TABLE_HALF).any():
+        raise ValueError(f"{name} must lie on the table (|x|, |y| < {TABLE_HALF} m), got "
+                         f"{arr[(np.abs(arr) >= TABLE_HALF).any(axis=1)][0].tolist()}")
+    return arr
+
+
+def peg_clearance(shape: np.ndarray, pegs: np.ndarray, peg_radius: float = PEG_RADIUS) -> float:
+    """The least distance from the cord's centre line (the polyline of ``shape``, ``(n, 2)``)
+    to a peg's surface, metres (``inf`` without pegs; negative when it crosses a peg)."""
+    pegs = np.asarray(pegs, dtype=np.float64).reshape(-1, 2)
+    if len(pegs) == 0:
+        return math.inf
+    pts = np.asarray(shape, dtype=np.float64).reshape(-1, 2)
+    a, seg = pts[:-1], np.diff(pts, axis=0)  # (s, 2)
+    rel = pegs[:, None, :] - a  # (k, s, 2)
+    t = np.clip((rel * seg).sum(-1) / np.maximum((seg * seg).sum(-1), 1e-18), 0.0, 1.0)
+    gap = rel - t[..., None] * seg
+    return float(np.sqrt((gap * gap).sum(-1)).min()) - peg_radius
+
+
+def peg_contact(starts: np.ndarray, moves: np.ndarray, pegs: np.ndarray, reach: float
+                ) -> np.ndarray:
+    """The share of a straight move at which a held end first comes within ``reach`` of a peg.
+
+    Args:
+        starts: ``(..., k, 2)`` positions of the ``k`` held ends.
+        moves: ``(..., k, 2)`` their displacements.
+        pegs: ``(m, 2)`` peg centres.
+        reach: Distance from a centre that counts as touching, metres.
+
+    Returns:
+        ``(...,)`` in ``[0, 1]``: 1 when no end touches a peg on the way; 0 when an end starts
+        touching one and moves towards its centre.
+    """
+    starts, moves = np.asarray(starts, dtype=np.float64), np.asarray(moves, dtype=np.float64)
+    if len(pegs) == 0:
+        return np.ones(starts.shape[:-2])
+    rel = starts[..., :, None, :] - pegs  # (..., k, m, 2)
+    d = moves[..., :, None, :]
+    a = (d * d).sum(-1)
+    b = 2.0 * (d * rel).sum(-1)
+    c = (rel * rel).sum(-1) - reach * reach
+    disc = b * b - 4.0 * a * c
+    with np.errstate(divide="ignore", invalid="ignore"):
+        enter = (-b - np.sqrt(np.maximum(disc, 0.0))) / (2.0 * a)
+    hit = (c > 0) & (a > 0) & (disc > 0) & (enter >= 0) & (enter <= 1)
+    t = np.where(hit, enter, np.inf)
+    t = np.where((c <= 0) & (b < 0), 0.0, t)  # touching already and pressing in: no move
+    return np.minimum(t.min(axis=(-2, -1)), 1.0)
+
+
+def reachable_targets(targets: np.ndarray, params: CordParams | None = None, *,
+                      starts: np.ndarray | None = None, pegs: np.ndarray | None = None,
+                      peg_radius: float = PEG_RADIUS) -> np.ndarray:
     """Where the grippers really go when sent to ``targets``: the rule of ``Cord.move``.
 
     Targets are clipped to the table less ``rim_margin``; with two ends (head, tail) held,
     a pair farther apart than ``max_span * length`` is pulled in symmetrically about its
-    middle. Batched, so a learned model applies exactly the simulator's rule.
+    middle. With ``pegs`` (and ``starts``), the straight move from ``starts`` stops where the
+    first end would touch a peg (its centre line within ``peg_radius + LINK_RADIUS +
+    PEG_GUARD``), every end at the same share of its move. Batched, so a learned model
+    applies exactly the simulator's rule.
 
     Args:
         targets: ``(..., k, 2)`` target positions of the ``k`` held ends (1, or 2: head, tail).
         params: Cord parameters (default cord if None).
+        starts: ``(..., k, 2)`` where the ends are (needed with pegs).
+        pegs: ``(m, 2)`` peg centres (None or empty: no pegs).
+        peg_radius: Radius of the pegs, metres.
 
     Returns:
         float64 ``(..., k, 2)`` reachable targets.
@@ -127,6 +202,13 @@ def reachable_targets(targets: np.ndarray, params: CordParams | None = None) -> 
             half_gap = 0.5 * span * gap / np.where(too_far, dist, 1.0)
             out[..., 0, :] = np.where(too_far, mid - half_gap, out[..., 0, :])
             out[..., 1, :] = np.where(too_far, mid + half_gap, out[..., 1, :])
+    if pegs is not None and len(pegs):
+        if starts is None:
+            raise ValueError("starts must be given with pegs: a move stops where it meets one")
+        starts = np.asarray(starts, dtype=np.float64)
+        share = peg_contact(starts, out - starts, np.asarray(pegs, dtype=np.float64),
+                            peg_radius + LINK_RADIUS + PEG_GUARD)
+        out = starts + share[..., None, None] * (out - starts)
     return out
 
 
@@ -136,6 +218,8 @@ class Cord:
     Args:
         params: The cord's parameters.
         grasp: Which ends grippers hold: ``"head"``, ``"tail"``, ``"both"`` or ``"none"``.
+        pegs: ``(k, 2)`` centres of fixed round pegs on the table, metres (None: none).
+        peg_radius: Radius of every peg, metres.
 
     Example:
         >>> cord = Cord()
@@ -144,10 +228,18 @@ class Cord:
         >>> cord.shape  # (20, 2) float32, metres
     """
 
-    def __init__(self, params: CordParams | None = None, grasp: Grasp = "head") -> None:
+    def __init__(self, params: CordParams | None = None, grasp: Grasp = "head", *,
+                 pegs: np.ndarray | None = None, peg_radius: float = PEG_RADIUS) -> None:
         self.params = params if params is not None else CordParams()
         self._check_grasp(grasp)
         self._grasp: Grasp = grasp
+        if not (isinstance(peg_radius, (int, float)) and math.isfinite(peg_radius)
+                and 0 < peg_radius < TABLE_HALF):
+            raise ValueError(f"peg_radius must be a number of metres in (0, {TABLE_HALF}), "
+                             f"got {peg_radius!r}")
+        self.peg_radius = float(peg_radius)
+        self._pegs = check_pegs(pegs)
+        self._peg_shapes: list[pymunk.Circle] = []
         self.space: pymunk.Space | None = None
         self.segments: list[pymunk.Body] = []
         self.grippers: dict[str, pymunk.Body] = {}
@@ -212,11 +304,33 @@ class Cord:
             space.add(pymunk.Segment(static, c0, c1, w))
         space.collision_slop = COLLISION_SLOP
         self.space = space
+        self._peg_shapes = []
+        self._add_pegs()
         self.segments = bodies
         self._make_buffer()
         self.grippers = {}
         self._grip_joints = {}
         self._attach(self._grasp)
+
+    @property
+    def pegs(self) -> np.ndarray:
+        """``(k, 2)`` peg centres, metres (a copy; ``(0, 2)`` without pegs)."""
+        return self._pegs.copy()
+
+    def set_pegs(self, pegs: np.ndarray | None) -> None:
+        """Place the pegs (None or empty: none), in the current simulation too."""
+        self._pegs = check_pegs(pegs)
+        if self.space is not None:
+            self.space.remove(*self._peg_shapes)
+            self._peg_shapes = []
+            self._add_pegs()
+
+    def _add_pegs(self) -> None:
+        assert self.space is not None
+        for x, y in self._pegs.tolist():
+            peg = pymunk.Circle(self.space.static_body, self.peg_radius, offset=(x, y))
+            self.space.add(peg)
+            self._peg_shapes.append(peg)
 
     def _make_buffer(self) -> None:
         self._buffer = pymunk.batch.Buffer()
@@ -370,7 +484,8 @@ class Cord:
                              f"{moves[bad].tolist()}")
         if not names:
             return names, starts, starts
-        return names, starts, reachable_targets(starts + moves, self.params)
+        return names, starts, reachable_targets(starts + moves, self.params, starts=starts,
+                                                pegs=self._pegs, peg_radius=self.peg_radius)
 
     def move(
         self,
@@ -459,24 +574,57 @@ class Cord:
             self._keep_on_table()
         return self._points(poses[..., 0:2], poses[..., 2]).astype(np.float32)
 
-    def _keep_on_table(self) -> np.ndarray:
-        """Push any link that overlaps the rim back onto the table; return the poses.
+    def _peg_shift(self, rows: np.ndarray, passes: int = 5) -> np.ndarray:
+        """``(n - 1, 2)`` shifts of the links that move every point out of the pegs.
 
-        The walls stop the cord LINK_RADIUS inside the edge; only a link forced against a
-        wall harder than the contact solver resolves in one step overlaps it further. Shifting
-        that link back (its angle kept) makes the rim hard: no point ever leaves the table.
+        A point inside a peg is pushed radially to ``PEG_GUARD`` beyond its surface by
+        shifting both links it joins (a link pushed by both its points takes the larger push);
+        a few passes settle points that one shift left inside.
+        """
+        total = np.zeros((len(rows), 2))
+        for _ in range(passes):
+            points = self._points(rows[:, 0:2] + total, rows[:, 2])  # (n, 2)
+            rel = points[:, None, :] - self._pegs  # (n, k, 2)
+            dist = np.sqrt((rel * rel).sum(-1))
+            depth = self.peg_radius + PEG_GUARD - dist
+            if not (depth > 0).any():
+                break
+            peg = np.argmax(depth, axis=1)
+            idx = np.arange(len(points))
+            deepest = np.clip(depth[idx, peg], 0.0, None)
+            push = deepest[:, None] * rel[idx, peg] / np.maximum(dist[idx, peg], 1e-12)[:, None]
+            size = (push * push).sum(-1)
+            # Link i joins points i and i + 1: it takes the larger of their pushes.
+            take = np.where(size[:-1] >= size[1:], 0, 1)
+            total += np.where(take[:, None] == 0, push[:-1], push[1:])
+        return total
+
+    def _keep_on_table(self) -> np.ndarray:
+        """Push any link that overlaps the rim back onto the table, and any link with a point
+        inside a peg out of it; return the poses.
+
+        The walls (and pegs) stop the cord LINK_RADIUS from their surface; only a link forced
+        against one harder than the contact solver resolves in one step overlaps it further.
+        Shifting that link back (its angle kept) makes the rim and the pegs hard: no point
+        ever leaves the table or lies inside a peg.
 
         Returns:
             ``(n - 1, 3)`` poses (x, y, angle) of the links after the correction.
         """
         rows = self._read(self._POSE, 3).copy()
-        if np.abs(rows[:, 0:2]).max() < TABLE_HALF - 0.5 * self.params.segment:
+        near_rim = np.abs(rows[:, 0:2]).max() >= TABLE_HALF - 0.5 * self.params.segment
+        if not near_rim and not len(self._pegs):
             return rows  # no link reaches the rim: the common case, checked cheaply
         offset = 0.5 * self.params.segment * np.stack([np.cos(rows[:, 2]), np.sin(rows[:, 2])], 1)
         ends = np.stack([rows[:, 0:2] - offset, rows[:, 0:2] + offset], axis=1)  # (n-1, 2, 2)
-        lim = TABLE_HALF - RIM_GUARD
-        shift = (np.clip(-lim - ends, 0.0, None).max(axis=1)
-                 - np.clip(ends - lim, 0.0, None).max(axis=1))  # (n-1, 2)
+        shift = np.zeros((len(rows), 2))
+        if len(self._pegs):
+            shift = self._peg_shift(rows)
+            ends = ends + shift[:, None, :]
+        if near_rim or shift.any():
+            lim = TABLE_HALF - RIM_GUARD
+            shift = shift + (np.clip(-lim - ends, 0.0, None).max(axis=1)
+                             - np.clip(ends - lim, 0.0, None).max(axis=1))  # (n-1, 2)
         for i in np.flatnonzero(np.abs(shift).sum(axis=1)):
             body = self.segments[i]
             x, y = body.position

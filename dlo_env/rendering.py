@@ -19,9 +19,10 @@ _GOAL = (120, 200, 120)
 _CORD = (30, 60, 140)
 _HEAD = (200, 60, 40)
 _GRIPPER = (240, 150, 20)
+_PEG = (90, 90, 90)
 #: The colours (RGB) of every mark, by name; other drawings of the cord (GIFs) use the same.
 PALETTE = {"floor": _FLOOR, "table": _TABLE, "edge": _EDGE, "goal": _GOAL, "cord": _CORD,
-           "head": _HEAD, "gripper": _GRIPPER}
+           "head": _HEAD, "gripper": _GRIPPER, "peg": _PEG}
 
 
 class CordRenderer:
@@ -69,6 +70,8 @@ class CordRenderer:
         shape: np.ndarray | None,
         goal: np.ndarray | None,
         grippers: Sequence[Sequence[float]],
+        pegs: np.ndarray | None = None,
+        peg_radius: float = 0.0,
     ) -> np.ndarray | None:
         """Draw one frame.
 
@@ -76,6 +79,8 @@ class CordRenderer:
             shape: ``(n, 2)`` cord shape (None before the first reset).
             goal: ``(n, 2)`` goal shape, drawn as a pale ghost (or None).
             grippers: Positions of the grippers, metres.
+            pegs: ``(k, 2)`` peg centres, metres (None: none).
+            peg_radius: Their radius, metres.
 
         Returns:
             ``(size, size, 3)`` uint8 in ``"rgb_array"`` mode, else None.
@@ -88,6 +93,10 @@ class CordRenderer:
         pg.draw.rect(surf, _TABLE, table)
         pg.draw.rect(surf, _EDGE, table, width=3)
         width = max(2, self.size // 100)
+        if pegs is not None and len(pegs):
+            scale = (self.size - 2 * 0.04 * self.size) / (2 * TABLE_HALF)
+            for p in self._pixels(pegs):
+                pg.draw.circle(surf, _PEG, p, max(2, int(round(peg_radius * scale))))
         if goal is not None:
             pts = self._pixels(goal)
             pg.draw.lines(surf, _GOAL, False, pts, width + 4)

@@ -27,7 +27,15 @@ from pathlib import Path
 import numpy as np
 
 from dlo_env.atomic import atomic_path
-from dlo_env.cord import Cord, CordParams, Grasp
+from dlo_env.cord import (
+    LINK_RADIUS,
+    PEG_RADIUS,
+    Cord,
+    CordParams,
+    Grasp,
+    check_pegs,
+    peg_clearance,
+)
 from dlo_env.shapes import (
     TABLE_HALF,
     error,
@@ -58,8 +66,15 @@ REST_CHECK_MARGIN = 0.01
 TARGET_MARGIN = 0.1
 #: With both ends held, head and tail stay this much closer than ``max_span * length``, metres.
 SPAN_MARGIN = 0.02
-#: Version of the ``.npz`` task file layout written by :func:`save_tasks`.
-FORMAT_VERSION = 1
+#: A start cord's centre line keeps at least this far from every peg's surface, metres.
+PEG_CLEARANCE = 0.02
+#: A drawn peg's surface lies at most this far from the start cord, so moves meet it, metres.
+PEG_NEAR = 0.15
+#: Drawn pegs leave at least this gap between their surfaces (a cord passes between), metres.
+PEG_GAP = 0.04
+#: Version of the ``.npz`` task file layout written by :func:`save_tasks` (2 adds the pegs;
+#: files of version 1, without pegs, stay readable).
+FORMAT_VERSION = 2
 
 #: The ends each grasp holds, in the order of their action components.
 GRASP_ENDS: dict[str, tuple[str, ...]] = {
@@ -100,6 +115,9 @@ class Task:
         moves: ``(difficulty, action_dim)`` displacement of each straight move, metres (head
             dx, dy then tail dx, dy when both ends are held).
         max_step: Gripper displacement of an action of 1.0, metres.
+        pegs: ``(k, 2)`` centres of the pegs on the table during the task, metres (``(0, 2)``:
+            none).
+        peg_radius: Their radius, metres.
     """
 
     start: np.ndarray
@@ -110,9 +128,15 @@ class Task:
     grasp: str
     moves: np.ndarray
     max_step: float = DEFAULT_MAX_STEP
+    pegs: np.ndarray | None = None
+    peg_radius: float = PEG_RADIUS
 
     def __post_init__(self) -> None:
         dim = action_dim(self.grasp)
+        object.__setattr__(self, "pegs", check_pegs(self.pegs, "Task.pegs").astype(np.float32))
+        if not (isinstance(self.peg_radius, (float, int)) and self.peg_radius > 0):
+            raise ValueError(f"Task.peg_radius must be a number > 0, got {self.peg_radius!r}")
+        object.__setattr__(self, "peg_radius", float(self.peg_radius))
         for name in ("start", "goal", "reference_actions", "moves"):
             object.__setattr__(self, name, np.asarray(getattr(self, name), dtype=np.float32))
         if self.start.ndim != 2 or self.start.shape[1] != 2 or self.goal.shape != self.start.shape:
@@ -144,11 +168,15 @@ class Task:
         """Length of one action."""
         return action_dim(self.grasp)
 
+    def options(self) -> dict[str, object]:
+        """The environment's ``reset`` options of this task (its pegs come with it)."""
+        return {"task": self}
+
     def __repr__(self) -> str:
         return (
             f"Task(grasp={self.grasp!r}, difficulty={self.difficulty}, seed={self.seed}, "
             f"n_points={len(self.start)}, reference_actions={len(self.reference_actions)}, "
-            f"max_step={self.max_step})"
+            f"max_step={self.max_step}" + (f", pegs={len(self.pegs)})" if len(self.pegs) else ")")
         )
 
 
@@ -256,6 +284,9 @@ def _random_start(rng: np.random.Generator, cord: Cord,
         shape = draw(rng, n_points=p.n_points, length=p.length)
         if cord.grasp == "both" and np.linalg.norm(shape[-1] - shape[0]) >= span:
             continue
+        pegs = cord.pegs
+        if len(pegs) and peg_clearance(shape, pegs, cord.peg_radius) < PEG_CLEARANCE:
+            continue
         cord.reset(shape)
         cord.settle(tolerance=REST_SPEED, max_time=3.0)
         settled = cord.shape
@@ -263,10 +294,43 @@ def _random_start(rng: np.random.Generator, cord: Cord,
         # rim (still on the table, which the check guards): not a valid start.
         if not _rest(cord) or not is_cord_like(settled) or not on_table(settled):
             continue
+        if len(pegs) and peg_clearance(settled, pegs, cord.peg_radius) < PEG_CLEARANCE:
+            continue
         if cord.grasp == "both" and np.linalg.norm(settled[-1] - settled[0]) >= span:
             continue
         return settled
     raise RuntimeError("could not draw a start shape that settles")  # pragma: no cover
+
+
+def draw_pegs(rng: np.random.Generator, count: int, shape: np.ndarray,
+              peg_radius: float = PEG_RADIUS) -> np.ndarray:
+    """``count`` pegs near the cord ``shape``: each surface ``PEG_CLEARANCE`` to ``PEG_NEAR``
+    from its centre line, ``PEG_GAP`` from the other pegs, inside the move targets' area.
+
+    Returns:
+        float32 ``(count, 2)`` peg centres (as a task stores them).
+    """
+    pts = np.asarray(shape, dtype=np.float64)
+    lim = TABLE_HALF - TARGET_MARGIN
+    pegs: list[np.ndarray] = []
+    for _ in range(1000 * max(count, 1)):
+        if len(pegs) == count:
+            break
+        i = int(rng.integers(len(pts) - 1))
+        anchor = pts[i] + rng.uniform() * (pts[i + 1] - pts[i])
+        angle = rng.uniform(-np.pi, np.pi)
+        dist = peg_radius + LINK_RADIUS + rng.uniform(PEG_CLEARANCE, PEG_NEAR)
+        centre = (anchor + dist * np.array([math.cos(angle), math.sin(angle)])).astype(np.float32)
+        if (np.abs(centre) > lim).any():
+            continue
+        if peg_clearance(pts, centre[None], peg_radius) < PEG_CLEARANCE:
+            continue
+        if any(np.linalg.norm(centre - q) < 2 * peg_radius + PEG_GAP for q in pegs):
+            continue
+        pegs.append(centre)
+    if len(pegs) < count:
+        raise ValueError(f"count: could not place {count} pegs near the cord")
+    return np.asarray(pegs, dtype=np.float32).reshape(-1, 2)
 
 
 def _random_move(
@@ -300,6 +364,8 @@ def make_task(
     max_step: float = DEFAULT_MAX_STEP,
     start: np.ndarray | None = None,
     min_error: float = SUCCESS_THRESHOLD,
+    pegs: np.ndarray | int | None = None,
+    peg_radius: float = PEG_RADIUS,
 ) -> Task:
     """Generate a task: a start at rest and a goal ``difficulty`` straight moves away.
 
@@ -312,6 +378,10 @@ def make_task(
         start: Use this start shape (as given, not settled) instead of a random one.
         min_error: The goal is redrawn until ``error(start, goal) > min_error``, so a new task
             is never solved at the start (and until every goal point is on the table).
+        pegs: Pegs on the table while the moves run: ``(k, 2)`` centres (a drawn start keeps
+            ``PEG_CLEARANCE`` from them; a given one must not cross them), or a count drawn
+            near the start (:func:`draw_pegs`), or None: none.
+        peg_radius: Radius of the pegs, metres.
 
     Returns:
         The task; its ``reference_actions`` replayed from ``start`` reproduce ``goal`` bitwise.
@@ -320,8 +390,15 @@ def make_task(
     dim = action_dim(grasp)
     if not max_step > 0:
         raise ValueError(f"max_step must be > 0, got {max_step!r}")
+    count = 0
+    if isinstance(pegs, (int, np.integer)) and not isinstance(pegs, bool):
+        if pegs < 0:
+            raise ValueError(f"pegs must be a count >= 0 or (k, 2) centres, got {pegs!r}")
+        count, fixed = int(pegs), None
+    else:  # float32, as the task stores them: the replay sees the very same pegs
+        fixed = check_pegs(pegs).astype(np.float32)
     rng = np.random.default_rng(seed)
-    cord = Cord(params, grasp=grasp)
+    cord = Cord(params, grasp=grasp, pegs=fixed, peg_radius=peg_radius)
     p = cord.params
     if start is None:
         # The cord re-projects every segment to its exact rest length: a drawn start is the
@@ -330,6 +407,12 @@ def make_task(
         start = cord.shape
     else:
         start = validate_shape(start, n_points=p.n_points, length=p.length, name="start")
+        if fixed is not None and len(fixed) and peg_clearance(start, fixed, peg_radius) < \
+                LINK_RADIUS:
+            raise ValueError("start: the cord lies on a peg (its centre line within "
+                             f"LINK_RADIUS = {LINK_RADIUS} m of a peg's surface)")
+    if count:
+        cord.set_pegs(draw_pegs(rng, count, start, peg_radius))
     for _ in range(100):
         cord.reset(start)  # fresh, exactly as env.reset does: the replay is bitwise
         actions, moves = [], []
@@ -354,6 +437,8 @@ def make_task(
                 grasp=grasp,
                 moves=np.array(moves),
                 max_step=max_step,
+                pegs=cord.pegs.astype(np.float32),
+                peg_radius=peg_radius,
             )
     raise RuntimeError(f"no goal farther than min_error={min_error} m from the start")
 
@@ -423,6 +508,9 @@ def save_tasks(path: str | os.PathLike, tasks: list[Task]) -> None:
         "seed": np.array([t.seed for t in tasks], dtype=np.int64),
         "grasp": np.array(tasks[0].grasp),
         "max_step": np.array([t.max_step for t in tasks], dtype=np.float64),
+        "pegs": np.concatenate([t.pegs for t in tasks]).reshape(-1, 2),
+        "peg_counts": np.array([len(t.pegs) for t in tasks], dtype=np.int64),
+        "peg_radius": np.array([t.peg_radius for t in tasks], dtype=np.float64),
     }
     path = Path(path)
     with atomic_path(path) as tmp, open(tmp, "wb") as f:
@@ -444,12 +532,18 @@ def load_tasks(path: str | os.PathLike) -> list[Task]:
         if missing:
             raise ValueError(f"path {str(path)!r} is not a dlo task file: missing {missing}")
         arrays = {k: data[k] for k in keys}
-    version = int(arrays["format_version"])
-    if version != FORMAT_VERSION:
-        raise ValueError(
-            f"path {str(path)!r} has task format version {version}, this dlo reads "
-            f"version {FORMAT_VERSION}"
-        )
+        version = int(arrays["format_version"])
+        if version not in (1, FORMAT_VERSION):
+            raise ValueError(
+                f"path {str(path)!r} has task format version {version}, this dlo reads "
+                f"versions 1 to {FORMAT_VERSION}"
+            )
+        peg_keys = ("pegs", "peg_counts", "peg_radius")
+        if version >= 2:
+            missing = [k for k in peg_keys if k not in data.files]
+            if missing:
+                raise ValueError(f"path {str(path)!r} is not a dlo task file: missing {missing}")
+            arrays.update({k: data[k] for k in peg_keys})
     counts, difficulty = arrays["action_counts"], arrays["difficulty"]
     action_ends = np.concatenate([[0], np.cumsum(counts)])
     move_ends = np.concatenate([[0], np.cumsum(difficulty)])
@@ -458,6 +552,13 @@ def load_tasks(path: str | os.PathLike) -> list[Task]:
     ):
         raise ValueError(f"path {str(path)!r} is corrupt: action or move counts do not add up")
     grasp = str(arrays["grasp"])
+    size = len(counts)
+    peg_counts = arrays.get("peg_counts", np.zeros(size, dtype=np.int64))
+    peg_ends = np.concatenate([[0], np.cumsum(peg_counts)])
+    pegs = arrays.get("pegs", np.zeros((0, 2), dtype=np.float32))
+    radius = arrays.get("peg_radius", np.full(size, PEG_RADIUS))
+    if peg_ends[-1] != len(pegs) or len(peg_counts) != size or len(radius) != size:
+        raise ValueError(f"path {str(path)!r} is corrupt: peg counts do not add up")
     return [
         Task(
             start=arrays["start"][i],
@@ -468,6 +569,8 @@ def load_tasks(path: str | os.PathLike) -> list[Task]:
             grasp=grasp,
             moves=arrays["moves"][move_ends[i] : move_ends[i + 1]],
             max_step=float(arrays["max_step"][i]),
+            pegs=pegs[peg_ends[i] : peg_ends[i + 1]],
+            peg_radius=float(radius[i]),
         )
-        for i in range(len(counts))
+        for i in range(size)
     ]

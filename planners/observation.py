@@ -1,14 +1,15 @@
 """Shape arguments and ``dlo_env`` observations as the planners read them.
 
 A ``dlo_env`` goal environment observes a Dict: ``observation`` (the flat shape followed by the
-held grippers' positions), ``achieved_goal`` (the flat shape) and ``desired_goal`` (the flat
-goal). Stable-Baselines3 and ``gym.make_vec`` pass the same Dict with a leading batch axis, one
-row per environment.
+held grippers' positions and, in an environment with ``max_pegs`` > 0, that many peg centres and
+their mask), ``achieved_goal`` (the flat shape) and ``desired_goal`` (the flat goal).
+Stable-Baselines3 and ``gym.make_vec`` pass the same Dict with a leading batch axis, one row per
+environment.
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
@@ -37,12 +38,14 @@ class CordObservation:
             does not give the grippers).
         grippers: ``(k, 2)`` the held grippers' positions, head first; ``(0, 2)`` when the
             observation gives only ``achieved_goal`` and ``desired_goal``.
+        pegs: ``(m, 2)`` the centres of the pegs on the table (``(0, 2)``: none).
     """
 
     shape: np.ndarray
     goal: np.ndarray
     head: np.ndarray
     grippers: np.ndarray
+    pegs: np.ndarray = field(default_factory=lambda: np.zeros((0, 2), dtype=np.float32))
 
 
 def _check_dict(observation: Any) -> None:
@@ -106,12 +109,19 @@ def read_observation(observation: Any, n_points: int) -> CordObservation:
         )
     shape = as_shape(flat, n_points, "observation['achieved_goal']")
     goal = as_shape(desired.reshape(-1), n_points, "observation['desired_goal']")
-    grippers = np.zeros((0, 2), dtype=np.float32)
+    grippers = pegs = np.zeros((0, 2), dtype=np.float32)
     extra = observation.get("observation")
     if extra is not None:
         extra = np.asarray(extra, dtype=np.float32).reshape(-1)
-        held = (extra.size - 2 * n_points) // 2
-        if held >= 1:
-            grippers = extra[2 * n_points : 2 * n_points + 2 * held].reshape(held, 2).copy()
+        # After the shape: 2 numbers per held end (1 or 2), then 3 per peg slot (centre, mask),
+        # so what is left modulo 3 tells the held ends apart (2: one end, 1: two, 0: none).
+        rest = extra.size - 2 * n_points
+        held = {0: 0, 2: 1, 1: 2}[rest % 3] if rest > 0 else 0
+        slots = (rest - 2 * held) // 3
+        at = 2 * n_points + 2 * held
+        grippers = extra[2 * n_points : at].reshape(held, 2).copy()
+        if slots > 0:
+            mask = extra[at + 2 * slots : at + 3 * slots] > 0.5
+            pegs = extra[at : at + 2 * slots].reshape(slots, 2)[mask].copy()
     head = grippers[0].copy() if len(grippers) else shape[0].copy()
-    return CordObservation(shape=shape, goal=goal, head=head, grippers=grippers)
+    return CordObservation(shape=shape, goal=goal, head=head, grippers=grippers, pegs=pegs)

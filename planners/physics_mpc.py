@@ -17,9 +17,10 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from dlo_env.checks import non_negative_ints, positive_ints
-from dlo_env.cord import Cord, CordParams
+from dlo_env.cord import PEG_RADIUS, Cord, CordParams
 from dlo_env.shapes import cord_length
 from planners.cem import CEMConfig, CEMPolicy
+from planners.observation import CordObservation
 
 
 @dataclass(frozen=True)
@@ -68,6 +69,8 @@ class PhysicsMPCPolicy(CEMPolicy):
         max_step: The environment's ``max_step`` (metres per unit action).
         success_threshold: Shape error (metres) below which the policy holds still.
         config: CEM parameters.
+        peg_radius: Radius of the environment's pegs, metres; the pegs themselves are read
+            from each observation (none without ``max_pegs``) and simulated.
 
     A cord observed at another length than ``params.length`` (by more than
     ``LENGTH_TOLERANCE``) is simulated at its observed length, the other parameters kept: a
@@ -84,11 +87,13 @@ class PhysicsMPCPolicy(CEMPolicy):
         config: PhysicsMPCConfig | None = None,
         *,
         success_metric: str = "error",
+        peg_radius: float = PEG_RADIUS,
     ) -> None:
         super().__init__(params, grasp, max_step, success_threshold,
                          config if config is not None else PhysicsMPCConfig(),
                          success_metric=success_metric)
-        self._cord = Cord(self.params, grasp=grasp)  # the model: reset for every candidate
+        # The model: reset for every candidate.
+        self._cord = Cord(self.params, grasp=grasp, peg_radius=peg_radius)
 
     @classmethod
     def for_env(cls, env: object, config: PhysicsMPCConfig | None = None) -> PhysicsMPCPolicy:
@@ -101,18 +106,20 @@ class PhysicsMPCPolicy(CEMPolicy):
             success_threshold=base.success_threshold,
             config=config,
             success_metric=base.success_metric,
+            peg_radius=base.peg_radius,
         )
 
     def check_env(self, env: object) -> None:
         """Raise ``ValueError`` unless the environment's cord, grasp and step match this policy."""
         base = getattr(env, "unwrapped", env)
-        if (base.params, base.cord.grasp, base.max_step) != (self.params, self.grasp,
-                                                              self.max_step):
+        if (base.params, base.cord.grasp, base.max_step, base.peg_radius) != (
+                self.params, self.grasp, self.max_step, self._cord.peg_radius):
             raise ValueError(
                 f"the physics planner was made for grasp {self.grasp!r}, max_step "
-                f"{self.max_step} m and {self.params}, but the environment has grasp "
-                f"{base.cord.grasp!r}, max_step {base.max_step} m and {base.params}: build it "
-                "with PhysicsMPCPolicy.for_env(env)"
+                f"{self.max_step} m, peg_radius {self._cord.peg_radius} m and {self.params}, "
+                f"but the environment has grasp {base.cord.grasp!r}, max_step "
+                f"{base.max_step} m, peg_radius {base.peg_radius} m and {base.params}: build "
+                "it with PhysicsMPCPolicy.for_env(env)"
             )
         self._check_threshold(base)
 
@@ -124,8 +131,15 @@ class PhysicsMPCPolicy(CEMPolicy):
         if abs(length - params.length) > LENGTH_TOLERANCE * params.length:
             params = replace(params, length=length)
         if params != self._cord.params:
-            self._cord = Cord(params, grasp=self.grasp)
+            self._cord = Cord(params, grasp=self.grasp, pegs=self._cord.pegs,
+                              peg_radius=self._cord.peg_radius)
         return super().plan(shape, goal)
+
+    def _act(self, obs: CordObservation) -> np.ndarray:
+        """Simulate the pegs the observation shows, then act as a CEM policy."""
+        if not np.array_equal(obs.pegs, self._cord.pegs):
+            self._cord.set_pegs(obs.pegs)
+        return super()._act(obs)
 
     def _rollout(self, shape: np.ndarray, plan: np.ndarray) -> np.ndarray:
         """Simulate one candidate ``(moves, ends, 2)`` from ``shape``; return the final shape."""
@@ -167,7 +181,8 @@ class TrueCordPhysicsMPCPolicy(PhysicsMPCPolicy):
         self._env = base
         super().__init__(params=base.cord.params, grasp=base.cord.grasp,
                          max_step=base.max_step, success_threshold=base.success_threshold,
-                         config=config, success_metric=base.success_metric)
+                         config=config, success_metric=base.success_metric,
+                         peg_radius=base.peg_radius)
 
     def check_env(self, env: object) -> None:
         """Raise ``ValueError`` unless ``env`` is the environment this policy reads."""

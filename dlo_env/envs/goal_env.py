@@ -16,7 +16,7 @@ import gymnasium as gym
 import numpy as np
 from gymnasium import spaces
 
-from dlo_env.cord import Cord, CordParams, Grasp
+from dlo_env.cord import LINK_RADIUS, PEG_RADIUS, Cord, CordParams, Grasp, check_pegs, peg_clearance
 from dlo_env.randomize import check_params, check_randomize, draw_params
 from dlo_env.shapes import (
     SUCCESS_METRICS,
@@ -41,8 +41,10 @@ from dlo_env.tasks import (
     wait_for_rest,
 )
 
-_OPTIONS = ("difficulty", "start", "goal", "task", "params")
+_OPTIONS = ("difficulty", "start", "goal", "task", "params", "pegs")
 _REWARD_TYPES = ("dense", "sparse")
+#: The most pegs an environment observes (``max_pegs``).
+MAX_PEGS = 16
 
 
 
@@ -66,6 +68,10 @@ class CordGoalEnv(gym.Env[dict[str, np.ndarray], np.ndarray]):
         difficulty: Straight moves between start and goal when ``reset`` draws a task (1-10).
         randomize: Cord parameter -> ``(low, high)``: each episode's cord is ``params`` with
             these drawn from the environment's ``np_random`` (``dlo_env.randomize``).
+        max_pegs: Most pegs on the table (0, the default: none, and the observation of an
+            empty table). A drawn task places 0 to ``max_pegs`` pegs near its start, and the
+            observation holds ``max_pegs`` peg slots (centres, then a mask).
+        peg_radius: Radius of every peg, metres.
         render_mode: ``None``, ``"rgb_array"`` or ``"human"``.
     """
 
@@ -84,6 +90,8 @@ class CordGoalEnv(gym.Env[dict[str, np.ndarray], np.ndarray]):
         judge_at_rest: bool = True,
         difficulty: int = 1,
         randomize: dict[str, tuple[float, float]] | None = None,
+        max_pegs: int = 0,
+        peg_radius: float = PEG_RADIUS,
         render_mode: str | None = None,
     ) -> None:
         if params is not None and not isinstance(params, CordParams):
@@ -99,6 +107,9 @@ class CordGoalEnv(gym.Env[dict[str, np.ndarray], np.ndarray]):
                              f"{success_metric!r}")
         if not isinstance(judge_at_rest, (bool, np.bool_)):
             raise ValueError(f"judge_at_rest must be True or False, got {judge_at_rest!r}")
+        if not (isinstance(max_pegs, (int, np.integer)) and not isinstance(max_pegs, bool)
+                and 0 <= max_pegs <= MAX_PEGS):
+            raise ValueError(f"max_pegs must be an int from 0 to {MAX_PEGS}, got {max_pegs!r}")
         if render_mode is not None and render_mode not in self.metadata["render_modes"]:
             raise ValueError(
                 f"render_mode must be None or one of {self.metadata['render_modes']}, "
@@ -116,15 +127,22 @@ class CordGoalEnv(gym.Env[dict[str, np.ndarray], np.ndarray]):
         self.randomize = check_randomize(randomize) if randomize is not None else {}
         self.render_mode = render_mode
 
-        self.cord = Cord(self.params, grasp=self.grasp)
+        self.max_pegs = int(max_pegs)
+        self.cord = Cord(self.params, grasp=self.grasp, peg_radius=peg_radius)
+        self.peg_radius = self.cord.peg_radius
         self._ends = GRASP_ENDS[self.grasp]
         n = self.params.n_points
         h = np.float32(TABLE_HALF)
         self.action_space = spaces.Box(-1.0, 1.0, shape=(2 * len(self._ends),), dtype=np.float32)
+        # The cord and grippers, then (with pegs) max_pegs centres and their mask.
+        size = 2 * n + 2 * len(self._ends)
+        low = np.full(size + 3 * self.max_pegs, -h, dtype=np.float32)
+        high = np.full(size + 3 * self.max_pegs, h, dtype=np.float32)
+        low[size + 2 * self.max_pegs:], high[size + 2 * self.max_pegs:] = 0.0, 1.0
+        self._pegs_obs = np.zeros(3 * self.max_pegs, dtype=np.float32)
         self.observation_space = spaces.Dict(
             {
-                "observation": spaces.Box(-h, h, shape=(2 * n + 2 * len(self._ends),),
-                                          dtype=np.float32),
+                "observation": spaces.Box(low, high, dtype=np.float32),
                 "achieved_goal": spaces.Box(-h, h, shape=(2 * n,), dtype=np.float32),
                 "desired_goal": spaces.Box(-h, h, shape=(2 * n,), dtype=np.float32),
             }
@@ -189,16 +207,21 @@ class CordGoalEnv(gym.Env[dict[str, np.ndarray], np.ndarray]):
     ) -> tuple[dict[str, np.ndarray], dict[str, Any]]:
         """Start an episode; see the class documentation for ``options``."""
         super().reset(seed=seed)
-        start, goal, task, params = self._episode(dict(options or {}))
+        start, goal, task, params, pegs = self._episode(dict(options or {}))
         if params != self.cord.params:
-            self.cord = Cord(params, grasp=self.grasp)
+            self.cord = Cord(params, grasp=self.grasp, peg_radius=self.peg_radius)
         self.task = task
         self.goal = goal
         self._goal_flat = goal.reshape(-1)
+        self.cord.set_pegs(pegs)
+        self._pegs_obs[:] = 0.0
+        self._pegs_obs[: 2 * len(pegs)] = pegs.reshape(-1)
+        self._pegs_obs[2 * self.max_pegs: 2 * self.max_pegs + len(pegs)] = 1.0
         self.cord.reset(start)
         obs, info = self._observe()
         info["settle_actions"] = 0
         info["params"] = self.cord.params
+        info["pegs"] = tuple(pegs)
         # Tuples, not (T, dim) arrays: their length varies per episode, and Gymnasium's vector
         # envs stack equal-shape arrays but keep other objects as they are.
         info["task"] = task
@@ -298,10 +321,12 @@ class CordGoalEnv(gym.Env[dict[str, np.ndarray], np.ndarray]):
         shape, speed = state if state is not None else self.cord.shape_and_speed()
         flat = shape.reshape(-1)
         n2 = flat.shape[0]
-        observation = np.empty(n2 + 2 * len(self._ends), dtype=np.float32)
+        size = n2 + 2 * len(self._ends)
+        observation = np.empty(size + len(self._pegs_obs), dtype=np.float32)
         observation[:n2] = flat
         for i, end in enumerate(self._ends):
             observation[n2 + 2 * i : n2 + 2 * i + 2] = self.cord.grippers[end].position
+        observation[size:] = self._pegs_obs
         goal = self._goal_flat
         goal_points = goal.reshape(-1, 2)
         metrics = self._metrics(shape, goal_points)
@@ -346,35 +371,64 @@ class CordGoalEnv(gym.Env[dict[str, np.ndarray], np.ndarray]):
                 pass  # the shape's own check says what is wrong with it
         return params
 
+    @property
+    def pegs(self) -> np.ndarray:
+        """``(k, 2)`` centres of this episode's pegs, metres (``(0, 2)``: none)."""
+        return self.cord.pegs.astype(np.float32)
+
+    def _pegs_option(self, options: dict) -> np.ndarray | None:
+        if "pegs" not in options:
+            return None
+        pegs = check_pegs(options["pegs"], "options['pegs']").astype(np.float32)
+        if len(pegs) > self.max_pegs:
+            raise ValueError(f"options['pegs'] holds {len(pegs)} pegs, more than this "
+                             f"environment observes: make it with gym.make(id, max_pegs="
+                             f"{len(pegs)}) (max_pegs={self.max_pegs})")
+        return pegs
+
+    def _check_clear(self, shape: np.ndarray, pegs: np.ndarray, name: str) -> None:
+        if len(pegs) and peg_clearance(shape, pegs, self.peg_radius) < LINK_RADIUS:
+            raise ValueError(f"options['{name}'] lies on a peg (the cord's centre line within "
+                             f"LINK_RADIUS = {LINK_RADIUS} m of a peg's surface)")
+
     def _episode(self, options: dict
-                 ) -> tuple[np.ndarray, np.ndarray, Task | None, CordParams]:
+                 ) -> tuple[np.ndarray, np.ndarray, Task | None, CordParams, np.ndarray]:
         unknown = sorted(set(options) - set(_OPTIONS))
         if unknown:
             raise ValueError(f"options has unknown keys {unknown}; expected some of {_OPTIONS}")
         # The episode's cord first, then its task; the env's cord changes only once every
         # option has passed (a refused reset leaves the environment as it was).
         p = self._episode_params(options)
+        pegs = self._pegs_option(options)
         difficulty = self.difficulty
         if "difficulty" in options:
             difficulty = check_difficulty(options["difficulty"], name="options['difficulty']")
         if "task" in options:
-            if len(options) > 1:
-                raise ValueError("options['task'] combines only with options['params'], got "
-                                 f"{sorted(options)}")
+            if len(set(options) - {"params"}) > 1:
+                raise ValueError("options['task'] combines only with options['params'] (a task "
+                                 f"carries its pegs), got {sorted(options)}")
             task = self._check_task(options["task"], p)
-            return task.start, task.goal, task, p
+            return task.start, task.goal, task, p, task.pegs
         start = self._shape_option(options, "start", p) if "start" in options else None
         goal = self._shape_option(options, "goal", p) if "goal" in options else None
         if goal is not None and "difficulty" in options:
             raise ValueError("options['difficulty'] has no effect when options['goal'] is given")
+        given = pegs if pegs is not None else np.zeros((0, 2), dtype=np.float32)
+        for name, shape in (("start", start), ("goal", goal)):
+            if shape is not None:
+                self._check_clear(shape, given, name)
         if goal is not None and start is not None:
-            return start, goal, None, p
+            return start, goal, None, p, given
         seed = int(self.np_random.integers(2**31 - 1))
-        if goal is not None:
-            return random_start(seed, self.grasp, params=p), goal, None, p
+        if goal is not None:  # a start clear of the pegs
+            cord = Cord(p, grasp=self.grasp, pegs=given, peg_radius=self.peg_radius)
+            return random_start(seed, self.grasp, cord=cord), goal, None, p, given
+        # A drawn task: the pegs given, or 0 to max_pegs drawn near its start.
+        count = int(self.np_random.integers(self.max_pegs + 1)) if self.max_pegs else None
         task = make_task(seed, difficulty, self.grasp, params=p, max_step=self.max_step,
-                         start=start, min_error=self.success_threshold)
-        return task.start, task.goal, task, p
+                         start=start, min_error=self.success_threshold,
+                         pegs=pegs if pegs is not None else count, peg_radius=self.peg_radius)
+        return task.start, task.goal, task, p, task.pegs
 
     def _check_task(self, task: object, p: CordParams) -> Task:
         if not isinstance(task, Task):
@@ -386,6 +440,13 @@ class CordGoalEnv(gym.Env[dict[str, np.ndarray], np.ndarray]):
         if task.max_step != self.max_step:
             raise ValueError(f"options['task'] was made with max_step {task.max_step}, "
                              f"this environment uses {self.max_step}")
+        if len(task.pegs) > self.max_pegs:
+            raise ValueError(f"options['task'] has {len(task.pegs)} pegs, more than this "
+                             f"environment observes: make it with gym.make(id, max_pegs="
+                             f"{len(task.pegs)}) (max_pegs={self.max_pegs})")
+        if len(task.pegs) and task.peg_radius != self.peg_radius:
+            raise ValueError(f"options['task'] was made with peg_radius {task.peg_radius}, "
+                             f"this environment uses {self.peg_radius}")
         for name in ("start", "goal"):
             validate_shape(getattr(task, name), n_points=p.n_points, length=p.length,
                            name=f"options['task'].{name}")
@@ -410,7 +471,8 @@ class CordGoalEnv(gym.Env[dict[str, np.ndarray], np.ndarray]):
             self._renderer = CordRenderer(self.render_mode, fps=round(1.0 / self.cord.params.dt))
         grippers = [self.cord.grippers[e].position for e in self._ends] if self.cord.space else []
         shape = self.cord.shape if self.cord.space is not None else None
-        return self._renderer.draw(shape, self.goal, grippers)
+        return self._renderer.draw(shape, self.goal, grippers, pegs=self.cord.pegs,
+                                   peg_radius=self.peg_radius)
 
     def close(self) -> None:
         """Close the render window, if any; safe to call more than once."""
