@@ -219,11 +219,17 @@ def _episode_options(
     if suite is not None:
         from dlo_env.cord_suites import CORD_SUITES, load_cord_suite
         from dlo_env.designed_suites import DESIGNED_SUITES, load_designed_suite
-        from dlo_env.peg_suites import PEG_SUITES, load_peg_suite
+        from dlo_env.peg_suites import (
+            PEG_SUITES,
+            ROUTE_SUITES,
+            load_peg_suite,
+            load_route_suite,
+        )
         from dlo_env.tasks import load_suite
 
         for names, load in ((DESIGNED_SUITES, load_designed_suite),
-                            (CORD_SUITES, load_cord_suite), (PEG_SUITES, load_peg_suite)):
+                            (CORD_SUITES, load_cord_suite), (PEG_SUITES, load_peg_suite),
+                            (ROUTE_SUITES, load_route_suite)):
             if suite in names:
                 made = load(suite, split, grasp=grasp, limit=episodes)
                 if len(made) < episodes:
@@ -317,11 +323,12 @@ def task_env_kwargs(difficulty: int | None = None, suite: str | None = None
     direction-free."""
     from dlo_env.cord_suites import CORD_SUITES
     from dlo_env.designed_suites import DESIGNED_MAX_STEPS, DESIGNED_SUITES
-    from dlo_env.peg_suites import PEG_SUITES, SUITE_MAX_PEGS
+    from dlo_env.peg_suites import PEG_SUITES, ROUTE_SUITES, SUITE_MAX_PEGS
     from dlo_env.tasks import difficulty_max_steps, suite_max_steps
 
-    if suite in PEG_SUITES:
-        return {"max_episode_steps": difficulty_max_steps(PEG_SUITES[suite]),
+    pegged = {**PEG_SUITES, **ROUTE_SUITES}
+    if suite in pegged:
+        return {"max_episode_steps": difficulty_max_steps(pegged[suite]),
                 "max_pegs": SUITE_MAX_PEGS}
     if suite in DESIGNED_SUITES:
         return {"max_episode_steps": DESIGNED_MAX_STEPS, "success_metric": "direction_free_error"}

@@ -26,19 +26,20 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     """Flags of ``dlo evaluate``."""
     from dlo_env.cord_suites import CORD_SUITES
     from dlo_env.designed_suites import DESIGNED_SUITES
-    from dlo_env.peg_suites import PEG_SUITES
+    from dlo_env.peg_suites import PEG_SUITES, ROUTE_SUITES
     from dlo_env.tasks import SPLIT_SIZES, SUCCESS_THRESHOLD, SUITES
 
     add_agent(parser, default=None)
     which = parser.add_mutually_exclusive_group()
     add_difficulty(which, [1], "random tasks (reset seeds SEED, SEED+1, ...); several give "
                                "several rows")
-    suites = [*SUITES, *DESIGNED_SUITES, *CORD_SUITES, *PEG_SUITES]
+    suites = [*SUITES, *DESIGNED_SUITES, *CORD_SUITES, *PEG_SUITES, *ROUTE_SUITES]
     which.add_argument("--suite", nargs="+", metavar="NAME", choices=suites,
                        help=f"named task suites instead of random tasks: {', '.join(suites)} "
                             "(designed goals are scored direction-free; cords-K tasks each "
-                            "run on their own cord, not told to the agent; pegs-K tasks have "
-                            "pegs on the table)")
+                            "run on their own cord, not told to the agent; pegs-K and route-K "
+                            "tasks have pegs on the table, route-K goals need the cord routed "
+                            "around them)")
     parser.add_argument("--split", default="test", choices=tuple(SPLIT_SIZES),
                         help="split of the suites")
     add_episodes(parser, f"episodes per row (default {DEFAULT_EPISODES}: a quick look; a "
