@@ -25,7 +25,7 @@ _weight = number_in(float, 0.0, None, expected="a number >= 0")
 
 #: Flags of ``--kind transitions`` only: fields of ``TransitionCollectConfig`` of the same name.
 TRANSITION_FLAGS = ("wide_fraction", "wavy_fraction", "rim_fraction", "randomize",
-                    "test_cords")
+                    "test_cords", "max_pegs")
 #: Flags of both kinds: fields of ``CollectConfig`` and ``TransitionCollectConfig``.
 SHARED_FLAGS = ("grasp_weights", "push_fraction")
 
@@ -104,6 +104,12 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help="--kind transitions: every episode's cord is one of the held-out "
                              "test cords (dlo_env.randomize.TEST_CORDS), to test a model of "
                              "several cords; not with --randomize")
+    parser.add_argument("--max-pegs", type=number_in(int, 0, 127, expected="an integer from 0 "
+                                                                         "to 127"),
+                        default=None, metavar="N",
+                        help="--kind transitions: every episode places 0 to N pegs near its "
+                             "start, and its moves run around them (each transition records "
+                             "its pegs; default 0: an empty table)")
     parser.add_argument("--resume", action="store_true",
                         help="continue an interrupted run from OUT.parts/")
     add_backend(parser)

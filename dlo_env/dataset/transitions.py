@@ -13,8 +13,11 @@ cord's middle (``push_fraction``: pushes buckle the cord and fold it onto itself
 nearest table edge (``rim_fraction``: moves that press the cord on the rim); half the lengths
 are drawn log-uniformly so short corrective moves are well represented.
 
-The ``.npz`` layout (format ``dlo-transitions``, version 2; no pickles; version 1 lacked
-``params``):
+With ``max_pegs`` > 0, each episode places 0 to ``max_pegs`` pegs near its start
+(:func:`dlo_env.tasks.draw_pegs`), and its moves run around them.
+
+The ``.npz`` layout (format ``dlo-transitions``, version 3; no pickles; version 1 lacked
+``params``, version 2 the pegs):
 
 ================ ============== ==============================================================
 array            dtype, shape   meaning
@@ -30,6 +33,9 @@ array            dtype, shape   meaning
 ``at_rest``      ?  (T,)        whether ``next`` is at rest (else ``MAX_SETTLE_ACTIONS`` ran out)
 ``params``       f4 (T, 4)      the cord of the move: ``PARAM_COLUMNS`` (length m, bending
                                 stiffness N m^2, friction, mass kg); version 2 on
+``pegs``         f4 (T, p, 2)   centres of the pegs on the table, metres, in the first
+                                ``peg_count`` of ``p`` slots (zeros after); version 3 on
+``peg_count``    i1 (T,)        pegs on the table during the move (0: none)
 ``metadata``     str ()         JSON: format, version, cord, settings, counts, times
 ================ ============== ==============================================================
 
@@ -56,7 +62,7 @@ import numpy as np
 
 from dlo_env.atomic import file_digest
 from dlo_env.checks import fractions, positive, positive_ints
-from dlo_env.cord import Cord, CordParams
+from dlo_env.cord import PEG_RADIUS, Cord, CordParams
 from dlo_env.dataset.chunks import (
     ChunkJob,
     Progress,
@@ -74,6 +80,7 @@ from dlo_env.tasks import (
     GRASP_ENDS,
     MAX_SETTLE_ACTIONS,
     apply_action,
+    draw_pegs,
     random_start,
     split_move,
     wait_for_rest,
@@ -82,10 +89,11 @@ from dlo_env.tasks import (
 #: Name stored in every file's metadata.
 FORMAT_NAME = "dlo-transitions"
 #: Version of the file layout; bumped on any incompatible change. Version 2 added ``params``
-#: (cords that differ); version 1 files still load, their cord from their metadata.
-FORMAT_VERSION = 2
+#: (cords that differ), version 3 ``pegs`` and ``peg_count``; files of versions 1 and 2 still
+#: load (their cord from their metadata; no pegs).
+FORMAT_VERSION = 3
 #: The versions ``load_transitions`` reads.
-READABLE_VERSIONS = (1, 2)
+READABLE_VERSIONS = (1, 2, 3)
 #: The cord parameters of every transition, the columns of ``params``.
 PARAM_COLUMNS = ("length", "bending_stiffness", "friction", "mass")
 #: Names of the grasp codes in ``grasp``.
@@ -102,8 +110,12 @@ _ARRAYS = {
     "settle": (np.dtype(np.int8), ("T",)),
     "at_rest": (np.dtype(np.bool_), ("T",)),
     "params": (np.dtype(np.float32), ("T", 4)),
+    "pegs": (np.dtype(np.float32), ("T", "p", 2)),
+    "peg_count": (np.dtype(np.int8), ("T",)),
 }
 ARRAY_NAMES = tuple(_ARRAYS)
+#: The arrays added after version 1, by the version that added them.
+_SINCE = {"params": 2, "pegs": 3, "peg_count": 3}
 
 
 @dataclass(frozen=True)
@@ -136,6 +148,9 @@ class TransitionCollectConfig:
         test_cords: Every episode's cord is one of ``dlo_env.randomize.TEST_CORDS`` (drawn
             uniformly; with ``cord``'s other settings): data to test a model of several
             cords on cords it was not trained on. Not with ``randomize``.
+        max_pegs: Every episode places 0 to ``max_pegs`` pegs (uniform count) near its start
+            (0: an empty table, and no draws: earlier files reproduce).
+        peg_radius: Radius of the pegs, metres.
     """
 
     seed: int = 0
@@ -153,8 +168,14 @@ class TransitionCollectConfig:
     cord: CordParams = field(default_factory=CordParams)
     randomize: dict[str, list[float]] = field(default_factory=dict)
     test_cords: bool = False
+    max_pegs: int = 0
+    peg_radius: float = PEG_RADIUS
 
     def __post_init__(self) -> None:
+        if not (isinstance(self.max_pegs, (int, np.integer)) and not isinstance(self.max_pegs, bool)
+                and 0 <= self.max_pegs <= 127):
+            raise ValueError(f"max_pegs must be an int from 0 to 127, got {self.max_pegs!r}")
+        positive(self, "peg_radius")
         ranges = check_randomize(self.randomize)
         if self.test_cords and ranges:
             raise ValueError("test_cords and randomize are two ways to choose the cords; give "
@@ -200,9 +221,14 @@ class TransitionDataset:
     settle: np.ndarray
     at_rest: np.ndarray
     params: np.ndarray | None = None
+    pegs: np.ndarray | None = None
+    peg_count: np.ndarray | None = None
     metadata: dict[str, Any] = field(default_factory=dict)
 
     def __post_init__(self) -> None:
+        if self.pegs is None and self.peg_count is None:  # before version 3: no pegs
+            object.__setattr__(self, "pegs", np.zeros((len(self.grasp), 0, 2), np.float32))
+            object.__setattr__(self, "peg_count", np.zeros(len(self.grasp), np.int8))
         if self.params is None:  # a version-1 file, or arrays made without: the file's cord
             if not isinstance(self.metadata, dict):
                 raise ValueError(f"metadata must be a dict, got {type(self.metadata).__name__}")
@@ -213,6 +239,9 @@ class TransitionDataset:
         check_arrays(_ARRAYS, self.arrays())
         if len(self.grasp) and (self.grasp.min() < 0 or self.grasp.max() > 2):
             raise ValueError("grasp must hold codes 0 (head), 1 (tail), 2 (both)")
+        if len(self.grasp) and (self.peg_count.min() < 0
+                                or self.peg_count.max() > self.pegs.shape[1]):
+            raise ValueError(f"peg_count must be in 0..{self.pegs.shape[1]} (the peg slots)")
         if not isinstance(self.metadata, dict):
             raise ValueError(f"metadata must be a dict, got {type(self.metadata).__name__}")
 
@@ -264,13 +293,22 @@ class TransitionDataset:
         actions = np.maximum(1, np.ceil(longest / max_step - 1e-9))
         return int(actions.sum() + self.settle.astype(np.int64).sum())
 
+    def peg_list(self, index: int) -> np.ndarray:
+        """``(k, 2)`` centres of the pegs of transition ``index``."""
+        return self.pegs[index, : int(self.peg_count[index])]
+
     @staticmethod
     def concatenate(parts: list[TransitionDataset]) -> TransitionDataset:
-        """One dataset of ``parts`` in order; episodes are renumbered to stay distinct."""
+        """One dataset of ``parts`` in order; episodes are renumbered to stay distinct, and the
+        peg slots padded to the most of any part."""
         arrays: dict[str, list[np.ndarray]] = {k: [] for k in ARRAY_NAMES}
+        slots = max((part.pegs.shape[1] for part in parts), default=0)
         offset = 0
         for part in parts:
             for name, arr in part.arrays().items():
+                if name == "pegs" and arr.shape[1] < slots:
+                    arr = np.concatenate([arr, np.zeros((len(arr), slots - arr.shape[1], 2),
+                                                        np.float32)], axis=1)
                 arrays[name].append(arr + offset if name == "episode" else arr)
             offset += int(part.episode.max()) + 1 if len(part) else 0
         return TransitionDataset(**{k: np.concatenate(v) for k, v in arrays.items()})
@@ -365,11 +403,17 @@ def collect_transition_chunk(config: TransitionCollectConfig, index: int, size: 
         else:
             params = draw_params(config.cord, config.randomize, rng) if config.randomize \
                 else config.cord
-        cord = Cord(params, grasp=GRASP_NAMES[grasp])
+        cord = Cord(params, grasp=GRASP_NAMES[grasp], peg_radius=config.peg_radius)
         row = [getattr(params, k) for k in PARAM_COLUMNS]
         draw = _start_family(rng, config)
         cord.reset(random_start(rng, cord=cord, draw=draw))  # fresh, as an environment's reset
         start = cord.shape
+        slots = np.zeros((config.max_pegs, 2), dtype=np.float32)
+        if config.max_pegs:  # draws only with pegs: files collected before stay reproducible
+            pegs = draw_pegs(rng, int(rng.integers(config.max_pegs + 1)), start,
+                             config.peg_radius)
+            cord.set_pegs(pegs)
+            slots[: len(pegs)] = pegs
         for step in range(config.moves_per_episode):
             if len(rows["grasp"]) == size:
                 break
@@ -378,7 +422,8 @@ def collect_transition_chunk(config: TransitionCollectConfig, index: int, size: 
             for name, value in (("start", start), ("next", nxt), ("grasp", grasp),
                                 ("displacement", commanded), ("moved", moved),
                                 ("episode", episode), ("step", step), ("settle", settle),
-                                ("at_rest", settle < MAX_SETTLE_ACTIONS), ("params", row)):
+                                ("at_rest", settle < MAX_SETTLE_ACTIONS), ("params", row),
+                                ("pegs", slots), ("peg_count", len(cord.pegs))):
                 rows[name].append(value)
             start = nxt
             if progress is not None:
@@ -405,12 +450,14 @@ def load_transitions(path: str | os.PathLike[str]) -> TransitionDataset:
     """
     arrays, meta = load_npz(
         path, format_name=FORMAT_NAME, format_version=READABLE_VERSIONS,
-        names=tuple(n for n in ARRAY_NAMES if n != "params"), optional=("params",),
+        names=tuple(n for n in ARRAY_NAMES if n not in _SINCE), optional=tuple(_SINCE),
         what="transition dataset",
         missing_hint=("make one with `dlo collect --kind transitions --num-transitions N "
                       f"--out {Path(path).name}`"))
-    if meta.get("format_version", FORMAT_VERSION) >= 2 and "params" not in arrays:
-        raise ValueError(f"{str(path)!r} lacks the array params (format_version 2)")
+    version = meta.get("format_version", FORMAT_VERSION)
+    for name, since in _SINCE.items():
+        if version >= since and name not in arrays:
+            raise ValueError(f"{str(path)!r} lacks the array {name} (format_version {version})")
     try:
         return TransitionDataset(**arrays, metadata=meta)
     except ValueError as exc:

@@ -337,7 +337,7 @@ def test_a_version_1_file_loads_with_the_cord_of_its_metadata(tmp_path, chunk):
     from dlo_env.dataset.npz_file import save_npz
 
     heavy = CordParams(mass=0.2)
-    arrays = {k: v for k, v in chunk.arrays().items() if k != "params"}
+    arrays = {k: v for k, v in chunk.arrays().items() if k not in ("params", "pegs", "peg_count")}
     path = save_npz(tmp_path / "v1.npz", arrays, {"cord": asdict(heavy)}, "dlo-transitions", 1)
     data = load_transitions(path)
     assert data.params.shape == (len(chunk), 4)
@@ -361,14 +361,63 @@ def test_bad_ranges_of_a_collection_are_one_line_errors(randomize, match):
         TransitionCollectConfig(randomize=randomize)
 
 
-def test_resaving_a_version_1_file_writes_version_2(tmp_path, chunk):
+def test_resaving_a_version_1_file_writes_the_current_version(tmp_path, chunk):
     from dlo_env.dataset.npz_file import save_npz
 
-    arrays = {k: v for k, v in chunk.arrays().items() if k != "params"}
+    arrays = {k: v for k, v in chunk.arrays().items() if k not in ("params", "pegs", "peg_count")}
     old = save_npz(tmp_path / "v1.npz", arrays, {"cord": asdict(CordParams())},
                    "dlo-transitions", 1)
-    again = load_transitions(save_transitions(tmp_path / "v2.npz", load_transitions(old)))
-    assert again.metadata["format_version"] == 2 and again.params.shape == (len(chunk), 4)
+    again = load_transitions(save_transitions(tmp_path / "v3.npz", load_transitions(old)))
+    assert again.metadata["format_version"] == transitions.FORMAT_VERSION == 3
+    assert again.params.shape == (len(chunk), 4) and again.pegs.shape == (len(chunk), 0, 2)
+    assert not again.peg_count.any()
+
+
+def test_a_version_2_file_without_pegs_loads_and_one_missing_them_at_version_3_is_refused(
+        tmp_path, chunk):
+    from dlo_env.dataset.npz_file import save_npz
+
+    arrays = {k: v for k, v in chunk.arrays().items() if k not in ("pegs", "peg_count")}
+    v2 = save_npz(tmp_path / "v2.npz", arrays, {"cord": asdict(CordParams())},
+                  "dlo-transitions", 2)
+    assert load_transitions(v2).pegs.shape == (len(chunk), 0, 2)
+    v3 = save_npz(tmp_path / "v3.npz", arrays, {"cord": asdict(CordParams())},
+                  "dlo-transitions", 3)
+    with pytest.raises(ValueError, match="lacks the array pegs"):
+        load_transitions(v3)
+
+
+def test_collecting_with_pegs_records_them_and_the_moves_run_around_them(chunk):
+    from dlo_env.cord import LINK_RADIUS, peg_clearance
+
+    config = replace(SMALL, max_pegs=3)
+    data = collect_transition_chunk(config, 0, 40)
+    assert data.pegs.shape == (40, 3, 2) and set(data.peg_count.tolist()) <= {0, 1, 2, 3}
+    assert data.peg_count.any()
+    for i in range(len(data)):
+        pegs = data.peg_list(i)
+        assert not data.pegs[i, len(pegs):].any()
+        if len(pegs):  # no point in a peg, the centre line about a link radius off its surface
+            for shape in (data.start[i], data.next[i]):
+                assert peg_clearance(shape, pegs) > LINK_RADIUS - 1e-3
+        # One cord with the same pegs carries the move out to the same shape.
+        cord = Cord(grasp=transitions.GRASP_NAMES[data.grasp[i]], pegs=pegs)
+        cord.reset(data.start[i])
+        ends = GRASP_ENDS[cord.grasp]
+        move = np.concatenate([data.displacement[i, 0 if e == "head" else 1] for e in ends])
+        for action in split_move(move, DEFAULT_MAX_STEP):
+            apply_action(cord, action, DEFAULT_MAX_STEP)
+        wait_for_rest(cord)
+        if data.step[i] == 0:  # a fresh start: the state is the shape (float32-rounded) alone
+            np.testing.assert_allclose(cord.shape, data.next[i], atol=1e-6)
+    assert _same(data, collect_transition_chunk(config, 0, 40))
+    # Without pegs the data is what it was: no draws are spent on pegs.
+    assert _same(chunk, collect_transition_chunk(SMALL, 0, 40))
+    # Files with and without pegs load as one, the slots padded.
+    both = transitions.TransitionDataset.concatenate([chunk, data])
+    assert both.pegs.shape == (80, 3, 2) and not both.peg_count[:40].any()
+    with pytest.raises(ValueError, match="max_pegs must be an int"):
+        TransitionCollectConfig(max_pegs=-1)
 
 
 def test_one_cord_refuses_several_cords_and_a_part_of_a_randomised_file():
