@@ -337,6 +337,9 @@ def train_transition_model(
         raise ValueError(f"out {str(out)!r} holds a training checkpoint; pass resume=True "
                          "(--resume) to continue it, or choose another folder")
     mc = model_config if model_config is not None else TransitionModelConfig()
+    if len(data) and data.peg_count.any():
+        raise ValueError("data holds transitions around pegs (collected with max_pegs); this "
+                         "transition model does not model pegs: use data of an empty table")
     # A model of one cord learns the cord its data's metadata names; a cord-conditioned one
     # (cord_inputs) the cords of every transition, its own being the default cord's length.
     conditioned = mc.cord_inputs or bool(

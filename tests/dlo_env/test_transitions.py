@@ -420,6 +420,15 @@ def test_collecting_with_pegs_records_them_and_the_moves_run_around_them(chunk):
         TransitionCollectConfig(max_pegs=-1)
 
 
+def test_a_transition_model_refuses_data_around_pegs(tmp_path):
+    from latent_model.transition_training import train_transition_model
+
+    data = collect_transition_chunk(replace(SMALL, max_pegs=2, seed=3), 0, 15)
+    assert data.peg_count.any()
+    with pytest.raises(ValueError, match="does not model pegs"):
+        train_transition_model(data, tmp_path / "model")
+
+
 def test_one_cord_refuses_several_cords_and_a_part_of_a_randomised_file():
     data = collect_transition_chunk(TransitionCollectConfig(seed=2, randomize=RANGES), 0, 20)
     with pytest.raises(ValueError, match="several cords"):
