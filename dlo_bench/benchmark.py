@@ -568,6 +568,7 @@ def _load_cell(path: Path, key: dict[str, Any], *, full: bool = False
     facts = {"wall_seconds": data.get("wall_seconds"),
              **{k: data.get(k, "") for k in RUN_FACTS}}
     summary = summarise(records, agent=key["agent"], env_id=key["env_id"])
+    summary["suite"] = key.get("suite") or SUITE_OF_DIFFICULTY.get(key.get("difficulty"), "")
     if not full:
         return Evaluation(records, summary), facts
     profiles = [FidelityProfile(p["episode"], *(np.asarray(p[k], dtype=float)
@@ -624,6 +625,7 @@ def merge_parts(parts: list[tuple[Evaluation, dict[str, Any]]], agent: str, env_
     records = [r for e, _ in parts for r in e.records]
     profiles = [p for e, _ in parts for p in e.profiles]
     summary = summarise(records, agent=agent, env_id=env_id)
+    summary["suite"] = parts[0][0].summary.get("suite", "")
     summary["divergence"] = divergence(profiles)
     evaluation = Evaluation(records, summary, profiles, [g for e, _ in parts for g in e.goals],
                             [r for e, _ in parts for r in e.rest_shapes])

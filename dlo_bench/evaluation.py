@@ -444,6 +444,7 @@ def evaluate(
         if owned:
             env.close()
     summary = summarise(records, agent=agent, env_id=env_id)
+    summary["suite"] = suite or ""
     summary["divergence"] = divergence(profiles)
     return Evaluation(records=records, summary=summary, profiles=profiles, goals=goals,
                       rest_shapes=rest_shapes)

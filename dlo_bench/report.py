@@ -23,6 +23,7 @@ from dlo_env.atomic import write_text_atomic
 #: Columns of the printed table: (summary key, header, format).
 TABLE_COLUMNS = (
     ("agent", "agent", "{}"),
+    ("suite", "suite", "{}"),
     ("difficulty", "diff", "{}"),
     ("episodes", "episodes", "{}"),
     ("success_rate", "success", "{:.0%}"),

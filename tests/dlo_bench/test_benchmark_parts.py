@@ -94,6 +94,7 @@ def test_a_cell_in_parts_equals_the_whole_cell_and_resumes_from_its_finished_par
         assert _untimed(a["records"]) == _untimed(b["records"]), cell
         assert a["summary"]["success_rate"] == b["summary"]["success_rate"]
         assert a["summary"]["divergence"] == b["summary"]["divergence"]
+        assert a["summary"]["suite"] == b["summary"]["suite"] != ""
         assert a["fidelity_profiles"] == b["fidelity_profiles"]
         assert a.get("shapes") == b.get("shapes")
         assert a["benchmark_key"] == b["benchmark_key"]
