@@ -796,6 +796,9 @@ def run_benchmark(config: BenchmarkConfig, out_dir: str | os.PathLike, *,
 
     import dlo_env  # noqa: F401  (registers the environments)
 
+    if part is not None and not (isinstance(part, int) and not isinstance(part, bool)
+                                 and part >= 1):
+        raise ValueError(f"part must be an int >= 1 (episodes per part) or None, got {part!r}")
     folder = Path(out_dir) / CELLS_DIR
     run_id = run_id or new_run_id()
     # The code that runs, read once before any cell is written: a run writing into a tracked
@@ -887,11 +890,10 @@ def run_benchmark(config: BenchmarkConfig, out_dir: str | os.PathLike, *,
         write_evaluation(result, folder, cell, extra=extra)
         rows[slot] = {**row_of(agent, env_id, suite, threshold, result, config.episodes),
                       **facts}
-        if len(pieces) > 1:
-            for a, n in pieces:
-                for suffix in (".json", ".csv"):
-                    (parts_folder / f"{part_name(cell, a, n)}{suffix}").unlink(missing_ok=True)
-            if parts_folder.is_dir() and not any(parts_folder.iterdir()):
+        if parts_folder.is_dir():  # its parts, also those of a run with another part size
+            for stale in parts_folder.glob(f"{cell}.episodes-*"):
+                stale.unlink(missing_ok=True)
+            if not any(parts_folder.iterdir()):
                 parts_folder.rmdir()
         if progress and backend is not None:
             print(f"{cell}: success {result.summary['success_rate']:.0%}", flush=True)

@@ -233,14 +233,14 @@ def _episode_options(
             if suite in names:
                 made = load(suite, split, grasp=grasp, limit=episodes)
                 if len(made) < episodes:
-                    raise ValueError(f"episodes must be at most the {len(made)} tasks of suite "
-                                     f"{suite!r} split {split!r}, got {episodes}")
+                    raise ValueError(f"first + episodes must be at most the {len(made)} tasks of "
+                                     f"suite {suite!r} split {split!r}, got {episodes}")
                 return [t.options() for t in made]
         tasks = load_suite(suite, split, grasp=grasp, limit=episodes)
         if len(tasks) < episodes:
             raise ValueError(
-                f"episodes must be at most the {len(tasks)} tasks of suite {suite!r} split "
-                f"{split!r}, got {episodes}"
+                f"first + episodes must be at most the {len(tasks)} tasks of suite {suite!r} "
+                f"split {split!r}, got {episodes}"
             )
         return [{"task": t} for t in tasks]
     return [None if difficulty is None else {"difficulty": difficulty}] * episodes
@@ -285,6 +285,7 @@ def _run_episode(
         start_inv = float(plan.stats.get("start_inversion_error", math.nan))
         if fidelity:
             result = transition_fidelity(plan, start, params=base.cord.params,
+                                         pegs=base.cord.pegs, peg_radius=base.peg_radius,
                                          max_step=base.max_step)
             fid, plan_final, fid_max = result.mean_error, result.final_error, result.max_error
             profile = FidelityProfile(index, result.errors, result.travel, result.move)

@@ -6,7 +6,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from dlo_env.cord import Cord, CordParams
+from dlo_env.cord import PEG_RADIUS, Cord, CordParams
 from dlo_env.shapes import error
 from dlo_env.tasks import GRASP_ENDS, apply_action
 from planners.interfaces import Plan
@@ -53,6 +53,8 @@ def transition_fidelity(
     params: CordParams | None = None,
     max_step: float = 0.02,
     settle_steps: int = 10,
+    pegs: np.ndarray | None = None,
+    peg_radius: float = PEG_RADIUS,
 ) -> Fidelity:
     """Execute a plan's end path in the simulator from ``start`` and compare shapes.
 
@@ -68,6 +70,7 @@ def transition_fidelity(
         params: The cord's parameters (the default cord if None).
         max_step: Displacement of an action of 1.0, metres.
         settle_steps: Zero actions after the motion before ``final_shape`` is read.
+        pegs, peg_radius: The pegs on the table (None: none) and their radius, metres.
 
     Returns:
         The per-shape errors, their mean, and the real shapes.
@@ -77,7 +80,7 @@ def transition_fidelity(
     if plan.shapes.shape[1] != params.n_points:
         raise ValueError(f"plan must be for a cord of n_points={params.n_points}, got shapes of "
                          f"{plan.shapes.shape[1]} points")
-    cord = Cord(params, grasp=plan.grasp)
+    cord = Cord(params, grasp=plan.grasp, pegs=pegs, peg_radius=peg_radius)
     cord.reset(start)
     names = list(GRASP_ENDS[plan.grasp])
     corners = plan.corners

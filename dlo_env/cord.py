@@ -106,17 +106,19 @@ class CordParams:
         return self.length / (self.n_points - 1)
 
 
-def check_pegs(pegs: object, name: str = "pegs") -> np.ndarray:
-    """``pegs`` as float64 ``(k, 2)`` peg centres on the table (metres), or ``ValueError``."""
+def check_pegs(pegs: object, name: str = "pegs", radius: float = 0.0) -> np.ndarray:
+    """``pegs`` as float64 ``(k, 2)`` peg centres on the table (metres), or ``ValueError``;
+    with ``radius``, every peg wholly on the table."""
     arr = np.zeros((0, 2)) if pegs is None else np.asarray(pegs, dtype=np.float64)
     if arr.size == 0:
         return np.zeros((0, 2))
     if arr.ndim != 2 or arr.shape[1] != 2 or not np.isfinite(arr).all():
         raise ValueError(f"{name} must be a finite array of peg centres, shape (k, 2) metres, "
                          f"got shape {arr.shape}")
-    if (np.abs(arr) >= TABLE_HALF).any():
-        raise ValueError(f"{name} must lie on the table (|x|, |y| < {TABLE_HALF} m), got "
-                         f"{arr[(np.abs(arr) >= TABLE_HALF).any(axis=1)][0].tolist()}")
+    off = (np.abs(arr) + radius >= TABLE_HALF).any(axis=1)
+    if off.any():
+        raise ValueError(f"{name} must lie on the table (|x|, |y| < {TABLE_HALF} m less the "
+                         f"radius {radius} m), got {arr[off][0].tolist()}")
     return arr
 
 
@@ -233,12 +235,13 @@ class Cord:
         self.params = params if params is not None else CordParams()
         self._check_grasp(grasp)
         self._grasp: Grasp = grasp
-        if not (isinstance(peg_radius, (int, float)) and math.isfinite(peg_radius)
+        if not (isinstance(peg_radius, (int, float, np.floating))
+                and not isinstance(peg_radius, bool) and math.isfinite(peg_radius)
                 and 0 < peg_radius < TABLE_HALF):
             raise ValueError(f"peg_radius must be a number of metres in (0, {TABLE_HALF}), "
                              f"got {peg_radius!r}")
         self.peg_radius = float(peg_radius)
-        self._pegs = check_pegs(pegs)
+        self._pegs = check_pegs(pegs, radius=self.peg_radius)
         self._peg_shapes: list[pymunk.Circle] = []
         self.space: pymunk.Space | None = None
         self.segments: list[pymunk.Body] = []
@@ -319,7 +322,7 @@ class Cord:
 
     def set_pegs(self, pegs: np.ndarray | None) -> None:
         """Place the pegs (None or empty: none), in the current simulation too."""
-        self._pegs = check_pegs(pegs)
+        self._pegs = check_pegs(pegs, radius=self.peg_radius)
         if self.space is not None:
             self.space.remove(*self._peg_shapes)
             self._peg_shapes = []

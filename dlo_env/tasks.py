@@ -134,8 +134,11 @@ class Task:
     def __post_init__(self) -> None:
         dim = action_dim(self.grasp)
         object.__setattr__(self, "pegs", check_pegs(self.pegs, "Task.pegs").astype(np.float32))
-        if not (isinstance(self.peg_radius, (float, int)) and self.peg_radius > 0):
-            raise ValueError(f"Task.peg_radius must be a number > 0, got {self.peg_radius!r}")
+        if not (isinstance(self.peg_radius, (float, int, np.floating))
+                and not isinstance(self.peg_radius, bool)
+                and 0 < self.peg_radius < TABLE_HALF):
+            raise ValueError(f"Task.peg_radius must be a number of metres in (0, {TABLE_HALF}), "
+                             f"got {self.peg_radius!r}")
         object.__setattr__(self, "peg_radius", float(self.peg_radius))
         for name in ("start", "goal", "reference_actions", "moves"):
             object.__setattr__(self, name, np.asarray(getattr(self, name), dtype=np.float32))
@@ -329,7 +332,8 @@ def draw_pegs(rng: np.random.Generator, count: int, shape: np.ndarray,
             continue
         pegs.append(centre)
     if len(pegs) < count:
-        raise ValueError(f"count: could not place {count} pegs near the cord")
+        raise ValueError(f"could not place {count} pegs near the cord (each {PEG_CLEARANCE} to "
+                         f"{PEG_NEAR} m from it, {PEG_GAP} m apart): ask for fewer pegs")
     return np.asarray(pegs, dtype=np.float32).reshape(-1, 2)
 
 
@@ -407,10 +411,8 @@ def make_task(
         start = cord.shape
     else:
         start = validate_shape(start, n_points=p.n_points, length=p.length, name="start")
-        if fixed is not None and len(fixed) and peg_clearance(start, fixed, peg_radius) < \
-                LINK_RADIUS:
-            raise ValueError("start: the cord lies on a peg (its centre line within "
-                             f"LINK_RADIUS = {LINK_RADIUS} m of a peg's surface)")
+        if fixed is not None and len(fixed) and peg_clearance(start, fixed, peg_radius) < 0:
+            raise ValueError("start: the cord crosses a peg (its centre line passes inside one)")
     if count:
         cord.set_pegs(draw_pegs(rng, count, start, peg_radius))
     for _ in range(100):

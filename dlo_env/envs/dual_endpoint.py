@@ -39,6 +39,7 @@ class DLODualEndpointEnv(CordGoalEnv):
     | Key             | Shape   | Content                                             |
     |-----------------|---------|-----------------------------------------------------|
     | `observation`   | `(44,)` | points (x, y), head first; head, tail gripper (x, y) |
+    |                 | `+3 max_pegs` | with pegs: `max_pegs` centres (x, y), then a mask |
     | `achieved_goal` | `(40,)` | the current shape, flat                             |
     | `desired_goal`  | `(40,)` | the goal shape, flat                                |
 
@@ -59,7 +60,8 @@ class DLODualEndpointEnv(CordGoalEnv):
 
     ## Reset Options
 
-    As in `DLOEndpoint-v0` (`difficulty`, `start`, `goal`, `task`); a `start` or `goal` whose
+    As in `DLOEndpoint-v0` (`difficulty`, `start`, `goal`, `task`, `params`, `pegs`; pegs as
+    there, `max_pegs` and `peg_radius` too); a `start` or `goal` whose
     head-tail distance is not below `max_span * length` raises `ValueError`, and a task must have
     `grasp="both"`. The reset `info` holds `reference_actions` `(T, 4)` (they solve the task;
     bitwise replay with `judge_at_rest=False`),

@@ -40,6 +40,7 @@ class DLOEndpointEnv(CordGoalEnv):
     | Key             | Shape   | Content                                             |
     |-----------------|---------|-----------------------------------------------------|
     | `observation`   | `(42,)` | points (x, y), head first; then head gripper (x, y) |
+    |                 | `+3 max_pegs` | with pegs: `max_pegs` centres (x, y), then a mask |
     | `achieved_goal` | `(40,)` | the current shape, flat (x0, y0, x1, y1, ...)       |
     | `desired_goal`  | `(40,)` | the goal shape, flat                                |
 
@@ -85,6 +86,7 @@ class DLOEndpointEnv(CordGoalEnv):
     | `goal`       | `(20, 2)` or `(40,)`   | this goal; random start; no reference moves |
     | `task`       | `dlo_env.tasks.Task`   | its start and goal (combines with `params`)  |
     | `params`     | `dlo_env.CordParams`   | this episode's cord (same `n_points`)       |
+    | `pegs`       | `(k, 2)`, k <= max_pegs | these pegs instead of drawn ones           |
 
     `difficulty` applies to this episode only (the constructor sets the default). A given
     `start` is used as is, its segments re-projected to rest length.
@@ -95,7 +97,14 @@ class DLOEndpointEnv(CordGoalEnv):
     The reset `info` also holds `reference_actions` (`(T, 2)` float32: replayed through `step`
     from the reset state they solve the task on the cord that made it; with
     `judge_at_rest=False` they reach the goal exactly, bitwise), `moves` (`(difficulty, 2)`
-    displacements, metres), `difficulty` and `task_seed` (0 and -1 when the goal was given).
+    displacements, metres), `difficulty` and `task_seed` (0 and -1 when the goal was given),
+    and `pegs` (the centres of the episode's pegs, a tuple; empty without pegs).
+
+    ## Pegs
+
+    `max_pegs > 0` puts round pegs of `peg_radius` on the table: a drawn task places 0 to
+    `max_pegs` near its start, the cord collides with them, a gripper stops where it would
+    touch one, and no point ever lies inside one (docs/environments.md#pegs).
 
     ## Episode End
 
@@ -117,6 +126,8 @@ class DLOEndpointEnv(CordGoalEnv):
         judge_at_rest=True,      # success judged on the cord at rest
         difficulty=1,            # default number of straight moves, 1-10
         randomize=None,          # e.g. {"bending_stiffness": (0.003, 0.03)}: a cord per episode
+        max_pegs=0,              # most pegs on the table (0: none, and the observation above)
+        peg_radius=0.02,         # metres
         render_mode=None,        # or "rgb_array", "human"
     )
     ```

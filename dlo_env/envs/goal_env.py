@@ -16,7 +16,7 @@ import gymnasium as gym
 import numpy as np
 from gymnasium import spaces
 
-from dlo_env.cord import LINK_RADIUS, PEG_RADIUS, Cord, CordParams, Grasp, check_pegs, peg_clearance
+from dlo_env.cord import PEG_RADIUS, Cord, CordParams, Grasp, check_pegs, peg_clearance
 from dlo_env.randomize import check_params, check_randomize, draw_params
 from dlo_env.shapes import (
     SUCCESS_METRICS,
@@ -221,7 +221,7 @@ class CordGoalEnv(gym.Env[dict[str, np.ndarray], np.ndarray]):
         obs, info = self._observe()
         info["settle_actions"] = 0
         info["params"] = self.cord.params
-        info["pegs"] = tuple(pegs)
+        info["pegs"] = tuple(np.array(pegs, dtype=np.float32))  # copies: the task keeps its own
         # Tuples, not (T, dim) arrays: their length varies per episode, and Gymnasium's vector
         # envs stack equal-shape arrays but keep other objects as they are.
         info["task"] = task
@@ -387,9 +387,11 @@ class CordGoalEnv(gym.Env[dict[str, np.ndarray], np.ndarray]):
         return pegs
 
     def _check_clear(self, shape: np.ndarray, pegs: np.ndarray, name: str) -> None:
-        if len(pegs) and peg_clearance(shape, pegs, self.peg_radius) < LINK_RADIUS:
-            raise ValueError(f"options['{name}'] lies on a peg (the cord's centre line within "
-                             f"LINK_RADIUS = {LINK_RADIUS} m of a peg's surface)")
+        # A cord the simulator brought to rest against a peg lies a little less than
+        # LINK_RADIUS from it; only one crossing a peg cannot be.
+        if len(pegs) and peg_clearance(shape, pegs, self.peg_radius) < 0:
+            raise ValueError(f"options['{name}'] crosses a peg (its centre line passes inside "
+                             "one)")
 
     def _episode(self, options: dict
                  ) -> tuple[np.ndarray, np.ndarray, Task | None, CordParams, np.ndarray]:

@@ -46,6 +46,25 @@ def test_evaluate_from_a_first_episode_runs_those_episodes_of_the_whole():
         evaluate(policy, ENDPOINT, episodes=1, first=-1)
 
 
+def test_a_bad_part_size_is_a_one_line_error(tmp_path):
+    config = BenchmarkConfig(agents=("straight-line",), envs=(ENDPOINT,), difficulties=(1,),
+                             thresholds=(0.02,), designed=(), episodes=1)
+    for part in (0, -2, 1.5, True):
+        with pytest.raises(ValueError, match="part must be an int >= 1"):
+            run_benchmark(config, tmp_path, progress=False, part=part)
+
+
+def test_parts_of_another_part_size_are_deleted_with_their_cell(tmp_path):
+    config = BenchmarkConfig(agents=("straight-line",), envs=(ENDPOINT,), difficulties=(1,),
+                             thresholds=(0.02,), designed=(), episodes=2)
+    stale = tmp_path / "results_episodes" / PARTS_DIR
+    stale.mkdir(parents=True)
+    (stale / "straight-line-endpoint-d1-2cm.episodes-0-4.json").write_text("{}")
+    (stale / "other-cell.episodes-0-4.json").write_text("{}")
+    run_benchmark(config, tmp_path, progress=False, part=1)
+    assert [p.name for p in stale.iterdir()] == ["other-cell.episodes-0-4.json"]
+
+
 def test_split_episodes_covers_the_cell_in_order():
     assert split_episodes(50, None) == [(0, 50)]
     assert split_episodes(5, 2) == [(0, 2), (2, 2), (4, 1)]

@@ -159,9 +159,9 @@ def test_wrong_peg_options_get_one_line_errors():
         gym.make("dlo_env/DLOEndpoint-v0", max_pegs=-1)
     with pytest.raises(ValueError, match=r"holds 3 pegs, more than this environment observes"):
         env.reset(options={"pegs": np.zeros((3, 2)) + [[0.1, 0.1]]})
-    with pytest.raises(ValueError, match=r"options\['start'\] lies on a peg"):
+    with pytest.raises(ValueError, match=r"options\['start'\] crosses a peg"):
         env.reset(options={"start": STRAIGHT, "pegs": [[0.0, 0.0]]})
-    with pytest.raises(ValueError, match=r"options\['goal'\] lies on a peg"):
+    with pytest.raises(ValueError, match=r"options\['goal'\] crosses a peg"):
         env.reset(options={"goal": STRAIGHT, "pegs": [[0.2, 0.0]]})
     env.reset(seed=1)
     with pytest.raises(ValueError, match="carries its pegs"):
@@ -169,8 +169,24 @@ def test_wrong_peg_options_get_one_line_errors():
     task = make_task(3, 1, pegs=3)
     with pytest.raises(ValueError, match="has 3 pegs, more than this environment observes"):
         env.reset(options={"task": task})
-    with pytest.raises(ValueError, match="start: the cord lies on a peg"):
+    with pytest.raises(ValueError, match="start: the cord crosses a peg"):
         make_task(0, 1, start=STRAIGHT, pegs=[[0.0, 0.0]])
+    with pytest.raises(ValueError, match="could not place 200 pegs near the cord"):
+        make_task(0, 1, pegs=200)
+    with pytest.raises(ValueError, match=r"less the radius 0.02 m"):
+        Cord(pegs=[[0.0, TABLE_HALF - 0.01]])
+
+
+def test_a_goal_resting_against_a_peg_is_taken_with_its_pegs():
+    from dlo_env.peg_suites import load_route_suite
+
+    env = gym.make("dlo_env/DLOEndpoint-v0", max_pegs=4, judge_at_rest=False)
+    for task in load_route_suite("route-2", limit=3):  # goals that rest against a peg
+        obs, info = env.reset(options={"start": task.start, "goal": task.goal,
+                                       "pegs": task.pegs})
+        np.testing.assert_array_equal(obs["desired_goal"], task.goal.reshape(-1))
+        info["pegs"][0][0] = 9.0  # the info holds copies
+        assert task.pegs[0, 0] != 9.0
 
 
 def test_a_goal_given_with_pegs_gets_a_start_clear_of_them():
