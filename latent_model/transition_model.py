@@ -31,7 +31,15 @@ import torch
 from torch import nn
 
 from dlo_env.checks import non_negative, positive, positive_ints
-from dlo_env.cord import CordParams, reachable_targets
+from dlo_env.cord import (
+    LINK_RADIUS,
+    PEG_GUARD,
+    PEG_RADIUS,
+    CordParams,
+    check_pegs,
+    peg_contact,
+    reachable_targets,
+)
 from dlo_env.dataset.transitions import PARAM_COLUMNS
 from dlo_env.shapes import TABLE_HALF, unflatten
 from dlo_env.tasks import DEFAULT_MAX_STEP
@@ -581,24 +589,29 @@ class TransitionModel(nn.Module):
 
     def reachable_moves(self, shapes: np.ndarray, grasp: str | None = None,
                         displacement: np.ndarray | None = None, *, end: str | None = None,
-                        params: Any = None) -> np.ndarray:
+                        params: Any = None, pegs: np.ndarray | None = None,
+                        peg_radius: float = PEG_RADIUS) -> np.ndarray:
         """``(B, 2, 2)`` displacement of [head, tail] the grippers really make, zero for an end
         not held: the move carried out as ``split_move`` actions, each clipped by the rule of
         ``Cord.move`` (targets on the table, both ends within the span of the cord, ``params``
-        as in ``predict``). ``end`` is the deprecated name of ``grasp``."""
+        as in ``predict``; with ``pegs``, ``(k, 2)`` centres, a move stops where a gripper
+        would touch one). ``end`` is the deprecated name of ``grasp``."""
         grasp = _grasp_argument(grasp, end)
         if displacement is None:
             raise ValueError("displacement is required")
+        pegs = check_pegs(pegs, "pegs")
         if params is not None and grasp == "both":  # only the span, of two ends, is the cord's
             moves = np.zeros((len(shapes), 2, 2), dtype=np.float32)
             disp = np.asarray(displacement).reshape(len(shapes), -1)
             for idx, cord in self._lengths(self.cord_rows(params, len(shapes))):
-                moves[idx] = self._reachable(shapes[idx], grasp, disp[idx], cord)
+                moves[idx] = self._reachable(shapes[idx], grasp, disp[idx], cord, pegs,
+                                             peg_radius)
             return moves
-        return self._reachable(shapes, grasp, displacement, self.cord_params)
+        return self._reachable(shapes, grasp, displacement, self.cord_params, pegs, peg_radius)
 
     def _reachable(self, shapes: np.ndarray, grasp: str, displacement: np.ndarray,
-                   params: CordParams) -> np.ndarray:
+                   params: CordParams, pegs: np.ndarray | None = None,
+                   peg_radius: float = PEG_RADIUS) -> np.ndarray:
         ends = {"head": [0], "tail": [-1], "both": [0, -1]}[grasp]
         start = shapes[:, ends].astype(np.float64)  # (B, k, 2)
         d = displacement.reshape(len(shapes), len(ends), 2).astype(np.float64)
@@ -613,14 +626,21 @@ class TransitionModel(nn.Module):
             pos = reachable_targets(pos, params)
         else:
             walk |= (reachable_targets(pos, params) != pos).any(axis=(1, 2))
+        has_pegs = pegs is not None and len(pegs) > 0
+        if has_pegs:  # a path that meets a peg stops there: walked too
+            walk |= peg_contact(start, d, pegs, peg_radius + LINK_RADIUS + PEG_GUARD) < 1.0
         if walk.any():  # step by step, as the environment's actions go
             longest = np.linalg.norm(d[walk], axis=-1).max(axis=-1, initial=0.0)
             actions = np.maximum(1, np.ceil(longest / self.config.max_step - 1e-9)).astype(int)
             step = d[walk] / actions[:, None, None]
             path = start[walk]
+            rule = ({"starts": None, "pegs": pegs, "peg_radius": peg_radius} if has_pegs
+                    else {})
             for j in range(int(actions.max(initial=0))):
                 going = j < actions
-                path[going] = reachable_targets(path[going] + step[going], params)
+                if has_pegs:
+                    rule["starts"] = path[going]
+                path[going] = reachable_targets(path[going] + step[going], params, **rule)
             pos[walk] = path
         moves = np.zeros((len(shapes), 2, 2), dtype=np.float32)
         if grasp == "both":
@@ -655,7 +675,8 @@ class TransitionModel(nn.Module):
     @torch.no_grad()
     def predict(self, shapes: Any, grasp: str | None = None, displacement: Any = None,
                 params: Any = None, return_std: bool = False, members: int | None = None,
-                inextensible: bool = True, *, end: str | None = None
+                inextensible: bool = True, *, end: str | None = None,
+                pegs: np.ndarray | None = None, peg_radius: float = PEG_RADIUS
                 ) -> np.ndarray | tuple[np.ndarray, np.ndarray]:
         """The shape at rest after one straight move of the held end(s).
 
@@ -687,6 +708,10 @@ class TransitionModel(nn.Module):
             ``return_std`` also ``(B,)`` (``()``) the members' spread: the mean over points of
             each point's standard deviation (metres).
             end: Deprecated name of ``grasp``.
+            pegs, peg_radius: ``(k, 2)`` centres of pegs on the table and their radius: a move
+                stops where a gripper would touch one, as in the simulator
+                (``reachable_moves``). The networks do not see pegs: the cord's contact with
+                them is not predicted.
         """
         grasp = _grasp_argument(grasp, end)
         if displacement is None:
@@ -705,7 +730,8 @@ class TransitionModel(nn.Module):
         use_mean_net = members is None and self.mean_net is not None
         rows = (self.cord_rows(params, len(arr)) if params is not None or self.config.cord_inputs
                 else None)
-        moves = self.reachable_moves(arr, grasp, d, params=rows)
+        moves = self.reachable_moves(arr, grasp, d, params=rows, pegs=pegs,
+                                     peg_radius=peg_radius)
         cord = (None if rows is None or not self.config.cord_inputs
                 else torch.from_numpy(cord_features(rows)).to(self.device))
         grasp_name, grasp = grasp, torch.full((len(arr),), GRASP_CODES[grasp], dtype=torch.int64)

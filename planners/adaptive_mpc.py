@@ -201,4 +201,4 @@ class AdaptiveLatentMPCPolicy(LatentMPCPolicy):
         return super().plan(shape, goal)
 
     def _predict(self, shapes: np.ndarray, moves: np.ndarray, **kw: Any) -> Any:
-        return self.model.predict(shapes, self.grasp, moves, params=self.cord_row, **kw)
+        return super()._predict(shapes, moves, params=self.cord_row, **kw)

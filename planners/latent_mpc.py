@@ -18,6 +18,7 @@ import numpy as np
 
 from dlo_env.checks import non_negative, non_negative_ints, positive_ints
 from planners.cem import CEMConfig, CEMPolicy
+from planners.observation import CordObservation
 
 
 @dataclass(frozen=True)
@@ -135,6 +136,12 @@ class LatentMPCPolicy(CEMPolicy):
                              f"{base.cord.grasp!r}")
         self._check_threshold(base)
 
+    def _act(self, obs: CordObservation) -> np.ndarray:
+        """Plan with the pegs the observation shows (their stop rule on the grippers), then act
+        as a CEM policy."""
+        self._pegs = obs.pegs
+        return super()._act(obs)
+
     def _score(self, shape: np.ndarray, goal: np.ndarray, candidates: np.ndarray) -> np.ndarray:
         cfg = self.config
         shapes = np.broadcast_to(shape, (len(candidates),) + shape.shape)
@@ -151,7 +158,11 @@ class LatentMPCPolicy(CEMPolicy):
         return self._distance(shapes, goal) + cfg.spread_weight * spread
 
     def _predict(self, shapes: np.ndarray, moves: np.ndarray, **kw: Any) -> Any:
-        """The model's prediction of ``moves`` from ``shapes`` (its default cord)."""
+        """The model's prediction of ``moves`` from ``shapes`` (its default cord), the grippers
+        stopping at the observed pegs."""
+        pegs = getattr(self, "_pegs", None)
+        if pegs is not None and len(pegs):
+            kw = {**kw, "pegs": pegs}
         return self.model.predict(shapes, self.grasp, moves, **kw)
 
     def _execute(self, plan: np.ndarray) -> list[np.ndarray]:

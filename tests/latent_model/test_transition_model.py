@@ -836,3 +836,34 @@ def test_a_model_of_one_cord_starts_a_model_of_several_cords(data, tmp_path):
         train_transition_model(data, tmp_path / "c", TransitionTrainConfig(
             **{**still.__dict__, "init": str(tmp_path / "b" / "transition.pt")}),
             replace(TINY, contact_reach=0.03), device="cpu")
+
+
+@pytest.mark.parametrize(("grasp", "move"), [("head", [-0.4, 0.0]), ("tail", [-0.2, 0.6]),
+                                             ("both", [-0.4, 0.0, 0.0, 0.6])])
+def test_with_pegs_the_model_moves_the_grippers_as_the_simulator_does(grasp, move):
+    from dlo_env.cord import Cord
+    from dlo_env.tasks import apply_action, split_move
+
+    model = TransitionModel(replace(TINY, members=2), device="cpu")
+    shape = np.stack([np.linspace(-0.5, 0.5, 20), np.zeros(20)], 1).astype(np.float32)
+    pegs = np.array([[-0.7, 0.02], [0.42, 0.3], [0.35, 0.26]])
+    d = np.array(move)
+    cord = Cord(grasp=grasp, pegs=pegs)
+    cord.reset(shape)
+    before = cord.gripper_positions()
+    for action in split_move(d, model.config.max_step):
+        apply_action(cord, action, model.config.max_step)
+    real = np.zeros((2, 2))
+    for row, end in enumerate(("head", "tail")):
+        if end in before:
+            real[row] = cord.gripper_positions()[end] - before[end]
+    moves = model.reachable_moves(shape[None], grasp, d[None], pegs=pegs)[0]
+    np.testing.assert_allclose(moves, real, atol=1e-6)
+    free = model.reachable_moves(shape[None], grasp, d[None])[0]
+    assert np.abs(free - moves).max() > 0.05  # the pegs stopped a gripper
+    if grasp != "both":  # (this straight cord is wider than both ends may be held apart)
+        # predict applies the same rule (the networks themselves do not see the pegs).
+        stopped = model.predict(shape, grasp, d, pegs=pegs, inextensible=False)
+        own = moves[0] if grasp == "head" else moves[1]
+        np.testing.assert_allclose(stopped, model.predict(shape, grasp, own, inextensible=False),
+                                   atol=1e-5)
