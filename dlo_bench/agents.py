@@ -231,6 +231,22 @@ def _bc(env: Any, options: AgentOptions) -> Policy:
     return load_bc(folder, device=options.device, env_id=env_id)
 
 
+def _check_observation(name: str, policy: Any, env: Any) -> None:
+    """Refuse, in one line, a trained policy whose observation is not the environment's (one
+    trained on an empty table, in an environment with pegs, say)."""
+    space = getattr(policy, "observation_space", None)
+    spaces = getattr(space, "spaces", None)
+    if not spaces or "observation" not in spaces:
+        return
+    want = env.observation_space["observation"].shape
+    got = spaces["observation"].shape
+    if got != want:
+        pegs = getattr(env.unwrapped, "max_pegs", 0)
+        raise ValueError(f"agent {name!r} was trained on observations of shape {got}, but this "
+                         f"environment observes {want} (max_pegs={pegs}: 3 numbers per peg "
+                         "slot): train one there (dlo baseline trains on the empty table)")
+
+
 #: Every agent by name, in the benchmark's table order.
 AGENTS: dict[str, AgentSpec] = {spec.name: spec for spec in (
     AgentSpec("straight-line", "moves the held end(s) straight to the goal's (reference)",
@@ -321,6 +337,7 @@ def build_agent(name: str, env: Any, **options: Any) -> Policy:
                          f"got environment {env_id!r}")
     given = {k: v for k, v in options.items() if v is not None}  # None: the default
     policy = spec.build(env, replace(AgentOptions(), **{**spec.defaults, **given}))
+    _check_observation(name, policy, env)
     from planners.episodes import EpisodicPolicy
 
     if isinstance(policy, EpisodicPolicy):  # aim as the environment scores

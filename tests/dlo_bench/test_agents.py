@@ -99,3 +99,13 @@ def test_the_shipped_ppo_acts_in_the_dual_environment():
     obs, _ = env.reset(seed=3)
     action, _ = build_agent("ppo", env).predict(obs, deterministic=True)
     assert action.shape == (4,)
+
+
+def test_a_policy_trained_on_the_empty_table_is_refused_where_pegs_are_observed():
+    import gymnasium as gym
+
+    with gym.make("dlo_env/DLOEndpoint-v0", max_pegs=2) as env:
+        with pytest.raises(ValueError, match=r"agent 'ppo' was trained on observations of shape "
+                                             r"\(42,\), but this environment observes \(48,\)"):
+            build_agent("ppo", env)
+        build_agent("latent-mpc", env)  # planners read the pegs, or ignore them
