@@ -68,6 +68,8 @@ class BaselineConfig:
         cords: ``"fixed"``: every episode on the environment's cord; ``"train"``: every
             episode on a cord drawn from ``dlo_env.randomize.DEFAULT_RANGES`` away from the
             held-out test cords (``draw_train_cord``), which the policy is not told.
+        max_pegs: The environment's ``max_pegs``: every episode places 0 to ``max_pegs``
+            pegs near its start, observed in ``max_pegs`` slots (0: the empty table).
     """
 
     algo: str = "ppo"
@@ -94,8 +96,15 @@ class BaselineConfig:
     her_n_sampled_goal: int = 4
     checkpoint_every: int = 20_000
     cords: str = "fixed"
+    max_pegs: int = 0
 
     def __post_init__(self) -> None:
+        from dlo_env.envs.goal_env import MAX_PEGS
+
+        if not (isinstance(self.max_pegs, int) and not isinstance(self.max_pegs, bool)
+                and 0 <= self.max_pegs <= MAX_PEGS):
+            raise ValueError(f"max_pegs must be an int from 0 to {MAX_PEGS}, "
+                             f"got {self.max_pegs!r}")
         if self.algo not in ALGOS:
             raise ValueError(f"algo must be one of {ALGOS}, got {self.algo!r}")
         if self.cords not in CORDS:
@@ -182,7 +191,7 @@ def _make_env(config: BaselineConfig, rank: int, monitor_dir: str | None,
 
     import dlo_env  # noqa: F401  (registers the environments in the worker process)
 
-    env = gym.make(config.env_id, reward_type=config.reward_type)
+    env = gym.make(config.env_id, reward_type=config.reward_type, max_pegs=config.max_pegs)
     if config.cords == "train":
         env = RandomCords(env, seed=config.seed + 1000 * rank)
     env = RandomDifficulty(env, config.difficulties, seed=config.seed + 1000 * rank)

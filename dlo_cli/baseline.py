@@ -4,12 +4,20 @@ from __future__ import annotations
 
 import argparse
 
-from dlo_cli.flags import add_difficulty, add_env, add_seed, add_threads, positive_int
+from dlo_cli.flags import (
+    add_difficulty,
+    add_env,
+    add_seed,
+    add_threads,
+    number_in,
+    positive_int,
+)
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     """Flags of ``dlo baseline``; defaults are ``dlo_bench.baselines.BaselineConfig``'s."""
     from dlo_bench.baselines import ALGOS, CORDS, BaselineConfig
+    from dlo_env.envs.goal_env import MAX_PEGS
 
     parser.add_argument("--algo", choices=ALGOS, required=True, help="the algorithm")
     parser.add_argument("--timesteps", type=positive_int, default=BaselineConfig.timesteps,
@@ -30,6 +38,11 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                              "episode; train, a cord drawn each episode from the ranges of "
                              "docs/cords.md away from the held-out test cords, not told to the "
                              "policy (the shipped sac-her-cords)")
+    parser.add_argument("--max-pegs", type=number_in(int, 0, MAX_PEGS, expected=f"an integer "
+                                                     f"from 0 to {MAX_PEGS}"),
+                        default=BaselineConfig.max_pegs, metavar="N",
+                        help="train with 0 to N pegs near every start, observed in N slots "
+                             "(default 0: the empty table)")
     parser.add_argument("--set", nargs="+", default=[], metavar="FIELD=VALUE",
                         help="other BaselineConfig fields, values in JSON "
                              "(e.g. ppo_n_steps=512 net_arch=[64,64])")
@@ -46,7 +59,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 #: checks always apply.
 FLAG_FIELDS = {"algo": "--algo", "env_id": "--env", "difficulties": "--difficulty",
                "reward_type": "--reward-type", "timesteps": "--timesteps", "n_envs": "--n-envs",
-               "subprocess": "--subprocess", "seed": "--seed", "cords": "--cords"}
+               "subprocess": "--subprocess", "seed": "--seed", "cords": "--cords",
+               "max_pegs": "--max-pegs"}
 
 
 def _overrides(items: list[str]) -> dict:
@@ -88,16 +102,18 @@ def run(args: argparse.Namespace) -> int:
         algo=args.algo, env_id=args.env_id, difficulties=list(args.difficulty),
         reward_type=args.reward_type, timesteps=args.timesteps, n_envs=args.n_envs,
         subprocess=args.subprocess, seed=args.seed, cords=args.cords,
+        max_pegs=args.max_pegs,
     )
     settings.update(_overrides(args.set))
     try:
         config = BaselineConfig.from_dict(settings)
     except TypeError as exc:  # a --set value of the wrong type
         raise ValueError(f"--set: {exc}") from exc
-    suffix = "-cords" if config.cords == "train" else ""  # the benchmark's folder names
+    # the benchmark's folder names
+    suffix = ("-cords" if config.cords == "train" else "") + ("-pegs" if config.max_pegs else "")
     out = Path(args.out) if args.out else default_out("baseline") / f"{config.algo}{suffix}"
     print(f"training {config.algo} on {config.env_id} (difficulties {config.difficulties}, "
-          f"{config.cords} cords) for "
+          f"{config.cords} cords, up to {config.max_pegs} pegs) for "
           f"{config.timesteps} steps with {config.n_envs} envs -> {out}")
     print("config: " + json.dumps(asdict(config)), flush=True)
     path = train_baseline(config, out, device=args.device, resume=args.resume,

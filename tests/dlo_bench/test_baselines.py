@@ -204,3 +204,15 @@ def test_training_resumes_from_a_checkpoint(tiny_models, tmp_path):
 def test_load_baseline_names_a_folder_without_a_model(tmp_path):
     with pytest.raises(FileNotFoundError, match="baseline folder"):
         load_baseline(tmp_path)
+
+
+def test_a_baseline_can_train_where_pegs_are_observed():
+    from dlo_bench.baselines import BaselineConfig, make_vec_env
+
+    env = make_vec_env(BaselineConfig(max_pegs=2, n_envs=1))
+    assert env.observation_space["observation"].shape == (42 + 6,)
+    env.reset()
+    assert len(env.envs[0].unwrapped.pegs) <= 2
+    env.close()
+    with pytest.raises(ValueError, match="max_pegs must be an int from 0 to"):
+        BaselineConfig(max_pegs=-1)
