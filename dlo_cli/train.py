@@ -13,7 +13,7 @@ non_negative_float = number_in(float, 0.0, expected="a number >= 0")
 #: Given to the other kind they would be silently ignored, so they are an error there.
 STAGE_FLAGS = {
     "transition": ("steps", "members", "architecture", "depth", "cord_inputs", "rim_reach",
-                   "rim_targets",
+                   "rim_targets", "peg_reach",
                    "contact_reach", "no_mirror", "init",
                    "teacher", "mean_by_grasp", "mean_width", "teacher_weight", "teacher_moves",
                    "chain_weight", "miss_weight", "miss_margin", "lr"),
@@ -65,6 +65,13 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                              "(length, bending stiffness, friction, mass), for data of several "
                              "cords (dlo collect --randomize); predict(params=...) then says "
                              "which cord")
+    parser.add_argument("--peg-reach", type=number_in(float, 0.0, 1.0, expected="a number of "
+                                                                        "metres in [0, 1]"),
+                        default=None, metavar="METRES",
+                        help="--stage transition: networks that also see the pegs within this "
+                             "of each point and target (TransitionModelConfig.peg_reach), for "
+                             "data around pegs (dlo collect --max-pegs); with --init of a "
+                             "model without them, their inputs start at zero weight")
     parser.add_argument("--no-mirror", action="store_true",
                         help="--stage transition: networks that see both handednesses (the "
                              "models before TransitionModelConfig.mirror)")

@@ -68,6 +68,7 @@ def run(args: argparse.Namespace) -> int:
                                   "rim_reach": args.rim_reach,
                                   "rim_targets": args.rim_targets,
                                   "contact_reach": args.contact_reach,
+                                  "peg_reach": args.peg_reach,
                                   "mirror": False if args.no_mirror else None}.items()
                 if v is not None}
     if args.teacher and model_kw:

@@ -43,6 +43,9 @@ COLLISION_SLOP = 5e-4
 RIM_GUARD = 1e-6
 #: Radius of a peg, metres (the default of ``Cord`` and of the environments' ``peg_radius``).
 PEG_RADIUS = 0.02
+#: Where an empty peg slot lies (a batch of moves with different numbers of pegs): too far
+#: from the table to touch anything.
+PEG_FAR = 1e3
 #: A point pressed into a peg is moved out to this far beyond its surface, metres; a gripper
 #: stops at ``LINK_RADIUS`` plus this from it.
 PEG_GUARD = 1e-4
@@ -143,7 +146,8 @@ def peg_contact(starts: np.ndarray, moves: np.ndarray, pegs: np.ndarray, reach: 
     Args:
         starts: ``(..., k, 2)`` positions of the ``k`` held ends.
         moves: ``(..., k, 2)`` their displacements.
-        pegs: ``(m, 2)`` peg centres.
+        pegs: ``(m, 2)`` peg centres, or ``(..., m, 2)``: each move's own (a slot far off the
+            table, ``PEG_FAR``, holds no peg).
         reach: Distance from a centre that counts as touching, metres.
 
     Returns:
@@ -151,9 +155,10 @@ def peg_contact(starts: np.ndarray, moves: np.ndarray, pegs: np.ndarray, reach: 
         touching one and moves towards its centre.
     """
     starts, moves = np.asarray(starts, dtype=np.float64), np.asarray(moves, dtype=np.float64)
-    if len(pegs) == 0:
+    pegs = np.asarray(pegs, dtype=np.float64)
+    if pegs.size == 0:
         return np.ones(starts.shape[:-2])
-    rel = starts[..., :, None, :] - pegs  # (..., k, m, 2)
+    rel = starts[..., :, None, :] - pegs[..., None, :, :]  # (..., k, m, 2)
     d = moves[..., :, None, :]
     a = (d * d).sum(-1)
     b = 2.0 * (d * rel).sum(-1)
@@ -183,7 +188,8 @@ def reachable_targets(targets: np.ndarray, params: CordParams | None = None, *,
         targets: ``(..., k, 2)`` target positions of the ``k`` held ends (1, or 2: head, tail).
         params: Cord parameters (default cord if None).
         starts: ``(..., k, 2)`` where the ends are (needed with pegs).
-        pegs: ``(m, 2)`` peg centres (None or empty: no pegs).
+        pegs: ``(m, 2)`` peg centres, or ``(..., m, 2)`` each move's own (``PEG_FAR`` slots
+            hold none); None or empty: no pegs.
         peg_radius: Radius of the pegs, metres.
 
     Returns:
@@ -204,7 +210,7 @@ def reachable_targets(targets: np.ndarray, params: CordParams | None = None, *,
             half_gap = 0.5 * span * gap / np.where(too_far, dist, 1.0)
             out[..., 0, :] = np.where(too_far, mid - half_gap, out[..., 0, :])
             out[..., 1, :] = np.where(too_far, mid + half_gap, out[..., 1, :])
-    if pegs is not None and len(pegs):
+    if pegs is not None and np.size(pegs):
         if starts is None:
             raise ValueError("starts must be given with pegs: a move stops where it meets one")
         starts = np.asarray(starts, dtype=np.float64)

@@ -108,6 +108,11 @@ def cords_of(model: TransitionModel, data: TransitionDataset, idx: np.ndarray
     return data.params[idx] if model.config.cord_inputs else None
 
 
+def pegs_of(data: TransitionDataset, idx: np.ndarray) -> np.ndarray | None:
+    """The pegs of transitions ``idx`` (``PEG_FAR`` in empty slots), None without pegs."""
+    return data.peg_rows(idx) if data.pegs.shape[1] else None
+
+
 def rollout_errors(model: TransitionModel, data: TransitionDataset, moves: int
                    ) -> tuple[np.ndarray, np.ndarray]:
     """Errors (metres) after ``moves`` chained predictions from every possible chain start.
@@ -124,7 +129,8 @@ def rollout_errors(model: TransitionModel, data: TransitionDataset, moves: int
         shapes = data.start[sel]
         for k in range(moves):
             shapes = model.predict(shapes, name, data.end_displacement(sel + k),
-                                   params=cords_of(model, data, sel + k))
+                                   params=cords_of(model, data, sel + k),
+                                   pegs=pegs_of(data, sel + k))
         errors[data.grasp[first] == code] = error(shapes, data.next[sel + moves - 1])
     return first, errors
 
@@ -140,7 +146,8 @@ def spread_rank_correlation(model: TransitionModel, data: TransitionDataset) -> 
         if not len(idx):
             continue
         pred, spread = model.predict(data.start[idx], name, data.end_displacement(idx),
-                                     params=cords_of(model, data, idx), return_std=True)
+                                     params=cords_of(model, data, idx), return_std=True,
+                                     pegs=pegs_of(data, idx))
         spreads.append(spread)
         errors.append(error(pred, data.next[idx]))
     s, e = np.concatenate(spreads), np.concatenate(errors)

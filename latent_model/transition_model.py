@@ -112,6 +112,32 @@ def cord_features(rows: np.ndarray) -> np.ndarray:
     return np.log(np.asarray(rows, dtype=np.float64) / DEFAULT_CORD_ROW).astype(np.float32)
 
 
+def peg_vectors(points: torch.Tensor, pegs: torch.Tensor, radius: float, reach: float
+                ) -> torch.Tensor:
+    """How close each world point ``(B, k, 2)`` is to the pegs ``(B, m, 2)``, as a vector
+    ``(B, k, 2)``: each peg whose surface lies within ``reach`` adds its outward direction
+    scaled by ``1 - distance / reach`` (a ``PEG_FAR`` slot adds nothing), so the vector is
+    exactly zero farther than ``reach`` from every peg."""
+    rel = points[:, :, None, :] - pegs[:, None, :, :]  # (B, k, m, 2)
+    dist = rel.norm(dim=-1, keepdim=True).clamp_min(1e-9)
+    near = torch.relu(1.0 - (dist - radius) / reach)
+    return (near * rel / dist).sum(dim=2)
+
+
+def padded_pegs(pegs: Any, count: int) -> np.ndarray:
+    """``pegs`` as float32 ``(count, m, 2)`` rows: one ``(m, 2)`` for every row, or already
+    ``(count, m, 2)`` (``PEG_FAR`` slots hold none); ``(count, 0, 2)`` for None."""
+    if pegs is None:
+        return np.zeros((count, 0, 2), dtype=np.float32)
+    arr = np.asarray(pegs, dtype=np.float32)
+    if arr.ndim == 2:
+        arr = np.broadcast_to(check_pegs(arr, "pegs").astype(np.float32)[None],
+                              (count,) + arr.shape)
+    if arr.ndim != 3 or arr.shape[0] != count or arr.shape[2] != 2:
+        raise ValueError(f"pegs must have shape (m, 2) or ({count}, m, 2), got {np.shape(pegs)}")
+    return np.array(arr, dtype=np.float32)  # a writable copy (torch takes it as it is)
+
+
 #: The ensemble designs of ``TransitionModelConfig.architecture``.
 ARCHITECTURES = ("mlp", "chain")
 
@@ -160,6 +186,11 @@ class TransitionModelConfig:
             one vector) or ``"chain"`` (``latent_model.chain_network.EnsembleChainNet``:
             weights shared along the chain, ``width`` channels, ``depth`` residual blocks). The
             mean network is always an MLP: the fast student of either ensemble.
+        peg_reach: The points and the held ends' targets also get a peg vector (0: none, a
+            model of the empty table): each peg whose surface lies within this of them adds
+            its outward direction scaled by ``1 - distance / peg_reach``, so far from every
+            peg the vector is exactly zero, as on the empty table. ``mlp`` only.
+        peg_radius: Radius of the pegs the model was trained with, metres.
     """
 
     n_points: int = 20
@@ -179,9 +210,19 @@ class TransitionModelConfig:
     mean_width: int | None = None
     architecture: str = "mlp"
     cord_inputs: bool = False
+    peg_reach: float = 0.0
+    peg_radius: float = PEG_RADIUS
 
     def __post_init__(self) -> None:
         positive_ints(self, "n_points", "members", "width", "depth")
+        non_negative(self, "peg_reach")
+        positive(self, "peg_radius")
+        if not math.isfinite(self.peg_reach):
+            raise ValueError(f"TransitionModelConfig.peg_reach must be finite, got "
+                             f"{self.peg_reach!r}")
+        if self.peg_reach and self.architecture != "mlp":
+            raise ValueError("TransitionModelConfig.peg_reach needs architecture='mlp' (the "
+                             "chain network has no peg inputs)")
         if self.architecture not in ARCHITECTURES:
             raise ValueError(f"TransitionModelConfig.architecture must be one of "
                              f"{ARCHITECTURES}, got {self.architecture!r}")
@@ -215,12 +256,22 @@ class TransitionModelConfig:
         return 2 * n + 2 * (n - 1) + 2 * (n + self.rim_targets)
 
     @property
+    def peg_inputs(self) -> int:
+        """Peg vectors the network sees: one per point and target with ``peg_reach``."""
+        return self.n_points + self.rim_targets if self.peg_reach else 0
+
+    @property
+    def peg_at(self) -> int:
+        """Where the peg vectors' inputs start (or would): after the rim's and contact's."""
+        return self.contact_at + 2 * (self.rim_inputs - self.n_points - self.rim_targets)
+
+    @property
     def inputs(self) -> int:
         """Network inputs: the cord's points and segment directions in the frame, the rim near
-        each point and near the held ends' targets (and their contact vectors), the cord's
-        parameters (``cord_inputs``), the lead length, the other move, both."""
-        return (self.contact_at + 2 * (self.rim_inputs - self.n_points - self.rim_targets)
-                + self.cord_features + 4)
+        each point and near the held ends' targets (and their contact vectors), the pegs near
+        them (``peg_reach``), the cord's parameters (``cord_inputs``), the lead length, the
+        other move, both."""
+        return self.peg_at + 2 * self.peg_inputs + self.cord_features + 4
 
     @property
     def cord_features(self) -> int:
@@ -433,7 +484,8 @@ class TransitionModel(nn.Module):
 
     def in_frame(self, shapes: torch.Tensor, grasp: torch.Tensor, moves: torch.Tensor,
                  members: int | None = None, net: EnsembleMLP | None = None,
-                 cord: torch.Tensor | None = None) -> tuple[torch.Tensor, MoveFrame]:
+                 cord: torch.Tensor | None = None, pegs: torch.Tensor | None = None
+                 ) -> tuple[torch.Tensor, MoveFrame]:
         """Every member's prediction in the move frames, ``(members, B, n, 2)``, and the frames.
 
         ``shapes`` is ``(B, n, 2)`` (one frame per move, shared by the members) or
@@ -442,7 +494,8 @@ class TransitionModel(nn.Module):
         networks to run (None: the ensemble; ``self.mean_net`` for the mean network). With
         ``config.mirror`` the networks (``predict_points``) get the mirrored inputs of cords
         on the right of the move's line and their outputs are mirrored back here. ``cord``
-        is ``(B, len(PARAM_COLUMNS))`` ``cord_features`` (None: the default cord).
+        is ``(B, len(PARAM_COLUMNS))`` ``cord_features`` (None: the default cord); ``pegs``
+        ``(B, m, 2)`` world peg centres (None: none), read only with ``config.peg_reach``.
         """
         net = self.net if net is None else net
         e, n = net.members, self.config.n_points
@@ -454,6 +507,7 @@ class TransitionModel(nn.Module):
             b = shapes.shape[1]
             grasp, moves, shapes = grasp.repeat(e), moves.repeat(e, 1, 1), shapes.reshape(-1, n, 2)
             cord = None if cord is None else cord.repeat(e, 1)
+            pegs = None if pegs is None else pegs.repeat(e, 1, 1)
         else:
             b = shapes.shape[0]
         points, lead, other, frame = to_frame(shapes, grasp, moves)
@@ -471,6 +525,12 @@ class TransitionModel(nn.Module):
             into_frame(rim_vectors(shapes, TABLE_HALF, reach), frame),
             into_frame(rim_vectors(target, TABLE_HALF, reach), frame, reorder=False))],
             dim=1)  # (B, rim_inputs, 2)
+        if c.peg_reach:  # then the pegs near the points and the targets (none: zeros)
+            near = [torch.zeros_like(shapes), torch.zeros_like(target)] if pegs is None else [
+                peg_vectors(x, pegs.to(shapes.dtype), c.peg_radius, c.peg_reach)
+                for x in (shapes, target)]
+            rim = torch.cat([rim, into_frame(near[0], frame),
+                             into_frame(near[1], frame, reorder=False)], dim=1)
         # One handedness: cords on the right of the move's line are seen mirrored.
         flip = handedness(points) if c.mirror else None
         seen = (points, other, rim) if flip is None else (
@@ -496,8 +556,9 @@ class TransitionModel(nn.Module):
         Args:
             points, lead, other, both: The batch in the move frames (flat over members and
                 batch when ``members_batch`` is given, else shared by the members).
-            rim: ``(B, config.rim_inputs, 2)`` rim vectors of the points and the targets
-                (then, with ``contact_reach``, their contact vectors).
+            rim: ``(B, config.rim_inputs + config.peg_inputs, 2)`` rim vectors of the points
+                and the targets (then, with ``contact_reach``, their contact vectors, and with
+                ``peg_reach`` their peg vectors).
             members_batch: ``(members, B)`` when every member has its own input.
             members: Run only the first ``members`` networks (inputs shared).
             net: The networks to run (None: the ensemble).
@@ -512,8 +573,8 @@ class TransitionModel(nn.Module):
         return points.reshape(-1, b, n, 2) + self.config.output_scale * out.reshape(e, b, n, 2)
 
     def forward(self, shapes: torch.Tensor, grasp: torch.Tensor, moves: torch.Tensor,
-                net: EnsembleMLP | None = None, cord: torch.Tensor | None = None
-                ) -> torch.Tensor:
+                net: EnsembleMLP | None = None, cord: torch.Tensor | None = None,
+                pegs: torch.Tensor | None = None) -> torch.Tensor:
         """Every member's prediction, world ``(members, B, n, 2)``; differentiable.
 
         Args:
@@ -524,8 +585,10 @@ class TransitionModel(nn.Module):
             net: The networks to run (None: the ensemble; ``self.mean_net``: one member).
             cord: ``(B, len(PARAM_COLUMNS))`` ``cord_features`` of each move's cord (None: the
                 default cord; read only with ``config.cord_inputs``).
+            pegs: ``(B, m, 2)`` world centres of each move's pegs, ``PEG_FAR`` in empty slots
+                (None: none; read only with ``config.peg_reach``).
         """
-        moved, frame = self.in_frame(shapes, grasp, moves, net=net, cord=cord)
+        moved, frame = self.in_frame(shapes, grasp, moves, net=net, cord=cord, pegs=pegs)
         e, b, n = moved.shape[:3]
         if shapes.dim() == 3:  # one frame per move: repeat it for the members
             frame = MoveFrame(frame.origin.repeat(e, 1), frame.cos.repeat(e),
@@ -594,18 +657,19 @@ class TransitionModel(nn.Module):
         """``(B, 2, 2)`` displacement of [head, tail] the grippers really make, zero for an end
         not held: the move carried out as ``split_move`` actions, each clipped by the rule of
         ``Cord.move`` (targets on the table, both ends within the span of the cord, ``params``
-        as in ``predict``; with ``pegs``, ``(k, 2)`` centres, a move stops where a gripper
-        would touch one). ``end`` is the deprecated name of ``grasp``."""
+        as in ``predict``; with ``pegs``, ``(m, 2)`` centres or ``(B, m, 2)`` each shape's own,
+        a move stops where a gripper would touch one). ``end`` is the deprecated name of
+        ``grasp``."""
         grasp = _grasp_argument(grasp, end)
         if displacement is None:
             raise ValueError("displacement is required")
-        pegs = check_pegs(pegs, "pegs")
+        pegs = None if pegs is None else padded_pegs(pegs, len(shapes)).astype(np.float64)
         if params is not None and grasp == "both":  # only the span, of two ends, is the cord's
             moves = np.zeros((len(shapes), 2, 2), dtype=np.float32)
             disp = np.asarray(displacement).reshape(len(shapes), -1)
             for idx, cord in self._lengths(self.cord_rows(params, len(shapes))):
-                moves[idx] = self._reachable(shapes[idx], grasp, disp[idx], cord, pegs,
-                                             peg_radius)
+                moves[idx] = self._reachable(shapes[idx], grasp, disp[idx], cord,
+                                             None if pegs is None else pegs[idx], peg_radius)
             return moves
         return self._reachable(shapes, grasp, displacement, self.cord_params, pegs, peg_radius)
 
@@ -626,7 +690,7 @@ class TransitionModel(nn.Module):
             pos = reachable_targets(pos, params)
         else:
             walk |= (reachable_targets(pos, params) != pos).any(axis=(1, 2))
-        has_pegs = pegs is not None and len(pegs) > 0
+        has_pegs = pegs is not None and pegs.size > 0
         if has_pegs:  # a path that meets a peg stops there: walked too
             walk |= peg_contact(start, d, pegs, peg_radius + LINK_RADIUS + PEG_GUARD) < 1.0
         if walk.any():  # step by step, as the environment's actions go
@@ -634,12 +698,14 @@ class TransitionModel(nn.Module):
             actions = np.maximum(1, np.ceil(longest / self.config.max_step - 1e-9)).astype(int)
             step = d[walk] / actions[:, None, None]
             path = start[walk]
-            rule = ({"starts": None, "pegs": pegs, "peg_radius": peg_radius} if has_pegs
+            rows = pegs[walk] if has_pegs and pegs.ndim == 3 else pegs
+            rule = ({"starts": None, "pegs": rows, "peg_radius": peg_radius} if has_pegs
                     else {})
             for j in range(int(actions.max(initial=0))):
                 going = j < actions
                 if has_pegs:
                     rule["starts"] = path[going]
+                    rule["pegs"] = rows[going] if rows.ndim == 3 else rows
                 path[going] = reachable_targets(path[going] + step[going], params, **rule)
             pos[walk] = path
         moves = np.zeros((len(shapes), 2, 2), dtype=np.float32)
@@ -708,10 +774,11 @@ class TransitionModel(nn.Module):
             ``return_std`` also ``(B,)`` (``()``) the members' spread: the mean over points of
             each point's standard deviation (metres).
             end: Deprecated name of ``grasp``.
-            pegs, peg_radius: ``(k, 2)`` centres of pegs on the table and their radius: a move
-                stops where a gripper would touch one, as in the simulator
-                (``reachable_moves``). The networks do not see pegs: the cord's contact with
-                them is not predicted.
+            pegs, peg_radius: ``(m, 2)`` centres of pegs on the table (or ``(B, m, 2)``, each
+                shape's own, ``PEG_FAR`` in empty slots) and their radius: a move stops where a
+                gripper would touch one, as in the simulator (``reachable_moves``). A model
+                with ``config.peg_reach`` also sees them; one without does not predict the
+                cord's contact with them.
         """
         grasp = _grasp_argument(grasp, end)
         if displacement is None:
@@ -732,6 +799,8 @@ class TransitionModel(nn.Module):
                 else None)
         moves = self.reachable_moves(arr, grasp, d, params=rows, pegs=pegs,
                                      peg_radius=peg_radius)
+        seen_pegs = (torch.from_numpy(padded_pegs(pegs, len(arr))).to(self.device)
+                     if self.config.peg_reach and pegs is not None else None)
         cord = (None if rows is None or not self.config.cord_inputs
                 else torch.from_numpy(cord_features(rows)).to(self.device))
         grasp_name, grasp = grasp, torch.full((len(arr),), GRASP_CODES[grasp], dtype=torch.int64)
@@ -741,10 +810,11 @@ class TransitionModel(nn.Module):
             batch = (torch.from_numpy(arr[part]).to(self.device), grasp[part].to(self.device),
                      torch.from_numpy(moves[part]).to(self.device))
             mine = None if cord is None else cord[part]
+            near = None if seen_pegs is None else seen_pegs[part]
             if use_mean_net:
-                moved, frame = self.in_frame(*batch, net=self.mean_net, cord=mine)
+                moved, frame = self.in_frame(*batch, net=self.mean_net, cord=mine, pegs=near)
             if not use_mean_net or return_std:
-                ensemble, frame = self.in_frame(*batch, members, cord=mine)
+                ensemble, frame = self.in_frame(*batch, members, cord=mine, pegs=near)
                 if not use_mean_net:
                     moved = ensemble
                 if return_std:  # in the frame: the spread does not depend on its angle

@@ -148,6 +148,12 @@ class TransitionTensors:
     episode: np.ndarray
     step: np.ndarray
     cord: torch.Tensor | None = None  # (T, 4) cord_features, for a model with cord_inputs
+    pegs: torch.Tensor | None = None  # (T, m, 2) peg centres (PEG_FAR: none), with peg_reach
+
+    def rows(self, name: str, idx: Any) -> torch.Tensor | None:
+        """``cord`` or ``pegs`` of the transitions ``idx`` (None when the model reads none)."""
+        value = getattr(self, name)
+        return None if value is None else value[idx]
 
 
 def _cords(model: TransitionModel, params: np.ndarray) -> torch.Tensor | None:
@@ -157,12 +163,21 @@ def _cords(model: TransitionModel, params: np.ndarray) -> torch.Tensor | None:
     return torch.from_numpy(cord_features(params)).to(model.device)
 
 
+def _pegs(model: TransitionModel, data: TransitionDataset, idx: Any) -> torch.Tensor | None:
+    """The pegs of transitions ``idx``, for a model that sees them (else None)."""
+    if not model.config.peg_reach:
+        return None
+    return torch.from_numpy(data.peg_rows(idx)).to(model.device)
+
+
 def _reachable(model: TransitionModel, data: TransitionDataset, starts: np.ndarray,
                idx: np.ndarray, name: str, moves_of: np.ndarray) -> np.ndarray:
     """Reachable moves of ``starts`` with the commanded moves of transitions ``moves_of``, on
-    the cords of transitions ``idx`` (a model of one cord: its own)."""
+    the cords and among the pegs of transitions ``idx`` (a model of one cord: its own)."""
     params = data.params[idx] if model.config.cord_inputs else None
-    return model.reachable_moves(starts, name, data.end_displacement(moves_of), params=params)
+    pegs = data.peg_rows(idx) if data.pegs.shape[1] else None
+    return model.reachable_moves(starts, name, data.end_displacement(moves_of), params=params,
+                                 pegs=pegs, peg_radius=model.config.peg_radius)
 
 
 def as_tensors(model: TransitionModel, data: TransitionDataset) -> TransitionTensors:
@@ -177,7 +192,7 @@ def as_tensors(model: TransitionModel, data: TransitionDataset) -> TransitionTen
         start=torch.from_numpy(data.start).to(dev), next=torch.from_numpy(data.next).to(dev),
         grasp=torch.from_numpy(data.grasp.astype(np.int64)).to(dev),
         moves=torch.from_numpy(moves).to(dev), episode=data.episode, step=data.step,
-        cord=_cords(model, data.params))
+        cord=_cords(model, data.params), pegs=_pegs(model, data, slice(None)))
 
 
 def paired_moves(model: TransitionModel, data: TransitionDataset, copies: int, seed: int
@@ -205,7 +220,9 @@ def paired_moves(model: TransitionModel, data: TransitionDataset, copies: int, s
         start=torch.from_numpy(starts).to(dev), next=torch.zeros(starts.shape, device=dev),
         grasp=torch.from_numpy(grasp).to(dev), moves=torch.from_numpy(moves).to(dev),
         episode=np.full(len(starts), -1), step=np.zeros(len(starts), dtype=np.int64),
-        cord=_cords(model, np.concatenate([data.params[order]] * copies)))
+        cord=_cords(model, np.concatenate([data.params[order]] * copies)),
+        pegs=None if not model.config.peg_reach else torch.cat(
+            [_pegs(model, data, order)] * copies))
 
 
 def chain_starts(episode: np.ndarray, step: np.ndarray, moves: int) -> np.ndarray:
@@ -229,7 +246,7 @@ def rollout(model: TransitionModel, data: TransitionTensors, first: torch.Tensor
     for k in range(moves):
         idx = first + k
         shapes = model(shapes, data.grasp[idx], data.moves[idx], net=net,
-                       cord=None if data.cord is None else data.cord[idx])
+                       cord=data.rows("cord", idx), pegs=data.rows("pegs", idx))
         out.append(shapes)
     return out
 
@@ -277,7 +294,8 @@ def mean_predictions(model: TransitionModel, data: TransitionTensors,
     for lo in range(0, count, chunk):
         part = slice(lo, min(lo + chunk, count))
         parts.append(model(data.start[part], data.grasp[part], data.moves[part], net=net,
-                           cord=None if data.cord is None else data.cord[part]).mean(dim=0))
+                           cord=data.rows("cord", part), pegs=data.rows("pegs", part)
+                           ).mean(dim=0))
     return torch.cat(parts)
 
 
@@ -337,9 +355,10 @@ def train_transition_model(
         raise ValueError(f"out {str(out)!r} holds a training checkpoint; pass resume=True "
                          "(--resume) to continue it, or choose another folder")
     mc = model_config if model_config is not None else TransitionModelConfig()
-    if len(data) and data.peg_count.any():
-        raise ValueError("data holds transitions around pegs (collected with max_pegs); this "
-                         "transition model does not model pegs: use data of an empty table")
+    if len(data) and data.peg_count.any() and not mc.peg_reach:
+        raise ValueError("data holds transitions around pegs (collected with max_pegs); a "
+                         "model without peg_reach (--peg-reach) does not see pegs: give it one, "
+                         "or use data of an empty table")
     # A model of one cord learns the cord its data's metadata names; a cord-conditioned one
     # (cord_inputs) the cords of every transition, its own being the default cord's length.
     conditioned = mc.cord_inputs or bool(
@@ -386,15 +405,19 @@ def train_transition_model(
     elif tc.init:
         start = TransitionModel.load(tc.init, device="cpu")
         # A network that learnt both handednesses is a fine start for one that sees one, one
-        # without contact vectors for one with them, and one of the default cord for one of
-        # several cords (the new inputs' weights start at zero: it first predicts every cord
-        # as the default, exactly as before).
+        # without contact vectors for one with them, one of the default cord for one of
+        # several cords, and one of the empty table for one that sees pegs (the new inputs'
+        # weights start at zero: it first predicts as before, every cord as the default and
+        # every peg as absent).
         seen = replace(start.config, mean_network=False, mean_by_grasp=False, mean_width=None,
                        mirror=mc.mirror)
         grow_contact = not seen.contact_reach and mc.contact_reach
         grow_cord = not seen.cord_inputs and mc.cord_inputs
+        grow_pegs = not seen.peg_reach and mc.peg_reach
         grown = replace(seen, contact_reach=mc.contact_reach if grow_contact
-                        else seen.contact_reach, cord_inputs=seen.cord_inputs or grow_cord)
+                        else seen.contact_reach, cord_inputs=seen.cord_inputs or grow_cord,
+                        peg_reach=mc.peg_reach if grow_pegs else seen.peg_reach,
+                        peg_radius=mc.peg_radius if grow_pegs else seen.peg_radius)
         differ = [f"{k}={v!r} (this run {getattr(mc, k)!r})" for k, v in asdict(grown).items()
                   if getattr(mc, k) != v]
         if differ:
@@ -404,6 +427,10 @@ def train_transition_model(
         if grow_contact:
             after = replace(seen, contact_reach=mc.contact_reach)
             first_net = first_net.with_inputs(seen.contact_at, after.inputs - seen.inputs)
+            seen = after
+        if grow_pegs:  # the peg vectors come after the rim's (and contact's)
+            after = replace(seen, peg_reach=mc.peg_reach, peg_radius=mc.peg_radius)
+            first_net = first_net.with_inputs(seen.peg_at, 2 * after.peg_inputs)
             seen = after
         if grow_cord:  # the cord's features come before the move's four inputs
             first_net = first_net.with_inputs(seen.inputs - 4, mc.cord_features)
@@ -461,7 +488,7 @@ def train_transition_model(
             group["lr"] = tc.lr * factor
         idx = torch.randint(len(tr.grasp), (real,), generator=gen).to(model.device)
         start, grasp, moves, target = tr.start[idx], tr.grasp[idx], tr.moves[idx], None
-        cord = None if tr.cord is None else tr.cord[idx]
+        cord, pegs = tr.rows("cord", idx), tr.rows("pegs", idx)
         if targets is not None:
             target = targets[idx]
         if extra is not None and real < tc.batch_size:  # the teacher's moves fill the batch
@@ -472,7 +499,9 @@ def train_transition_model(
                 (target, extra_targets)))
             if cord is not None:
                 cord = torch.cat([cord, extra.cord[pick]])
-        pred = model(start, grasp, moves, net=net, cord=cord)
+            if pegs is not None:
+                pegs = torch.cat([pegs, extra.pegs[pick]])
+        pred = model(start, grasp, moves, net=net, cord=cord, pegs=pegs)
         errors = point_error(pred[:, :real], tr.next[idx][None])
         loss_one = errors.mean()
         loss = one_move_loss(errors, tc)

@@ -62,7 +62,7 @@ import numpy as np
 
 from dlo_env.atomic import file_digest
 from dlo_env.checks import fractions, positive, positive_ints
-from dlo_env.cord import PEG_RADIUS, Cord, CordParams
+from dlo_env.cord import PEG_FAR, PEG_RADIUS, Cord, CordParams
 from dlo_env.dataset.chunks import (
     ChunkJob,
     Progress,
@@ -296,6 +296,14 @@ class TransitionDataset:
     def peg_list(self, index: int) -> np.ndarray:
         """``(k, 2)`` centres of the pegs of transition ``index``."""
         return self.pegs[index, : int(self.peg_count[index])]
+
+    def peg_rows(self, index: np.ndarray | slice = slice(None)) -> np.ndarray:
+        """float32 ``(T, p, 2)`` pegs of the transitions ``index``, an empty slot at
+        ``dlo_env.cord.PEG_FAR`` (where it touches nothing): what a model takes."""
+        pegs = self.pegs[index].copy()
+        empty = np.arange(pegs.shape[1])[None, :] >= self.peg_count[index][:, None]
+        pegs[empty] = PEG_FAR
+        return pegs
 
     @staticmethod
     def concatenate(parts: list[TransitionDataset]) -> TransitionDataset:

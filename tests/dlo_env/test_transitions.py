@@ -425,7 +425,7 @@ def test_a_transition_model_refuses_data_around_pegs(tmp_path):
 
     data = collect_transition_chunk(replace(SMALL, max_pegs=2, seed=3), 0, 15)
     assert data.peg_count.any()
-    with pytest.raises(ValueError, match="does not model pegs"):
+    with pytest.raises(ValueError, match="does not see pegs"):
         train_transition_model(data, tmp_path / "model")
 
 

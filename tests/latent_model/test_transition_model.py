@@ -867,3 +867,63 @@ def test_with_pegs_the_model_moves_the_grippers_as_the_simulator_does(grasp, mov
         own = moves[0] if grasp == "head" else moves[1]
         np.testing.assert_allclose(stopped, model.predict(shape, grasp, own, inextensible=False),
                                    atol=1e-5)
+
+
+def test_a_model_that_sees_pegs_is_equivariant_and_sees_nothing_far_from_them():
+    config = replace(TINY, members=2, rim_targets=2, peg_reach=0.1)
+    model = TransitionModel(config, device="cpu")
+    rng = np.random.default_rng(0)
+    shape = np.stack([np.linspace(-0.4, 0.4, 20), 0.05 * np.sin(np.linspace(0, 3, 20))], 1)
+    shape = shape.astype(np.float32)
+    pegs = np.array([[0.0, 0.08], [0.3, -0.06]], dtype=np.float32)
+    move = np.array([0.05, 0.1], dtype=np.float32)
+    near = model.predict(shape, "head", move, pegs=pegs, inextensible=False)
+    # Pegs change what it predicts; pegs far from the cord and the target change nothing.
+    assert np.abs(near - model.predict(shape, "head", move, inextensible=False)).max() > 1e-6
+    far = np.array([[0.8, 0.8]], dtype=np.float32)
+    np.testing.assert_allclose(model.predict(shape, "head", move, pegs=far, inextensible=False),
+                               model.predict(shape, "head", move, inextensible=False), atol=1e-6)
+    # Turning and shifting the world, pegs included, turns and shifts the prediction.
+    angle = rng.uniform(-np.pi, np.pi)
+    rot = np.array([[np.cos(angle), -np.sin(angle)], [np.sin(angle), np.cos(angle)]])
+    shift = np.array([0.05, -0.03])
+
+    def moved(x):
+        return (x @ rot.T + shift).astype(np.float32)
+
+    turned = model.predict(moved(shape), "head", (move @ rot.T).astype(np.float32),
+                           pegs=moved(pegs), inextensible=False)
+    np.testing.assert_allclose(turned, moved(near), atol=2e-5)
+
+
+def test_peg_inputs_added_at_zero_weight_predict_as_the_model_without_them():
+    plain = TransitionModel(replace(TINY, members=2, rim_targets=2), device="cpu")
+    config = replace(plain.config, peg_reach=0.1)
+    seeing = TransitionModel(config, device="cpu")
+    seeing.net.load_state_dict(plain.net.with_inputs(plain.config.peg_at,
+                                                     2 * config.peg_inputs).state_dict())
+    shape = np.stack([np.linspace(-0.4, 0.4, 20), np.zeros(20)], 1).astype(np.float32)
+    pegs = np.array([[0.0, 0.05], [-0.2, -0.05]], dtype=np.float32)
+    move = np.array([0.1, 0.1], dtype=np.float32)
+    np.testing.assert_allclose(seeing.predict(shape, "head", move, pegs=pegs),
+                               plain.predict(shape, "head", move, pegs=pegs), atol=1e-6)
+    with pytest.raises(ValueError, match="peg_reach needs architecture='mlp'"):
+        TransitionModelConfig(peg_reach=0.1, architecture="chain")
+
+
+def test_a_model_that_sees_pegs_trains_on_data_around_pegs(tmp_path):
+    from dlo_env.dataset.transitions import TransitionCollectConfig, collect_transition_chunk
+    from latent_model.transition_training import TransitionTrainConfig, train_transition_model
+
+    data = collect_transition_chunk(TransitionCollectConfig(seed=5, max_pegs=2), 0, 40)
+    assert data.peg_count.any()
+    model = train_transition_model(
+        data, tmp_path / "m", TransitionTrainConfig(steps=4, batch_size=16, eval_every=2),
+        replace(TINY, members=2, peg_reach=0.1))
+    assert model.config.peg_reach == 0.1
+    loaded = TransitionModel.load(tmp_path / "m")
+    i = int(np.flatnonzero(data.peg_count)[0])
+    name = ("head", "tail", "both")[int(data.grasp[i])]
+    args = (data.start[i], name, data.end_displacement(np.array([i]))[0])
+    np.testing.assert_allclose(loaded.predict(*args, pegs=data.peg_list(i)),
+                               model.predict(*args, pegs=data.peg_list(i)), atol=1e-3)
