@@ -13,10 +13,9 @@ non_negative_float = number_in(float, 0.0, expected="a number >= 0")
 #: Given to the other kind they would be silently ignored, so they are an error there.
 STAGE_FLAGS = {
     "transition": ("steps", "members", "architecture", "depth", "cord_inputs", "rim_reach",
-                   "rim_targets", "peg_reach",
-                   "contact_reach", "no_mirror", "init",
+                   "peg_reach", "contact_reach", "init",
                    "teacher", "mean_by_grasp", "mean_width", "teacher_weight", "teacher_moves",
-                   "chain_weight", "miss_weight", "miss_margin", "lr"),
+                   "miss_weight", "miss_margin", "lr"),
     "shape": ("minutes", "gan_steps", "encoder_steps", "representation", "output", "paper",
               "d_steps", "report_size"),
 }
@@ -45,9 +44,6 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--rim-reach", type=float, default=None,
                         help="--stage transition: metres from the table's edge within which the "
                              "model sees the rim (None: TransitionModelConfig's)")
-    parser.add_argument("--rim-targets", type=int, choices=(1, 2), default=None,
-                        help="--stage transition: rim vectors of the leading end's target only "
-                             "(1) or of both ends' targets (2) (None: TransitionModelConfig's)")
     parser.add_argument("--contact-reach", type=non_negative_float, default=None,
                         help="--stage transition: a second, sharp rim vector of this reach "
                              "(metres) per point and target, for contact with the walls (0: "
@@ -72,9 +68,6 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                              "of each point and target (TransitionModelConfig.peg_reach), for "
                              "data around pegs (dlo collect --max-pegs); with --init of a "
                              "model without them, their inputs start at zero weight")
-    parser.add_argument("--no-mirror", action="store_true",
-                        help="--stage transition: networks that see both handednesses (the "
-                             "models before TransitionModelConfig.mirror)")
     parser.add_argument("--init", default=None,
                         help="--stage transition: start from this transition model file "
                              "(fine-tuning; the same architecture, or one without the contact "
@@ -99,9 +92,6 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help="--stage transition with --teacher: extra inputs per training "
                              "transition, its start with another transition's move, labelled "
                              "by the teacher's mean alone (None: 0, the data's moves only)")
-    parser.add_argument("--chain-weight", type=non_negative_float, default=None,
-                        help="--stage transition: weight of the loss on rolled-out chains of "
-                             "2-3 moves (0: one-move loss only; None: TransitionTrainConfig's)")
     parser.add_argument("--miss-weight", type=non_negative_float, default=None,
                         help="--stage transition: extra weight of a move's error beyond "
                              "--miss-margin, so misses count more (None: 0, none)")
@@ -144,7 +134,7 @@ def check_stage_flags(args: argparse.Namespace) -> None:
     """Refuse a flag the chosen stage would ignore (one line naming it and the stages)."""
     kind = "transition" if args.stage == "transition" else "shape"
     for other, names in STAGE_FLAGS.items():
-        # "is not": a flag given as 0 (--chain-weight 0) is given, though 0 == False.
+        # "is not": a flag given as 0 (--miss-weight 0) is given, though 0 == False.
         given = [n for n in names if other != kind
                  and getattr(args, n) is not None and getattr(args, n) is not False]
         if given:

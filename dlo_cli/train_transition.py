@@ -58,7 +58,6 @@ def run(args: argparse.Namespace) -> int:
                                   "teacher": args.teacher,
                                   "teacher_weight": args.teacher_weight,
                                   "teacher_moves": args.teacher_moves,
-                                  "chain_weight": args.chain_weight,
                                   "miss_weight": args.miss_weight,
                                   "miss_margin": args.miss_margin}.items()
                 if v is not None}
@@ -66,14 +65,11 @@ def run(args: argparse.Namespace) -> int:
                                   "architecture": args.architecture, "depth": args.depth,
                                   "cord_inputs": True if args.cord_inputs else None,
                                   "rim_reach": args.rim_reach,
-                                  "rim_targets": args.rim_targets,
                                   "contact_reach": args.contact_reach,
-                                  "peg_reach": args.peg_reach,
-                                  "mirror": False if args.no_mirror else None}.items()
+                                  "peg_reach": args.peg_reach}.items()
                 if v is not None}
     if args.teacher and model_kw:
-        given = ", ".join("--no-mirror" if k == "mirror" else "--" + k.replace("_", "-")
-                          for k in model_kw)
+        given = ", ".join("--" + k.replace("_", "-") for k in model_kw)
         raise ValueError(f"{given} shape a new ensemble, not --teacher's mean network (its "
                          "architecture is the teacher's)")
     if args.mean_by_grasp and not args.teacher:

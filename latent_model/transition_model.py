@@ -73,18 +73,41 @@ PREDICT_CHUNK = 4096
 #: (no shipped model is one); fields added since (``architecture``, ``cord_inputs``) default
 #: to what such files behaved by.
 REQUIRED_CONFIG = ("rim_targets", "mean_network", "mirror", "mean_by_grasp", "contact_reach")
+#: Config fields retired with the only value any shipped model had: files still state them
+#: (so older readers and ``REQUIRED_CONFIG`` read them), and a file with another value (both
+#: handednesses, the leading end's rim alone) is refused.
+RETIRED_CONFIG = {"rim_targets": 2, "mirror": True}
+#: The held ends' targets whose rim (and peg) vectors the network sees: both (the other end's
+#: target is its start when it is not held).
+RIM_TARGETS = RETIRED_CONFIG["rim_targets"]
 
 
 def check_config_keys(config: dict[str, Any], name: str, checkpoint: bool = False) -> None:
     """Raise a one-line ``ValueError`` when a saved config lacks a ``REQUIRED_CONFIG`` field
-    (a file written before it existed); ``checkpoint``: a training checkpoint's."""
+    (a file written before it existed) or has a retired field at another value than
+    ``RETIRED_CONFIG``'s; ``checkpoint``: a training checkpoint's."""
+    what, fix = (("training checkpoint", "give another --out or delete it") if checkpoint
+                 else ("transition model file",
+                       "train it again with dlo train --stage transition"))
     missing = [k for k in REQUIRED_CONFIG if k not in config]
     if missing:
-        what, fix = (("training checkpoint", "give another --out or delete it") if checkpoint
-                     else ("transition model file",
-                           "train it again with dlo train --stage transition"))
         raise ValueError(f"{name}: a {what} from before {', '.join(missing)} existed, which "
                          f"this version no longer reads: {fix}")
+    retired = [f"{k}={config[k]!r}" for k, v in RETIRED_CONFIG.items() if config[k] != v]
+    if retired:
+        raise ValueError(f"{name}: a {what} with {', '.join(retired)}, which this version no "
+                         f"longer supports: {fix}")
+
+
+def current_config(config: dict[str, Any]) -> dict[str, Any]:
+    """A saved config without its ``RETIRED_CONFIG`` fields (checked by
+    :func:`check_config_keys`), as ``TransitionModelConfig`` takes it."""
+    return {k: v for k, v in config.items() if k not in RETIRED_CONFIG}
+
+
+def saved_config(config: TransitionModelConfig) -> dict[str, Any]:
+    """``config`` as files store it: with the ``RETIRED_CONFIG`` fields."""
+    return {**asdict(config), **RETIRED_CONFIG}
 
 
 def _grasp_argument(grasp: str | None, end: str | None) -> str:
@@ -158,9 +181,6 @@ class TransitionModelConfig:
         rim_reach: Points (and the held ends' targets) closer than this to the table's edge
             tell the network where the rim is, metres; farther, the model is exactly
             equivariant.
-        rim_targets: Targets whose rim vectors the network sees: 1, the leading end's (the
-            first models); 2, both ends' (the other end's target is its start when it is not
-            held).
         contact_reach: The points and the targets also get a second rim vector of this
             reach, metres (0: none): a sharp one that tells a point touching a wall (the
             cord rests ``LINK_RADIUS`` from the edge) from one a few centimetres away, where
@@ -173,12 +193,6 @@ class TransitionModelConfig:
         mean_width: Hidden units per layer of the mean network (None: ``width``). A wider
             mean network fits more at a higher cost per prediction; the ensemble keeps
             ``width``. Needs ``mean_network``.
-        mirror: Mirror-equivariant by construction: the networks only see cords whose
-            centroid lies on the left of the move's line (y >= 0 in the move frame); a cord
-            on the right is mirrored across the line, predicted, and the prediction mirrored
-            back. The physics has no handedness, so the networks learn one instead of two.
-            Where the centroid crosses the line (a cord lying along the move) the prediction
-            may jump by twice the network's sideways error there.
         cord_inputs: The networks also see the cord (``cord_features``: the logarithm of
             each of ``PARAM_COLUMNS`` over the default cord's), so one model predicts cords
             that differ; ``predict(params=...)`` says which. Off: a model of one cord.
@@ -202,10 +216,8 @@ class TransitionModelConfig:
     move_scale: float = 0.35
     output_scale: float = 0.1
     rim_reach: float = 0.35
-    rim_targets: int = 2
     contact_reach: float = 0.0
     mean_network: bool = False
-    mirror: bool = True
     mean_by_grasp: bool = False
     mean_width: int | None = None
     architecture: str = "mlp"
@@ -226,9 +238,6 @@ class TransitionModelConfig:
         if self.architecture not in ARCHITECTURES:
             raise ValueError(f"TransitionModelConfig.architecture must be one of "
                              f"{ARCHITECTURES}, got {self.architecture!r}")
-        if self.rim_targets not in (1, 2):
-            raise ValueError(f"TransitionModelConfig.rim_targets must be 1 or 2, "
-                             f"got {self.rim_targets!r}")
         positive(self, "cord_length", "max_step", "move_scale", "output_scale", "rim_reach")
         non_negative(self, "contact_reach")
         if not math.isfinite(self.contact_reach):
@@ -246,24 +255,24 @@ class TransitionModelConfig:
     @property
     def rim_inputs(self) -> int:
         """Rim vectors the network sees: one per point and target, two with ``contact_reach``."""
-        return (self.n_points + self.rim_targets) * (2 if self.contact_reach else 1)
+        return (self.n_points + RIM_TARGETS) * (2 if self.contact_reach else 1)
 
     @property
     def contact_at(self) -> int:
         """Where the contact vectors' inputs start (or would): after the points', segments'
         and rim vectors', before the move's four (``TransitionModel.features``)."""
         n = self.n_points
-        return 2 * n + 2 * (n - 1) + 2 * (n + self.rim_targets)
+        return 2 * n + 2 * (n - 1) + 2 * (n + RIM_TARGETS)
 
     @property
     def peg_inputs(self) -> int:
         """Peg vectors the network sees: one per point and target with ``peg_reach``."""
-        return self.n_points + self.rim_targets if self.peg_reach else 0
+        return self.n_points + RIM_TARGETS if self.peg_reach else 0
 
     @property
     def peg_at(self) -> int:
         """Where the peg vectors' inputs start (or would): after the rim's and contact's."""
-        return self.contact_at + 2 * (self.rim_inputs - self.n_points - self.rim_targets)
+        return self.contact_at + 2 * (self.rim_inputs - self.n_points - RIM_TARGETS)
 
     @property
     def inputs(self) -> int:
@@ -461,7 +470,7 @@ class TransitionModel(nn.Module):
         c = self.config
         width = c.width if width is None else width
         if design == "chain":
-            return EnsembleChainNet(members, c.n_points, c.rim_targets,
+            return EnsembleChainNet(members, c.n_points, RIM_TARGETS,
                                     2 if c.contact_reach else 1, width, c.depth,
                                     extra_globals=c.cord_features)
         return EnsembleMLP(members, c.inputs, width, c.depth, 2 * c.n_points)
@@ -491,9 +500,9 @@ class TransitionModel(nn.Module):
         ``shapes`` is ``(B, n, 2)`` (one frame per move, shared by the members) or
         ``(members, B, n, 2)`` (one start per member; frames then cover ``members * B``).
         ``members`` runs only the first networks (shared frames only). ``net`` is the
-        networks to run (None: the ensemble; ``self.mean_net`` for the mean network). With
-        ``config.mirror`` the networks (``predict_points``) get the mirrored inputs of cords
-        on the right of the move's line and their outputs are mirrored back here. ``cord``
+        networks to run (None: the ensemble; ``self.mean_net`` for the mean network). The
+        networks (``predict_points``) get the mirrored inputs of cords on the right of the
+        move's line and their outputs are mirrored back here. ``cord``
         is ``(B, len(PARAM_COLUMNS))`` ``cord_features`` (None: the default cord); ``pegs``
         ``(B, m, 2)`` world peg centres (None: none), read only with ``config.peg_reach``.
         """
@@ -514,12 +523,10 @@ class TransitionModel(nn.Module):
         both = grasp == GRASP_CODES["both"]
         c = self.config
         target = frame.origin + torch.stack([frame.cos, frame.sin], dim=-1) * lead[:, None]
-        if c.rim_targets == 2:  # the other end's target too: its start plus its move
-            far_end = torch.where(frame.reversed[:, None], shapes[:, 0], shapes[:, -1])
-            target = torch.stack([target, far_end + out_of_frame(other[:, None], frame)[:, 0]],
-                                 dim=1)
-        else:
-            target = target[:, None]
+        # The other end's target too: its start plus its move.
+        far_end = torch.where(frame.reversed[:, None], shapes[:, 0], shapes[:, -1])
+        target = torch.stack([target, far_end + out_of_frame(other[:, None], frame)[:, 0]],
+                             dim=1)
         reaches = (c.rim_reach, c.contact_reach) if c.contact_reach else (c.rim_reach,)
         rim = torch.cat([v for reach in reaches for v in (
             into_frame(rim_vectors(shapes, TABLE_HALF, reach), frame),
@@ -531,14 +538,13 @@ class TransitionModel(nn.Module):
                 for x in (shapes, target)]
             rim = torch.cat([rim, into_frame(near[0], frame),
                              into_frame(near[1], frame, reorder=False)], dim=1)
-        # One handedness: cords on the right of the move's line are seen mirrored.
-        flip = handedness(points) if c.mirror else None
-        seen = (points, other, rim) if flip is None else (
-            points * flip[:, None], other * flip, rim * flip[:, None])
-        moved = self.predict_points(seen[0], lead, seen[1], both, seen[2],
-                                    (e, b) if per_member else None, members, net, cord)
-        if flip is not None:
-            moved = moved * flip.reshape(-1, b, 1, 2)
+        # One handedness: cords on the right of the move's line are seen mirrored (the
+        # physics has none, so the networks learn one instead of two).
+        flip = handedness(points)
+        moved = self.predict_points(points * flip[:, None], lead, other * flip, both,
+                                    rim * flip[:, None], (e, b) if per_member else None,
+                                    members, net, cord)
+        moved = moved * flip.reshape(-1, b, 1, 2)
         if per_member:
             points, lead, other, both = (t.reshape(e, b, *t.shape[1:])
                                          for t in (points, lead, other, both))
@@ -550,8 +556,8 @@ class TransitionModel(nn.Module):
                        net: EnsembleMLP | None = None, cord: torch.Tensor | None = None
                        ) -> torch.Tensor:
         """The members' points in the move frames, ``(members, B, n, 2)``, before the held
-        ends are pinned: the one place where a model design differs. With ``config.mirror``
-        every input is a cord on the left of its move's line (``in_frame`` mirrors).
+        ends are pinned: the one place where a model design differs. Every input is a cord on
+        the left of its move's line (``in_frame`` mirrors).
 
         Args:
             points, lead, other, both: The batch in the move frames (flat over members and
@@ -847,7 +853,8 @@ class TransitionModel(nn.Module):
             return {k: (v.half() if half else v).cpu() for k, v in net.state_dict().items()}
 
         state = {"format": FORMAT, "format_version": FORMAT_VERSION,
-                 "config": asdict(self.config), "net": weights(self.net), "info": self.info}
+                 "config": saved_config(self.config), "net": weights(self.net),
+                 "info": self.info}
         if self.mean_net is not None:
             state["mean_net"] = weights(self.mean_net)
         return state
@@ -866,7 +873,8 @@ class TransitionModel(nn.Module):
         if isinstance(data.get("config"), dict):
             check_config_keys(data["config"], name)
         try:
-            config = config_from_dict(TransitionModelConfig, data["config"], "config")
+            config = config_from_dict(TransitionModelConfig, current_config(data["config"]),
+                                      "config")
             model = cls(config, device="cpu", info=data.get("info"))
             model.net.load_state_dict({k: v.float() for k, v in data["net"].items()})
             if model.mean_net is not None:

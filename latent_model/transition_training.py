@@ -1,12 +1,10 @@
-"""Training the transition model: the one-move loss, optionally rolled-out multi-move chains.
+"""Training the transition model: the one-move loss.
 
 Each step takes a batch of single transitions; the loss is the mean per-point distance (the
-project's ``error``). With ``chain_weight`` > 0 it also takes a batch of chains of 2 to
-``chain_moves`` consecutive moves of one episode: every member predicts the first move from
-the real start and each later move from its own previous prediction, so errors that would
-compound along a plan are trained (off by default: at equal time more one-move steps did
-better, on chains too). The frame of the move makes rigid-transform augmentation redundant:
-the model is exactly equivariant (and, with ``mirror``, mirror-equivariant). Checkpoints are
+project's ``error``). (A loss on rolled-out chains of 2-3 moves was retired: at equal time
+more one-move steps did better, on chains too; docs/history.md.) The frame of the move makes
+rigid-transform augmentation redundant: the model is exactly equivariant, mirror-equivariant
+too. Checkpoints are
 written atomically every ``eval_every`` steps; a run resumes from the last one. The learning
 rate follows a cosine decay over ``steps``.
 
@@ -52,6 +50,8 @@ from latent_model.transition_model import (
     TransitionModelConfig,
     check_config_keys,
     cord_features,
+    current_config,
+    saved_config,
 )
 
 #: Marks a file as a transition-training checkpoint (resumable state).
@@ -68,11 +68,6 @@ class TransitionTrainConfig:
     Attributes:
         steps: Optimiser steps.
         batch_size: Single transitions per step.
-        chain_batch: Chains per step (each of 2 to ``chain_moves`` moves).
-        chain_moves: Longest chain rolled out.
-        chain_weight: Weight of the chain loss against the one-move loss (0: none). A step
-            with chains costs about twice one without; in as much time, the one-move loss
-            alone was more accurate, on chained moves too (docs/history.md).
         lr: Adam learning rate at the start.
         lr_schedule: ``"cosine"`` (decays to 0 over ``steps``) or ``"constant"``.
         validation_fraction: Share of the training episodes kept out to watch progress.
@@ -100,9 +95,6 @@ class TransitionTrainConfig:
 
     steps: int = 96_000
     batch_size: int = 512
-    chain_batch: int = 128
-    chain_moves: int = 3
-    chain_weight: float = 0.0
     lr: float = 1e-3
     lr_schedule: str = "cosine"
     validation_fraction: float = 0.05
@@ -116,9 +108,8 @@ class TransitionTrainConfig:
     miss_margin: float = 0.005
 
     def __post_init__(self) -> None:
-        positive_ints(self, "steps", "batch_size", "eval_every", "chain_moves")
-        non_negative(self, "chain_batch", "chain_weight", "teacher_weight", "miss_weight",
-                     "miss_margin")
+        positive_ints(self, "steps", "batch_size", "eval_every")
+        non_negative(self, "teacher_weight", "miss_weight", "miss_margin")
         if not (isinstance(self.teacher_moves, int) and self.teacher_moves >= 0):
             raise ValueError("TransitionTrainConfig.teacher_moves must be an int >= 0, "
                              f"got {self.teacher_moves!r}")
@@ -234,21 +225,6 @@ def chain_starts(episode: np.ndarray, step: np.ndarray, moves: int) -> np.ndarra
     for k in range(1, moves):
         ok &= (episode[k:k + last] == episode[:last]) & (step[k:k + last] == step[:last] + k)
     return np.flatnonzero(ok)
-
-
-def rollout(model: TransitionModel, data: TransitionTensors, first: torch.Tensor, moves: int,
-            net: EnsembleMLP | None = None) -> list[torch.Tensor]:
-    """Each member's predictions along chains starting at ``first``: ``moves`` tensors
-    ``(members, B, n, 2)``, the k-th after k+1 moves (each from the member's own last one);
-    ``net`` as in ``TransitionModel.forward``."""
-    shapes: torch.Tensor = data.start[first]
-    out = []
-    for k in range(moves):
-        idx = first + k
-        shapes = model(shapes, data.grasp[idx], data.moves[idx], net=net,
-                       cord=data.rows("cord", idx), pegs=data.rows("pegs", idx))
-        out.append(shapes)
-    return out
 
 
 def point_error(pred: torch.Tensor, true: torch.Tensor) -> torch.Tensor:
@@ -404,13 +380,11 @@ def train_transition_model(
                 mine.copy_(theirs)
     elif tc.init:
         start = TransitionModel.load(tc.init, device="cpu")
-        # A network that learnt both handednesses is a fine start for one that sees one, one
-        # without contact vectors for one with them, one of the default cord for one of
-        # several cords, and one of the empty table for one that sees pegs (the new inputs'
-        # weights start at zero: it first predicts as before, every cord as the default and
-        # every peg as absent).
-        seen = replace(start.config, mean_network=False, mean_by_grasp=False, mean_width=None,
-                       mirror=mc.mirror)
+        # A network without contact vectors is a fine start for one with them, one of the
+        # default cord for one of several cords, and one of the empty table for one that
+        # sees pegs (the new inputs' weights start at zero: it first predicts as before,
+        # every cord as the default and every peg as absent).
+        seen = replace(start.config, mean_network=False, mean_by_grasp=False, mean_width=None)
         grow_contact = not seen.contact_reach and mc.contact_reach
         grow_cord = not seen.cord_inputs and mc.cord_inputs
         grow_pegs = not seen.peg_reach and mc.peg_reach
@@ -444,7 +418,8 @@ def train_transition_model(
     if resume and checkpoint.is_file():
         saved = load_checkpoint(checkpoint, str(checkpoint), kind=CHECKPOINT_FORMAT, version=1)
         check_config_keys(saved["model_config"], str(checkpoint), checkpoint=True)
-        saved_mc = config_from_dict(TransitionModelConfig, saved["model_config"], "model_config")
+        saved_mc = config_from_dict(TransitionModelConfig, current_config(saved["model_config"]),
+                                    "model_config")
         saved_tc = config_from_json(saved["train_config"])
         if saved_tc != tc or saved_mc != mc:
             differ = [f"{k}={a!r} (now {b!r})" for old, new in ((saved_tc, tc), (saved_mc, mc))
@@ -463,8 +438,6 @@ def train_transition_model(
         step = int(saved["step"])
     train, validation = split_transitions(data, tc.validation_fraction, seed=tc.seed)
     tr, va = as_tensors(model, train), as_tensors(model, validation)
-    chains = {k: chain_starts(tr.episode, tr.step, k) for k in range(2, tc.chain_moves + 1)}
-    chains = {k: torch.from_numpy(v).to(model.device) for k, v in chains.items() if len(v)}
     targets = mean_predictions(model, tr) if teacher is not None else None
     extra = extra_targets = None
     real = tc.batch_size
@@ -505,23 +478,15 @@ def train_transition_model(
         errors = point_error(pred[:, :real], tr.next[idx][None])
         loss_one = errors.mean()
         loss = one_move_loss(errors, tc)
-        loss_teacher = loss_chain = torch.zeros(())
+        loss_teacher = torch.zeros(())
         if target is not None:
             loss_teacher = point_error(pred, target[None]).mean()
             loss = loss + tc.teacher_weight * loss_teacher
-        if chains and tc.chain_batch and tc.chain_weight:
-            k = list(chains)[step % len(chains)]
-            pick = torch.randint(len(chains[k]), (tc.chain_batch,), generator=gen)
-            first = chains[k][pick.to(model.device)]
-            preds = rollout(model, tr, first, k, net)
-            loss_chain = torch.stack([point_error(p, tr.next[first + j][None]).mean()
-                                      for j, p in enumerate(preds[1:], start=1)]).mean()
-            loss = loss + tc.chain_weight * loss_chain
         optimiser.zero_grad(set_to_none=True)
         loss.backward()
         optimiser.step()
         step += 1
-        stats = {"loss": float(loss_one.detach()), "chain": float(loss_chain.detach())}
+        stats = {"loss": float(loss_one.detach())}
         if targets is not None:
             stats["teacher"] = float(loss_teacher.detach())
         if step % tc.eval_every == 0 or step == tc.steps:
@@ -531,7 +496,7 @@ def train_transition_model(
             _curve_row(out / CURVE_FILE, {"step": step, "lr": tc.lr * factor, **stats,
                                           "seconds": round(time.perf_counter() - started, 1)})
             save_atomic({"format": CHECKPOINT_FORMAT, "format_version": 1, "step": step,
-                         "train_config": asdict(tc), "model_config": asdict(mc),
+                         "train_config": asdict(tc), "model_config": saved_config(mc),
                          "net": trained.state_dict(), "optimiser": optimiser.state_dict(),
                          "teacher_ensemble": teacher_ensemble,
                          "init_fingerprint": init_record and init_record["fingerprint"]},
@@ -553,6 +518,17 @@ def train_transition_model(
     return model
 
 
+#: Training settings retired (the chain loss, off in every shipped model: ``chain_weight``
+#: 0); a record with another ``chain_weight`` is refused.
+RETIRED_TRAIN = {"chain_batch": 128, "chain_moves": 3, "chain_weight": 0.0}
+
+
 def config_from_json(values: dict[str, Any]) -> TransitionTrainConfig:
-    """A training config from JSON values (unknown keys are an error naming them)."""
-    return config_from_dict(TransitionTrainConfig, values, "train_config")
+    """A training config from JSON values (unknown keys are an error naming them; retired
+    ones must have had no effect)."""
+    if values.get("chain_weight", 0.0) != 0.0:
+        raise ValueError(f"train_config has chain_weight={values['chain_weight']!r}: the chain "
+                         "loss is retired")
+    return config_from_dict(TransitionTrainConfig,
+                            {k: v for k, v in values.items() if k not in RETIRED_TRAIN},
+                            "train_config")

@@ -134,11 +134,11 @@ def test_collect_runs_on_the_core_install_without_tqdm_torch_or_matplotlib(tmp_p
 @pytest.mark.parametrize("stage, flags, named", [
     ("gan", ["--teacher", "model.pt"], "--teacher applies to --stage transition only"),
     ("all", ["--lr", "1e-3"], "--lr applies to --stage transition only"),
-    ("encoder", ["--no-mirror"], "--no-mirror applies to --stage transition only"),
+    ("encoder", ["--peg-reach", "0.1"], "--peg-reach applies to --stage transition only"),
     ("transition", ["--gan-steps", "5"], "--gan-steps applies to --stage gan, encoder or all"),
     ("transition", ["--minutes", "3"], "--minutes applies to --stage gan, encoder or all"),
     ("transition", ["--report-size", "9"], "--report-size applies to --stage gan, encoder"),
-    ("all", ["--chain-weight", "0"], "--chain-weight applies to --stage transition only"),
+    ("all", ["--miss-weight", "0"], "--miss-weight applies to --stage transition only"),
     ("transition", ["--minutes", "0"], "--minutes applies to --stage gan, encoder or all"),
     ("gan", ["--contact-reach", "0.03"], "--contact-reach applies to --stage transition only"),
     ("all", ["--mean-width", "64"], "--mean-width applies to --stage transition only"),
@@ -152,8 +152,8 @@ def test_a_flag_the_stage_would_ignore_is_one_line_naming_it(stage, flags, named
     assert not (tmp_path / "r").exists()
 
 
-@pytest.mark.parametrize("flag", ["--miss-weight", "--miss-margin", "--chain-weight",
-                                  "--teacher-weight", "--contact-reach"])
+@pytest.mark.parametrize("flag", ["--miss-weight", "--miss-margin", "--teacher-weight",
+                                  "--contact-reach"])
 @pytest.mark.parametrize("value", ["-1", "inf", "nan"])
 def test_a_loss_weight_that_is_negative_or_not_finite_is_refused_before_any_data_loads(
         flag, value, tmp_path, capsys):

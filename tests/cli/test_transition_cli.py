@@ -25,22 +25,21 @@ def test_collect_then_train_a_transition_model_from_two_files(tmp_path, capsys):
     assert main(["train", "--stage", "transition", "--data", str(first), str(second),
                  "--heldout", str(second), "--out", str(out), "--steps", "20",
                  "--width", "16", "--members", "2", "--batch-size", "32", "--eval-every", "10",
-                 "--chain-weight", "0.25", "--miss-weight", "2", "--miss-margin", "0.01",
+                 "--miss-weight", "2", "--miss-margin", "0.01",
                  "--no-progress"]) == 0
     text = capsys.readouterr().out
     assert "50 transitions" in text
     assert "spread-error rank correlation" in text
     model = TransitionModel.load(out)
     assert model.config.members == 2 and model.info["steps"] == 20
-    assert model.info["train_config"]["chain_weight"] == 0.25 and model.config.mirror
     assert (model.info["train_config"]["miss_weight"], model.info["train_config"]["miss_margin"]) \
         == (2, 0.01)
     again = ["train", "--stage", "transition", "--data", str(first), str(second), "--heldout",
              str(second), "--out", str(out), "--steps", "20", "--width", "16", "--members", "2",
              "--batch-size", "32", "--eval-every", "10", "--no-progress"]
-    assert main(again + ["--no-mirror"]) == 2  # resuming with other settings names them
-    assert "chain_weight=0.25 (now 0.0), miss_weight=2.0 (now 0.0), miss_margin=0.01 " \
-        "(now 0.005), mirror=True (now False)" in capsys.readouterr().err
+    assert main(again + ["--contact-reach", "0.03"]) == 2  # resuming with other settings
+    assert "miss_weight=2.0 (now 0.0), miss_margin=0.01 (now 0.005), contact_reach=0.0 " \
+        "(now 0.03)" in capsys.readouterr().err  # names them
     assert model.info["files"] == [str(first), str(second)]
     for name in ("transition-metrics.csv", "transition-metrics.png", "transition-training.csv"):
         assert (out / name).is_file()
@@ -48,7 +47,8 @@ def test_collect_then_train_a_transition_model_from_two_files(tmp_path, capsys):
     distil = ["train", "--stage", "transition", "--data", str(first), "--heldout", str(second),
               "--out", str(mean), "--steps", "10", "--batch-size", "32", "--eval-every", "10",
               "--teacher", str(out / "transition.pt"), "--no-progress"]
-    for flag, named in ((["--width", "32"], "--width shape"), (["--no-mirror"], "--no-mirror"),
+    for flag, named in ((["--width", "32"], "--width shape"), (["--peg-reach", "0.1"],
+                                                               "--peg-reach shape"),
                         (["--contact-reach", "0.03"], "--contact-reach shape")):
         assert main(distil + flag) == 2
         err = capsys.readouterr().err

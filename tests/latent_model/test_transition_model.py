@@ -15,7 +15,7 @@ from dlo_env.shapes import error, random_cord_shape
 from dlo_env.tasks import DEFAULT_MAX_STEP, apply_action, split_move
 from latent_model import TransitionModel
 from latent_model.transition_metrics import transition_report, write_report
-from latent_model.transition_model import TransitionModelConfig
+from latent_model.transition_model import RIM_TARGETS, TransitionModelConfig
 from latent_model.transition_training import (
     CURVE_FILE,
     TransitionTrainConfig,
@@ -27,7 +27,7 @@ from latent_model.transition_training import (
     train_transition_model,
 )
 
-TINY = TransitionModelConfig(width=32, depth=2, members=3, rim_reach=0.15, rim_targets=1)
+TINY = TransitionModelConfig(width=32, depth=2, members=3, rim_reach=0.15)
 
 
 @pytest.fixture(scope="module")
@@ -71,7 +71,7 @@ def test_rotating_and_shifting_the_input_rotates_and_shifts_the_output(model, en
 
 
 @pytest.mark.parametrize("end", ["head", "tail", "both"])
-def test_a_mirrored_input_gives_the_mirrored_output_and_without_mirror_it_does_not(model, end):
+def test_a_mirrored_input_gives_the_mirrored_output(model, end):
     # Mirroring across the table's axis x = 0 maps the table onto itself: it holds at the rim too.
     shapes = _shapes(32, seed=4, margin=0.05)
     rng = np.random.default_rng(2)
@@ -83,12 +83,7 @@ def test_a_mirrored_input_gives_the_mirrored_output_and_without_mirror_it_does_n
         mirrored = m.predict(shapes * flip, end, (d.reshape(32, -1, 2) * flip).reshape(32, -1))
         return np.abs(mirrored - pred * flip).max()
 
-    assert model.config.mirror and gap(model) < 1e-5
-    torch.manual_seed(0)
-    plain = TransitionModel(replace(TINY, mirror=False), device="cpu")
-    with torch.no_grad():
-        plain.net.weights[-1].mul_(30.0)
-    assert gap(plain.eval()) > 1e-3  # a network alone learns each handedness on its own
+    assert gap(model) < 1e-5
 
 
 def test_members_with_their_own_starts_mirror_each_start_on_its_own(model):
@@ -126,12 +121,10 @@ class _RimRecorder(TransitionModel):
 
 
 @pytest.mark.parametrize("lead", ["head", "tail"])
-def test_with_rim_targets_2_the_network_sees_the_rim_at_both_held_ends_targets(lead):
-    from latent_model.move_frame import rim_vectors
+def test_the_network_sees_the_rim_at_both_held_ends_targets(lead):
+    from latent_model.move_frame import handedness, rim_vectors, to_frame
 
-    config = TransitionModelConfig(width=16, depth=1, members=2, rim_reach=0.35, rim_targets=2,
-                                   mirror=False)  # the rim in the move frame, not mirrored
-    assert config.inputs == TINY.inputs + 2
+    config = TransitionModelConfig(width=16, depth=1, members=2, rim_reach=0.35)
     model = _RimRecorder(config, device="cpu").eval()
     # A bent cord (ends 0.8 m apart) whose other end moves less than the leading one, onto
     # the rim; both targets are within the span, so the moves are not clipped.
@@ -148,7 +141,11 @@ def test_with_rim_targets_2_the_network_sees_the_rim_at_both_held_ends_targets(l
     assert float(near.norm()) > 0.5  # the other end's target is near the rim
     c, s_ = lead_move / np.linalg.norm(lead_move)
     expected = torch.tensor([c * near[0] + s_ * near[1], -s_ * near[0] + c * near[1]])
-    assert torch.allclose(model.rim[0, -1], expected.float(), atol=1e-5)  # in the move's frame
+    # In the move's frame, mirrored with the cord when it lies right of the move's line.
+    points = to_frame(torch.from_numpy(shape[None]), torch.tensor([2]),
+                      torch.from_numpy(d.astype(np.float32).reshape(1, 2, 2)))[0]
+    expected = expected.float() * handedness(points)[0]
+    assert torch.allclose(model.rim[0, -1], expected, atol=1e-5)
     assert np.abs(model.rim[0, -2].numpy()).max() == 0.0  # the lead's target is far from it
 
 
@@ -335,16 +332,22 @@ def test_save_and_load_round_trip_and_a_corrupt_file_is_refused(model, tmp_path)
         TransitionModel.load(tmp_path / "missing.pt")
 
 
-def test_a_file_from_before_rim_targets_is_refused_in_one_line():
-    old = TransitionModel(TransitionModelConfig(width=16, depth=1, members=2, rim_targets=1,
-                                                mirror=False), device="cpu")
+def test_a_file_from_before_rim_targets_or_with_a_retired_setting_is_refused_in_one_line():
+    old = TransitionModel(TransitionModelConfig(width=16, depth=1, members=2), device="cpu")
     state = old.state()
+    assert {k: state["config"][k] for k in ("rim_targets", "mirror")} == {
+        "rim_targets": 2, "mirror": True}  # files still state the retired fields
     del state["config"]["rim_targets"]  # as the files written before the field existed
     del state["config"]["mirror"]
     with pytest.raises(ValueError, match=r"^path: a transition model file from before "
                        r"rim_targets, mirror existed, which this version no longer reads: "
                        r"train it again with dlo train --stage transition$"):
         TransitionModel.from_state(state, device="cpu")
+    both = old.state()
+    both["config"].update(mirror=False, rim_targets=1)  # both handednesses, one target's rim
+    with pytest.raises(ValueError, match=r"^path: a transition model file with rim_targets=1, "
+                       r"mirror=False, which this version no longer supports"):
+        TransitionModel.from_state(both, device="cpu")
     assert TransitionModel.from_state(old.state(), device="cpu").config == old.config
 
 
@@ -358,13 +361,10 @@ def test_chain_starts_only_link_consecutive_moves_of_one_cord():
 
 @pytest.mark.slow
 def test_training_learns_resumes_and_reports(data, tmp_path):
-    tc = TransitionTrainConfig(steps=60, batch_size=64, chain_batch=16, chain_weight=0.5,
-                               eval_every=30, validation_fraction=0.2)
+    tc = TransitionTrainConfig(steps=60, batch_size=64, eval_every=30, validation_fraction=0.2)
     model = train_transition_model(data, tmp_path, tc, TINY, device="cpu")
     curve = (tmp_path / CURVE_FILE).read_text().splitlines()
     assert curve[0].startswith("step,") and len(curve) == 3
-    chain = curve[0].split(",").index("chain")
-    assert float(curve[1].split(",")[chain]) > 0  # the chain loss was trained
     untrained = TransitionModel(TINY, device="cpu")
     idx = np.flatnonzero(data.grasp == 0)
     trained_err = error(model.predict(data.start[idx], "head", data.end_displacement(idx)),
@@ -404,7 +404,7 @@ def test_the_miss_weight_counts_each_error_beyond_the_margin_more_and_nothing_be
 
 
 def test_training_can_start_from_a_saved_model(data, tmp_path):
-    tc = TransitionTrainConfig(steps=30, batch_size=64, chain_batch=16, eval_every=30,
+    tc = TransitionTrainConfig(steps=30, batch_size=64, eval_every=30,
                                validation_fraction=0.2)
     first = train_transition_model(data, tmp_path / "a", tc, TINY, device="cpu")
     still = TransitionTrainConfig(**{**tc.__dict__, "steps": 1, "lr": 1e-12,
@@ -421,28 +421,20 @@ def test_training_can_start_from_a_saved_model(data, tmp_path):
     wider = TransitionModelConfig(**{**TINY.__dict__, "width": 16})
     with pytest.raises(ValueError, match="another architecture"):
         train_transition_model(data, tmp_path / "c", still, wider, device="cpu")
-    # A model of both handednesses (mirror=False) starts a mirrored one.
-    both = TransitionModel(replace(TINY, mirror=False), device="cpu")
-    both.save(tmp_path / "both.pt")
-    from_both = TransitionTrainConfig(**{**still.__dict__, "init": str(tmp_path / "both.pt")})
-    tuned = train_transition_model(data, tmp_path / "d", from_both, TINY, device="cpu")
-    assert tuned.config.mirror
-    for mine, theirs in zip(tuned.net.parameters(), both.net.parameters()):
-        assert torch.allclose(mine, theirs, atol=1e-3)  # its weights, trained at lr 1e-12
 
 
 def test_contact_vectors_tell_a_point_at_the_wall_and_a_model_without_them_starts_one_with(
         data, tmp_path):
     from latent_model.move_frame import rim_vectors
 
-    contact = replace(TINY, contact_reach=0.03, mirror=False)
+    contact = replace(TINY, contact_reach=0.03)
     assert contact.rim_inputs == 2 * TINY.rim_inputs
     assert contact.inputs == TINY.inputs + 2 * TINY.rim_inputs
     recorder = _RimRecorder(contact, device="cpu").eval()
     shapes = _shapes(3, seed=12, margin=0.5)
     shapes[:, :, 0] += 0.985 - shapes[:, :, 0].max(axis=1, keepdims=True)  # 1.5 cm from it
     recorder.predict(shapes, "head", np.tile(np.float32([-0.05, 0.0]), (3, 1)))
-    n, k = contact.n_points, contact.n_points + contact.rim_targets
+    n, k = contact.n_points, contact.n_points + RIM_TARGETS
     assert recorder.rim.shape == (3, 2 * k, 2)
     # Moving left: in the frame the rim on the right (+x in the world) is at -x.
     near = rim_vectors(torch.from_numpy(shapes), 1.0, 0.03)  # the sharp vectors, world
@@ -458,7 +450,7 @@ def test_contact_vectors_tell_a_point_at_the_wall_and_a_model_without_them_start
                        "existed, which this version no longer reads"):
         TransitionModel.from_state(old)
     # Fine-tuning a model without contact vectors into one with them: same predictions first.
-    tc = TransitionTrainConfig(steps=20, batch_size=64, chain_batch=16, eval_every=20,
+    tc = TransitionTrainConfig(steps=20, batch_size=64, eval_every=20,
                                validation_fraction=0.2)
     first = train_transition_model(data, tmp_path / "a", tc, TINY, device="cpu")
     still = TransitionTrainConfig(**{**tc.__dict__, "steps": 1, "lr": 1e-12,
@@ -489,7 +481,7 @@ def test_contact_vectors_tell_a_point_at_the_wall_and_a_model_without_them_start
 
 
 def test_distilling_keeps_the_ensemble_and_predicts_with_the_mean_network(data, tmp_path):
-    tc = TransitionTrainConfig(steps=40, batch_size=64, chain_batch=16, eval_every=20,
+    tc = TransitionTrainConfig(steps=40, batch_size=64, eval_every=20,
                                validation_fraction=0.2)
     train_transition_model(data, tmp_path / "teacher", tc, TINY, device="cpu")
     teacher = TransitionModel.load(tmp_path / "teacher", device="cpu")  # as on disk: float16
@@ -548,7 +540,7 @@ def test_distilling_keeps_the_ensemble_and_predicts_with_the_mean_network(data, 
 
 def test_a_mean_network_by_grasp_runs_one_network_per_move_and_learns_each_grasp_apart(
         data, tmp_path):
-    tc = TransitionTrainConfig(steps=40, batch_size=64, chain_batch=16, eval_every=20,
+    tc = TransitionTrainConfig(steps=40, batch_size=64, eval_every=20,
                                validation_fraction=0.2)
     train_transition_model(data, tmp_path / "teacher", tc, TINY, device="cpu")
     distil = TransitionTrainConfig(**{**tc.__dict__, "lr": 3e-3,
@@ -586,7 +578,7 @@ def test_a_mean_network_by_grasp_runs_one_network_per_move_and_learns_each_grasp
 
 def test_a_wider_mean_network_starts_as_the_first_member_and_learns_at_its_own_width(
         data, tmp_path):
-    tc = TransitionTrainConfig(steps=20, batch_size=64, chain_batch=16, eval_every=20,
+    tc = TransitionTrainConfig(steps=20, batch_size=64, eval_every=20,
                                validation_fraction=0.2)
     teacher = train_transition_model(data, tmp_path / "teacher", tc, TINY, device="cpu")
     shapes = _shapes(8, seed=31)
@@ -659,7 +651,7 @@ def test_paired_moves_give_each_start_reachable_moves_of_its_grasp_from_other_tr
 
 def test_distilling_with_the_teachers_moves_learns_the_ensemble_on_moves_off_the_data(
         data, tmp_path):
-    tc = TransitionTrainConfig(steps=40, batch_size=64, chain_batch=16, eval_every=20,
+    tc = TransitionTrainConfig(steps=40, batch_size=64, eval_every=20,
                                validation_fraction=0.2)
     train_transition_model(data, tmp_path / "teacher", tc, TINY, device="cpu")
     teacher = TransitionModel.load(tmp_path / "teacher", device="cpu")
@@ -687,7 +679,7 @@ class _Stop(Exception):
 
 def test_an_interrupted_distillation_resumes_from_its_checkpoint_and_only_with_its_teacher(
         data, tmp_path):
-    tc = TransitionTrainConfig(steps=20, batch_size=32, chain_batch=8, eval_every=20,
+    tc = TransitionTrainConfig(steps=20, batch_size=32, eval_every=20,
                                validation_fraction=0.2)
     train_transition_model(data, tmp_path / "teacher", tc, TINY, device="cpu")
     teacher = str(tmp_path / "teacher" / "transition.pt")
@@ -717,7 +709,7 @@ def test_an_interrupted_distillation_resumes_from_its_checkpoint_and_only_with_i
 
 
 def test_a_fine_tuning_resumes_only_from_the_model_it_started_from(data, tmp_path):
-    tc = TransitionTrainConfig(steps=10, batch_size=32, chain_batch=8, eval_every=10,
+    tc = TransitionTrainConfig(steps=10, batch_size=32, eval_every=10,
                                validation_fraction=0.2)
     train_transition_model(data, tmp_path / "first", tc, TINY, device="cpu")
     init = str(tmp_path / "first" / "transition.pt")
@@ -737,7 +729,7 @@ def test_a_fine_tuning_resumes_only_from_the_model_it_started_from(data, tmp_pat
 
 
 def test_a_checkpoint_from_before_distillation_existed_is_refused_on_resume(data, tmp_path):
-    tc = TransitionTrainConfig(steps=20, batch_size=32, chain_batch=8, eval_every=10,
+    tc = TransitionTrainConfig(steps=20, batch_size=32, eval_every=10,
                                validation_fraction=0.2)
 
     def stop_at_15(step, stats):
@@ -813,7 +805,7 @@ def test_a_model_of_one_cord_starts_a_model_of_several_cords(data, tmp_path):
     so the grown model first predicts every cord as the one-cord model predicts its own."""
     from dlo_env import CordParams
 
-    tc = TransitionTrainConfig(steps=20, batch_size=64, chain_batch=16, eval_every=20,
+    tc = TransitionTrainConfig(steps=20, batch_size=64, eval_every=20,
                                validation_fraction=0.2)
     first = train_transition_model(data, tmp_path / "a", tc, replace(TINY, contact_reach=0.03),
                                    device="cpu")
@@ -870,7 +862,7 @@ def test_with_pegs_the_model_moves_the_grippers_as_the_simulator_does(grasp, mov
 
 
 def test_a_model_that_sees_pegs_is_equivariant_and_sees_nothing_far_from_them():
-    config = replace(TINY, members=2, rim_targets=2, peg_reach=0.1)
+    config = replace(TINY, members=2, peg_reach=0.1)
     model = TransitionModel(config, device="cpu")
     rng = np.random.default_rng(0)
     shape = np.stack([np.linspace(-0.4, 0.4, 20), 0.05 * np.sin(np.linspace(0, 3, 20))], 1)
@@ -897,7 +889,7 @@ def test_a_model_that_sees_pegs_is_equivariant_and_sees_nothing_far_from_them():
 
 
 def test_peg_inputs_added_at_zero_weight_predict_as_the_model_without_them():
-    plain = TransitionModel(replace(TINY, members=2, rim_targets=2), device="cpu")
+    plain = TransitionModel(replace(TINY, members=2), device="cpu")
     config = replace(plain.config, peg_reach=0.1)
     seeing = TransitionModel(config, device="cpu")
     seeing.net.load_state_dict(plain.net.with_inputs(plain.config.peg_at,
