@@ -244,7 +244,7 @@ def _check_observation(name: str, policy: Any, env: Any) -> None:
         pegs = getattr(env.unwrapped, "max_pegs", 0)
         raise ValueError(f"agent {name!r} was trained on observations of shape {got}, but this "
                          f"environment observes {want} (max_pegs={pegs}: 3 numbers per peg "
-                         "slot): train one there (dlo baseline trains on the empty table)")
+                         "slot): train one there (dlo baseline --max-pegs)")
 
 
 #: Every agent by name, in the benchmark's table order.

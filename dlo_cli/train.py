@@ -71,7 +71,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--init", default=None,
                         help="--stage transition: start from this transition model file "
                              "(fine-tuning; the same architecture, or one without the contact "
-                             "vectors of --contact-reach), None: random weights")
+                             "vectors of --contact-reach, the cord inputs of --cord-inputs or "
+                             "the peg vectors of --peg-reach, which start at zero weight), "
+                             "None: random weights")
     parser.add_argument("--teacher", default=None,
                         help="--stage transition: distil a mean network for this transition "
                              "model file (its ensemble is kept; predict then runs one network)")

@@ -106,8 +106,13 @@ def current_config(config: dict[str, Any]) -> dict[str, Any]:
 
 
 def saved_config(config: TransitionModelConfig) -> dict[str, Any]:
-    """``config`` as files store it: with the ``RETIRED_CONFIG`` fields."""
-    return {**asdict(config), **RETIRED_CONFIG}
+    """``config`` as files store it: with the ``RETIRED_CONFIG`` fields, and without the peg
+    fields of a model that does not see pegs (so earlier versions still read its file)."""
+    saved = {**asdict(config), **RETIRED_CONFIG}
+    if not config.peg_reach:
+        for key in ("peg_reach", "peg_radius"):
+            saved.pop(key)
+    return saved
 
 
 def _grasp_argument(grasp: str | None, end: str | None) -> str:
@@ -659,17 +664,18 @@ class TransitionModel(nn.Module):
     def reachable_moves(self, shapes: np.ndarray, grasp: str | None = None,
                         displacement: np.ndarray | None = None, *, end: str | None = None,
                         params: Any = None, pegs: np.ndarray | None = None,
-                        peg_radius: float = PEG_RADIUS) -> np.ndarray:
+                        peg_radius: float | None = None) -> np.ndarray:
         """``(B, 2, 2)`` displacement of [head, tail] the grippers really make, zero for an end
         not held: the move carried out as ``split_move`` actions, each clipped by the rule of
         ``Cord.move`` (targets on the table, both ends within the span of the cord, ``params``
         as in ``predict``; with ``pegs``, ``(m, 2)`` centres or ``(B, m, 2)`` each shape's own,
         a move stops where a gripper would touch one). ``end`` is the deprecated name of
-        ``grasp``."""
+        ``grasp``; ``peg_radius`` None: ``config.peg_radius``)."""
         grasp = _grasp_argument(grasp, end)
         if displacement is None:
             raise ValueError("displacement is required")
         pegs = None if pegs is None else padded_pegs(pegs, len(shapes)).astype(np.float64)
+        peg_radius = self.config.peg_radius if peg_radius is None else float(peg_radius)
         if params is not None and grasp == "both":  # only the span, of two ends, is the cord's
             moves = np.zeros((len(shapes), 2, 2), dtype=np.float32)
             disp = np.asarray(displacement).reshape(len(shapes), -1)
@@ -690,13 +696,17 @@ class TransitionModel(nn.Module):
         # straight lines, which is largest at the path's start or end. So a move whose start
         # and end obey the rule is never clipped on the way; only the others are walked.
         walk = (reachable_targets(start, params) != start).any(axis=(1, 2))
+        clipped = (reachable_targets(pos, params) != pos).any(axis=(1, 2))
+        has_pegs = pegs is not None and pegs.size > 0
         if len(ends) == 1:
             # One end: the rule only clips to a box, and clipping after every step of a
-            # straight path is clipping its end point, when the start is inside the box.
+            # straight path is clipping its end point, when the start is inside the box
+            # (among pegs a clipped path slides along the edge: walked).
             pos = reachable_targets(pos, params)
+            if has_pegs:
+                walk |= clipped
         else:
-            walk |= (reachable_targets(pos, params) != pos).any(axis=(1, 2))
-        has_pegs = pegs is not None and pegs.size > 0
+            walk |= clipped
         if has_pegs:  # a path that meets a peg stops there: walked too
             walk |= peg_contact(start, d, pegs, peg_radius + LINK_RADIUS + PEG_GUARD) < 1.0
         if walk.any():  # step by step, as the environment's actions go
@@ -748,7 +758,7 @@ class TransitionModel(nn.Module):
     def predict(self, shapes: Any, grasp: str | None = None, displacement: Any = None,
                 params: Any = None, return_std: bool = False, members: int | None = None,
                 inextensible: bool = True, *, end: str | None = None,
-                pegs: np.ndarray | None = None, peg_radius: float = PEG_RADIUS
+                pegs: np.ndarray | None = None, peg_radius: float | None = None
                 ) -> np.ndarray | tuple[np.ndarray, np.ndarray]:
         """The shape at rest after one straight move of the held end(s).
 
@@ -784,7 +794,7 @@ class TransitionModel(nn.Module):
                 shape's own, ``PEG_FAR`` in empty slots) and their radius: a move stops where a
                 gripper would touch one, as in the simulator (``reachable_moves``). A model
                 with ``config.peg_reach`` also sees them; one without does not predict the
-                cord's contact with them.
+                cord's contact with them. ``peg_radius`` None: ``config.peg_radius``.
         """
         grasp = _grasp_argument(grasp, end)
         if displacement is None:

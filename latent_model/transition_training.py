@@ -331,10 +331,6 @@ def train_transition_model(
         raise ValueError(f"out {str(out)!r} holds a training checkpoint; pass resume=True "
                          "(--resume) to continue it, or choose another folder")
     mc = model_config if model_config is not None else TransitionModelConfig()
-    if len(data) and data.peg_count.any() and not mc.peg_reach:
-        raise ValueError("data holds transitions around pegs (collected with max_pegs); a "
-                         "model without peg_reach (--peg-reach) does not see pegs: give it one, "
-                         "or use data of an empty table")
     # A model of one cord learns the cord its data's metadata names; a cord-conditioned one
     # (cord_inputs) the cords of every transition, its own being the default cord's length.
     conditioned = mc.cord_inputs or bool(
@@ -356,9 +352,16 @@ def train_transition_model(
         raise ValueError("model_config.mean_network: a mean network is made by distilling a "
                          "trained ensemble (TransitionTrainConfig.teacher, --teacher), not "
                          "trained with it")
+    collected = data.metadata.get("collect", {})
+    if mc.peg_reach and "peg_radius" in collected:  # the pegs the data went around
+        mc = replace(mc, peg_radius=float(collected["peg_radius"]))
     teacher = init_record = None
     if tc.teacher:
         teacher, mc = _distil_from(tc.teacher, mc)
+    if len(data) and data.peg_count.any() and not mc.peg_reach:
+        raise ValueError("data holds transitions around pegs (collected with max_pegs); a "
+                         "model without peg_reach (--peg-reach) does not see pegs: give it one, "
+                         "or use data of an empty table")
     torch.manual_seed(tc.seed)
     model = model_class(mc, device=device)
     trained = model.net

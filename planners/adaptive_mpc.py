@@ -132,6 +132,7 @@ class AdaptiveLatentMPCPolicy(LatentMPCPolicy):
         policy = cls(model, grasp=base.cord.grasp, success_threshold=base.success_threshold,
                      config=config, success_metric=base.success_metric, adapt=adapt)
         policy.check_env(env)
+        policy.peg_radius = base.peg_radius  # of the pegs it will observe
         return policy
 
     def reset(self) -> None:

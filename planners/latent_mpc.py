@@ -116,6 +116,7 @@ class LatentMPCPolicy(CEMPolicy):
         policy = cls(model, grasp=base.cord.grasp, success_threshold=base.success_threshold,
                      config=config, success_metric=base.success_metric)
         policy.check_env(env)
+        policy.peg_radius = base.peg_radius  # of the pegs it will observe
         return policy
 
     def check_env(self, env: object) -> None:
@@ -135,6 +136,11 @@ class LatentMPCPolicy(CEMPolicy):
             raise ValueError(f"the policy moves grasp {self.grasp!r} but the environment holds "
                              f"{base.cord.grasp!r}")
         self._check_threshold(base)
+
+    def reset(self) -> None:
+        """Forget the plan and the pegs last observed (see ``CEMPolicy.reset``)."""
+        super().reset()
+        self._pegs: np.ndarray | None = None
 
     def _act(self, obs: CordObservation) -> np.ndarray:
         """Plan with the pegs the observation shows (their stop rule on the grippers), then act
@@ -162,7 +168,7 @@ class LatentMPCPolicy(CEMPolicy):
         stopping at the observed pegs."""
         pegs = getattr(self, "_pegs", None)
         if pegs is not None and len(pegs):
-            kw = {**kw, "pegs": pegs}
+            kw = {**kw, "pegs": pegs, "peg_radius": getattr(self, "peg_radius", None)}
         return self.model.predict(shapes, self.grasp, moves, **kw)
 
     def _execute(self, plan: np.ndarray) -> list[np.ndarray]:

@@ -919,3 +919,28 @@ def test_a_model_that_sees_pegs_trains_on_data_around_pegs(tmp_path):
     args = (data.start[i], name, data.end_displacement(np.array([i]))[0])
     np.testing.assert_allclose(loaded.predict(*args, pegs=data.peg_list(i)),
                                model.predict(*args, pegs=data.peg_list(i)), atol=1e-3)
+    # Its mean network is distilled on the same data (the teacher sees the pegs).
+    student = train_transition_model(
+        data, tmp_path / "mean", TransitionTrainConfig(
+            steps=2, batch_size=16, eval_every=2, teacher=str(tmp_path / "m" / "transition.pt")))
+    assert student.config.peg_reach == 0.1 and student.mean_net is not None
+
+
+def test_a_gripper_sliding_along_the_edge_stops_at_a_peg_there_as_in_the_simulator():
+    from dlo_env.cord import Cord
+    from dlo_env.tasks import apply_action, split_move
+
+    model = TransitionModel(replace(TINY, members=2), device="cpu")
+    # The head at x = 0.9, 10 cm from the right edge.
+    shape = np.stack([np.linspace(0.9, -0.1, 20), np.zeros(20)], 1).astype(np.float32)
+    pegs = np.array([[0.97, 0.5]])
+    d = np.array([0.5, 1.0])  # clipped at the edge, then sliding up into the peg
+    cord = Cord(pegs=pegs)
+    cord.reset(shape)
+    before = cord.gripper_positions()["head"]
+    for action in split_move(d, model.config.max_step):
+        apply_action(cord, action, model.config.max_step)
+    real = cord.gripper_positions()["head"] - before
+    moves = model.reachable_moves(shape[None], "head", d[None], pegs=pegs)[0]
+    np.testing.assert_allclose(moves[0], real, atol=1e-6)
+    assert real[1] < 0.6  # the peg stopped it
