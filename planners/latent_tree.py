@@ -264,6 +264,9 @@ class LatentTreePlanner:
         self.seed = int(seed)
         self._end = list(ENDS[self.config.grasp])  # indices of the held points
         self.transition_model = transition_model
+        #: ``(m, 2)`` centres of the pegs on the table (None: none): the straight-move edges'
+        #: grippers stop at them (``PlannerPolicy`` sets them from each observation).
+        self.pegs: np.ndarray | None = None
         if self.config.edges == "moves":
             if transition_model is None:
                 raise ValueError('edges="moves" needs a transition_model (a '
@@ -541,6 +544,7 @@ class LatentTreePlanner:
         # with; the projection's fixed cost per call adds up over the tree's many small calls.
         predicted = self.transition_model.predict(
             np.repeat(shapes, m, axis=0), self.config.grasp, flat, inextensible=False,
+            **({} if self.pegs is None else {"pegs": self.pegs}),
         ).reshape(b, m, self.n_points, 2)
         errs = np.asarray(error(predicted, targets[:, None])).reshape(b, m)
         pick = errs.argmin(axis=1)

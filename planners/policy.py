@@ -305,6 +305,9 @@ class PlannerPolicy(EpisodicPolicy):
         """The next action: plan at the episode's first step; closed loop, check the plan
         (and replan) when due, after letting the cord come to rest."""
         closed = self.replan_every is not None or self.moves_per_plan is not None
+        # The pegs the observation shows: a planner with straight-move edges stops its
+        # predicted grippers at them (none when the environment has no pegs).
+        self.planner.pegs = obs.pegs if len(obs.pegs) else None
         moving = self._previous is not None and float(
             np.abs(obs.shape - self._previous).max()) > REST_MOTION
         self._previous = obs.shape

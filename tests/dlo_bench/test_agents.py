@@ -109,3 +109,24 @@ def test_a_policy_trained_on_the_empty_table_is_refused_where_pegs_are_observed(
                                              r"\(42,\), but this environment observes \(48,\)"):
             build_agent("ppo", env)
         build_agent("latent-mpc", env)  # planners read the pegs, or ignore them
+
+
+@pytest.mark.parametrize("name", ["latent-mpc", "latent-tree-kino"])
+def test_planners_on_the_transition_model_pass_it_the_pegs_they_observe(name):
+    from dlo_env.peg_suites import load_peg_suite
+
+    task = load_peg_suite("pegs-1", limit=3)[2]  # three pegs
+    with gym.make("dlo_env/DLOEndpoint-v0", max_pegs=4) as env:
+        policy = build_agent(name, env)
+        model = policy.planner.transition_model if name == "latent-tree-kino" else policy.model
+        seen = []
+        predict = model.predict
+
+        def spy(*args, **kwargs):
+            seen.append(kwargs.get("pegs"))
+            return predict(*args, **kwargs)
+
+        model.predict = spy
+        obs, _ = env.reset(options={"task": task})
+        policy.predict(obs, episode_start=np.array([True]), deterministic=True)
+    assert seen and all(p is not None and np.array_equal(p, task.pegs) for p in seen)
