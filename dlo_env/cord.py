@@ -139,6 +139,15 @@ def peg_clearance(shape: np.ndarray, pegs: np.ndarray, peg_radius: float = PEG_R
     return float(np.sqrt((gap * gap).sum(-1)).min()) - peg_radius
 
 
+def check_not_crossing(shape: np.ndarray, pegs: np.ndarray, peg_radius: float, name: str
+                       ) -> None:
+    """Refuse (one-line ``ValueError`` naming ``name``) a shape whose centre line passes
+    inside a peg; one resting against a peg (closer than ``LINK_RADIUS``, as the simulator
+    leaves it) is fine."""
+    if len(pegs) and peg_clearance(shape, pegs, peg_radius) < 0:
+        raise ValueError(f"{name} crosses a peg (its centre line passes inside one)")
+
+
 def peg_contact(starts: np.ndarray, moves: np.ndarray, pegs: np.ndarray, reach: float
                 ) -> np.ndarray:
     """The share of a straight move at which a held end first comes within ``reach`` of a peg.

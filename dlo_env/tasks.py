@@ -33,6 +33,7 @@ from dlo_env.cord import (
     Cord,
     CordParams,
     Grasp,
+    check_not_crossing,
     check_pegs,
     peg_clearance,
 )
@@ -411,8 +412,8 @@ def make_task(
         start = cord.shape
     else:
         start = validate_shape(start, n_points=p.n_points, length=p.length, name="start")
-        if fixed is not None and len(fixed) and peg_clearance(start, fixed, peg_radius) < 0:
-            raise ValueError("start: the cord crosses a peg (its centre line passes inside one)")
+        if fixed is not None:
+            check_not_crossing(start, fixed, peg_radius, "start: the cord")
     if count:
         cord.set_pegs(draw_pegs(rng, count, start, peg_radius))
     for _ in range(100):

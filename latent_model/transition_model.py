@@ -696,13 +696,14 @@ class TransitionModel(nn.Module):
         # straight lines, which is largest at the path's start or end. So a move whose start
         # and end obey the rule is never clipped on the way; only the others are walked.
         walk = (reachable_targets(start, params) != start).any(axis=(1, 2))
-        clipped = (reachable_targets(pos, params) != pos).any(axis=(1, 2))
+        clip = reachable_targets(pos, params)  # once: this runs for every planned move
+        clipped = (clip != pos).any(axis=(1, 2))
         has_pegs = pegs is not None and pegs.size > 0
         if len(ends) == 1:
             # One end: the rule only clips to a box, and clipping after every step of a
             # straight path is clipping its end point, when the start is inside the box
             # (among pegs a clipped path slides along the edge: walked).
-            pos = reachable_targets(pos, params)
+            pos = clip
             if has_pegs:
                 walk |= clipped
         else:

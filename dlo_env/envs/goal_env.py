@@ -16,7 +16,7 @@ import gymnasium as gym
 import numpy as np
 from gymnasium import spaces
 
-from dlo_env.cord import PEG_RADIUS, Cord, CordParams, Grasp, check_pegs, peg_clearance
+from dlo_env.cord import PEG_RADIUS, Cord, CordParams, Grasp, check_not_crossing, check_pegs
 from dlo_env.randomize import check_params, check_randomize, draw_params
 from dlo_env.shapes import (
     SUCCESS_METRICS,
@@ -386,13 +386,6 @@ class CordGoalEnv(gym.Env[dict[str, np.ndarray], np.ndarray]):
                              f"{len(pegs)}) (max_pegs={self.max_pegs})")
         return pegs
 
-    def _check_clear(self, shape: np.ndarray, pegs: np.ndarray, name: str) -> None:
-        # A cord the simulator brought to rest against a peg lies a little less than
-        # LINK_RADIUS from it; only one crossing a peg cannot be.
-        if len(pegs) and peg_clearance(shape, pegs, self.peg_radius) < 0:
-            raise ValueError(f"options['{name}'] crosses a peg (its centre line passes inside "
-                             "one)")
-
     def _episode(self, options: dict
                  ) -> tuple[np.ndarray, np.ndarray, Task | None, CordParams, np.ndarray]:
         unknown = sorted(set(options) - set(_OPTIONS))
@@ -418,7 +411,7 @@ class CordGoalEnv(gym.Env[dict[str, np.ndarray], np.ndarray]):
         given = pegs if pegs is not None else np.zeros((0, 2), dtype=np.float32)
         for name, shape in (("start", start), ("goal", goal)):
             if shape is not None:
-                self._check_clear(shape, given, name)
+                check_not_crossing(shape, given, self.peg_radius, f"options['{name}']")
         if goal is not None and start is not None:
             return start, goal, None, p, given
         seed = int(self.np_random.integers(2**31 - 1))
