@@ -65,6 +65,7 @@ class AgentSpec:
             section only (the cord suites, ``dlo_env.cord_suites``).
         train: How its trained model or policy is made, for messages about a missing one
             (``{env}``: the environment id).
+        no_pegs: Why it cannot act where pegs are observed ("": it can).
         defaults: ``AgentOptions`` fields this agent sets differently.
     """
 
@@ -77,11 +78,18 @@ class AgentSpec:
     transition_model: bool = False
     cords: bool = False
     train: str = ""
+    no_pegs: str = ""
     defaults: Mapping[str, Any] = field(default_factory=dict)
 
 
 def _max_step(env: Any) -> float:
     return float(env.unwrapped.max_step)
+
+
+def observes_pegs(env: Any) -> bool:
+    """Whether ``env`` observes pegs (``max_pegs > 0``): its RL agents are those trained
+    there (``dlo baseline --max-pegs``)."""
+    return int(getattr(env.unwrapped, "max_pegs", 0)) > 0
 
 
 def _loaded_or_file(model: Any, loaded: type, load: Callable[[Any], Any], what: str,
@@ -215,8 +223,17 @@ def _sb3(algo: str, shipped: str = "", cords: str = "") -> Callable[[Any, AgentO
     def build(env: Any, options: AgentOptions) -> Policy:
         from dlo_bench.baselines import load_baseline
 
-        folder = (options.baseline if options.baseline is not None
-                  else shipped_baseline(shipped or algo, env.unwrapped.spec.id))
+        folder = options.baseline
+        if folder is None:
+            env_id, pegs = env.unwrapped.spec.id, observes_pegs(env)
+            folder = shipped_baseline(shipped or algo, env_id, pegs=pegs)
+            if not folder.is_dir():
+                where = f" where {env.unwrapped.max_pegs} pegs are observed" if pegs else ""
+                raise FileNotFoundError(
+                    f"no {shipped or algo} trained{where} in {env_id} is shipped ({folder.name}/):"
+                    f" train one with `dlo baseline --algo {algo} --env {env_id}"
+                    + (f" --max-pegs {env.unwrapped.max_pegs}" if pegs else "")
+                    + "` and run it as agent sb3:FOLDER")
         return load_baseline(folder, device=options.device, algo=algo, cords=cords)
 
     return build
@@ -274,7 +291,8 @@ AGENTS: dict[str, AgentSpec] = {spec.name: spec for spec in (
               train="dlo baseline --algo sac-her --env {env}"),
     AgentSpec("bc", "behaviour cloning of the oracle demonstrations (Minari datasets)", _bc,
               environments=(ENDPOINT, DUAL_ENDPOINT), extra="rl",
-              train="dlo_bench.behaviour_cloning.train_bc for {env}"),
+              train="dlo_bench.behaviour_cloning.train_bc for {env}",
+              no_pegs="its demonstrations (the oracle's Minari datasets) have no pegs"),
     AgentSpec("latent-mpc-adaptive", "latent-mpc on the model of several cords, fitting the "
               "cord to the episode's moves after each one", _latent_mpc_adaptive,
               environments=(ENDPOINT, DUAL_ENDPOINT), extra="model", transition_model=True,
@@ -335,6 +353,8 @@ def build_agent(name: str, env: Any, **options: Any) -> Policy:
     if env_id is not None and env_id not in spec.environments:
         raise ValueError(f"agent {name!r} acts in {', '.join(spec.environments)}, "
                          f"got environment {env_id!r}")
+    if spec.no_pegs and observes_pegs(env):
+        raise ValueError(f"agent {name!r} does not act where pegs are observed: {spec.no_pegs}")
     given = {k: v for k, v in options.items() if v is not None}  # None: the default
     policy = spec.build(env, replace(AgentOptions(), **{**spec.defaults, **given}))
     _check_observation(name, policy, env)

@@ -10,7 +10,11 @@ on the cord at rest; the planners take their stopping rules from it). The design
 in every environment; their rows add the errors per curve family beside the reference errors
 of :mod:`dlo_bench.reference`. The ``cords`` section runs the cord suites (``cords-3``: each
 task on a held-out cord the agents are not told, :mod:`dlo_env.cord_suites`) with the agents
-of ``CORD_AGENTS``, at the headline threshold. An agent that does not act
+of ``CORD_AGENTS``, at the headline threshold. The ``pegs`` section runs the peg suites
+(``pegs-K``: goals made by K moves among pegs; ``route-K``: goals that need the cord routed
+around a peg, :mod:`dlo_env.peg_suites`) with the agents of ``PEG_AGENTS`` in an environment
+that observes the pegs, at the headline threshold; its RL agents are those trained there
+(``dlo baseline --max-pegs``). An agent that does not act
 in an environment, or whose model is missing, gets a row that says so, never silently none.
 Every row states the agent's sample cost: the data its model or policy was trained on. Every
 finished (agent, environment, suite, threshold) cell is written at once, so an interrupted
@@ -42,6 +46,7 @@ from dlo_bench.agents import (
     ENDPOINT,
     build_agent,
     load_transition_model,
+    observes_pegs,
 )
 from dlo_bench.evaluation import (
     EpisodeRecord,
@@ -63,6 +68,7 @@ from dlo_env.atomic import file_digest
 from dlo_env.cord_suites import CORD_SUITES
 from dlo_env.designed_suites import DESIGNED_SUITES
 from dlo_env.envs import ENVIRONMENTS
+from dlo_env.peg_suites import PEG_SUITES, ROUTE_SUITES, SUITE_MAX_PEGS
 from dlo_env.tasks import SPLIT_SIZES, SUITES
 from planners.interfaces import Policy, ShapeSurrogate
 from planners.policy import DEFAULT_REPLAN_EVERY
@@ -84,6 +90,14 @@ CORD_AGENTS = ("straight-line", "latent-mpc", "latent-mpc-adaptive", "physics-mp
                "physics-mpc-true-cord", "sac-her-cords")
 #: The environments of the ``cords`` section.
 CORD_ENVS = (ENDPOINT,)
+#: Every suite with pegs on the table, by name: the ``pegs`` section's choices.
+PEGGED_SUITES = {**PEG_SUITES, **ROUTE_SUITES}
+#: The suites of the ``pegs`` section (goals made among pegs; goals that need routing).
+DEFAULT_PEGS = tuple(PEGGED_SUITES)
+#: The agents of the ``pegs`` section, in table order: every agent of the main table.
+PEG_AGENTS = tuple(name for name, spec in AGENTS.items() if not spec.cords)
+#: The environments of the ``pegs`` section.
+PEG_ENVS = (ENDPOINT,)
 #: Episodes of every cell in ``--quick`` runs.
 QUICK_EPISODES = 2
 #: Subfolder of the output folder holding one CSV/JSON of episodes per cell.
@@ -110,6 +124,12 @@ class BenchmarkConfig:
         cord_agents: The agents of the ``cords`` section, when it runs (the agents marked
             ``cords`` in the registry run only there).
         cord_envs: The environments of the ``cords`` section.
+        pegs: Suites with pegs (``dlo_env.peg_suites``: ``pegs-K``, ``route-K``) of the
+            ``pegs`` section, run at the designed threshold in an environment observing
+            ``SUITE_MAX_PEGS`` pegs (none by default here; ``dlo benchmark`` runs
+            ``DEFAULT_PEGS``).
+        peg_agents: The agents of the ``pegs`` section, when it runs.
+        peg_envs: The environments of the ``pegs`` section.
         episodes: Episodes per cell (the first tasks of the split; the split has 50).
         seed: Seed of the planners' sampling.
         baselines: Folder with one ``dlo baseline`` output folder per RL agent and environment
@@ -120,6 +140,9 @@ class BenchmarkConfig:
             (None: the shipped one).
         cords_transition_model: Transition model of several cords of the agents marked
             ``cords`` (latent-mpc-adaptive; None: the shipped ``transition-cords.pt``).
+        pegs_transition_model: Transition model of the agents of the ``pegs`` section (a
+            model that sees pegs, ``dlo train --stage transition --peg-reach``; None: the one
+            of ``transition_model``).
         replan_every: Steps between replans of ``latent-tree-closed``.
         max_seconds: Time budget of one latent-tree plan (None: the planner's default).
         fidelity: Compute the transition fidelity of each first latent-tree plan.
@@ -133,21 +156,25 @@ class BenchmarkConfig:
     cords: tuple[str, ...] = ()
     cord_agents: tuple[str, ...] = CORD_AGENTS
     cord_envs: tuple[str, ...] = CORD_ENVS
+    pegs: tuple[str, ...] = ()
+    peg_agents: tuple[str, ...] = PEG_AGENTS
+    peg_envs: tuple[str, ...] = PEG_ENVS
     episodes: int = SPLIT_SIZES["test"]
     seed: int = 0
     baselines: str | None = None
     model: str | None = None
     transition_model: str | None = None
     cords_transition_model: str | None = None
+    pegs_transition_model: str | None = None
     replan_every: int = DEFAULT_REPLAN_EVERY
     max_seconds: float | None = None
     fidelity: bool = True
 
     def __post_init__(self) -> None:
         unknown = [a for a in self.agents if a not in AGENTS]
-        if unknown or not (self.agents or self.cord_agents):
-            raise ValueError(f"agents must be a tuple of {tuple(AGENTS)} (with cord_agents, "
-                             f"not both empty), got {self.agents!r}")
+        if unknown or not (self.agents or self.cord_agents or self.peg_agents):
+            raise ValueError(f"agents must be a tuple of {tuple(AGENTS)} (with cord_agents "
+                             f"and peg_agents, not all empty), got {self.agents!r}")
         cords_only = [a for a in self.agents if AGENTS[a].cords]
         if cords_only:
             raise ValueError(f"agents must not name agents of the cords section only "
@@ -155,14 +182,23 @@ class BenchmarkConfig:
         if any(a not in AGENTS for a in self.cord_agents):
             raise ValueError(f"cord_agents must be some of {tuple(AGENTS)}, "
                              f"got {self.cord_agents!r}")
-        bad_envs = [e for e in (*self.envs, *self.cord_envs) if e not in ENVIRONMENTS]
+        if any(a not in AGENTS or AGENTS[a].cords for a in self.peg_agents):
+            raise ValueError(f"peg_agents must be some of {PEG_AGENTS}, "
+                             f"got {self.peg_agents!r}")
+        bad_envs = [e for e in (*self.envs, *self.cord_envs, *self.peg_envs)
+                    if e not in ENVIRONMENTS]
         if bad_envs or not self.envs:
-            raise ValueError(f"envs and cord_envs must be some of {tuple(ENVIRONMENTS)} (envs "
-                             f"not empty), got {self.envs!r} and {self.cord_envs!r}")
+            raise ValueError(f"envs, cord_envs and peg_envs must be some of "
+                             f"{tuple(ENVIRONMENTS)} (envs not empty), got {self.envs!r}, "
+                             f"{self.cord_envs!r} and {self.peg_envs!r}")
         if any(c not in CORD_SUITES for c in self.cords) or len(set(self.cords)) < len(
                 self.cords):
             raise ValueError(f"cords must be distinct suites of {tuple(CORD_SUITES)}, "
                              f"got {self.cords!r}")
+        if any(p not in PEGGED_SUITES for p in self.pegs) or len(set(self.pegs)) < len(
+                self.pegs):
+            raise ValueError(f"pegs must be distinct suites of {tuple(PEGGED_SUITES)}, "
+                             f"got {self.pegs!r}")
         if self.difficulties is not None:
             bad = [d for d in self.difficulties if d not in SUITE_OF_DIFFICULTY]
             if bad:
@@ -178,8 +214,8 @@ class BenchmarkConfig:
             raise ValueError(f"designed must be distinct suites of {tuple(DESIGNED_SUITES)}, "
                              f"got {self.designed!r}")
         if not self.cells():
-            raise ValueError("the benchmark has no cell to run: give difficulties, designed or "
-                             "cord suites (with agents of the cords section)")
+            raise ValueError("the benchmark has no cell to run: give difficulties, designed, "
+                             "cord or peg suites (with agents of their sections)")
         size = SPLIT_SIZES["test"]
         if not (isinstance(self.episodes, int) and 1 <= self.episodes <= size):
             raise ValueError(f"episodes must be an int in 1..{size} (the test split), "
@@ -188,7 +224,8 @@ class BenchmarkConfig:
     def cells(self, agent: str | None = None) -> list[tuple[str, str, float]]:
         """``(env_id, suite, threshold)`` of every cell (of ``agent``'s, when given), in table
         order: the linear suites at every threshold, the designed ones at the headline
-        threshold, then the cord suites of the ``cords`` section."""
+        threshold, then the cord suites of the ``cords`` section and the peg suites of the
+        ``pegs`` section."""
         cells: list[tuple[str, str, float]] = []
         if (agent is None and self.agents) or agent in self.agents:
             cells += [(env, SUITE_OF_DIFFICULTY[d], t) for t in self.thresholds
@@ -201,13 +238,17 @@ class BenchmarkConfig:
             # (no cells without cord suites)
             cells += [(env, suite, self.designed_threshold) for suite in self.cords
                       for env in self.cord_envs]
+        if (agent is None and self.peg_agents) or agent in self.peg_agents:
+            cells += [(env, suite, self.designed_threshold) for suite in self.pegs
+                      for env in self.peg_envs]
         return cells
 
     @property
     def all_agents(self) -> tuple[str, ...]:
         """Every agent of the run, in table order: ``agents``, then the rest of
-        ``cord_agents`` (when cord suites run)."""
-        return tuple(dict.fromkeys((*self.agents, *(self.cord_agents if self.cords else ()))))
+        ``cord_agents`` (when cord suites run) and of ``peg_agents`` (when peg suites run)."""
+        return tuple(dict.fromkeys((*self.agents, *(self.cord_agents if self.cords else ()),
+                                    *(self.peg_agents if self.pegs else ()))))
 
     @property
     def designed_threshold(self) -> float:
@@ -245,6 +286,8 @@ class LoadedAgent:
         sample_cost: What it was trained on, in words.
         models: The files of its models (none for model-free planners).
         settings: Its planner's settings (``repr`` of its config), part of the resume key.
+        applicable: False when the agent cannot act there at all (``missing`` says why): its
+            cells read "n/a", not "missing".
     """
 
     name: str
@@ -254,6 +297,7 @@ class LoadedAgent:
     sample_cost: str = ""
     models: tuple[str, ...] = ()
     settings: str = ""
+    applicable: bool = True
 
 
 def policy_settings(policy: Any) -> str:
@@ -269,12 +313,14 @@ def policy_settings(policy: Any) -> str:
     return "; ".join(p for p in parts if p and p != "''")
 
 
-def _baseline_folder(name: str, config: BenchmarkConfig, env_id: str) -> Path:
+def _baseline_folder(name: str, config: BenchmarkConfig, env_id: str,
+                     pegs: bool = False) -> Path:
     """Where the RL agent ``name`` for ``env_id`` is read: ``ppo/`` for ``DLOEndpoint-v0``,
-    ``ppo-dual-endpoint/`` for ``DLODualEndpoint-v0`` (in ``config.baselines`` or shipped)."""
+    ``ppo-dual-endpoint/`` for ``DLODualEndpoint-v0``, ``ppo-pegs/`` where pegs are observed
+    (in ``config.baselines`` or shipped)."""
     if config.baselines:
-        return Path(config.baselines) / baseline_folder_name(name, env_id)
-    return shipped_baseline(name, env_id)
+        return Path(config.baselines) / baseline_folder_name(name, env_id, pegs)
+    return shipped_baseline(name, env_id, pegs)
 
 
 def _steps(count: int) -> str:
@@ -298,17 +344,23 @@ def load_agent(name: str, config: BenchmarkConfig, env: Any,
     env_id = env.unwrapped.spec.id
     if env_id not in spec.environments:
         return LoadedAgent(name, None, missing=f"acts only in {', '.join(spec.environments)}")
+    pegs = observes_pegs(env)
+    if pegs and spec.no_pegs:
+        return LoadedAgent(name, None, missing=f"does not act among pegs: {spec.no_pegs}",
+                           applicable=False)
     if spec.extra == "rl":
         from dlo_bench.baselines import read_baseline_metadata
 
-        folder = _baseline_folder(name, config, env_id)
+        folder = _baseline_folder(name, config, env_id, pegs)
+        train = spec.train.format(env=env_id) + (
+            f" --max-pegs {env.unwrapped.max_pegs}" if pegs else "")
         try:
             meta = read_baseline_metadata(folder)
             policy = build_agent(name, env, baseline=folder)
         except FileNotFoundError:
             return LoadedAgent(name, None, missing=(
-                f"no trained model for {env_id} in {baseline_folder_name(name, env_id)}/ (train "
-                f"one with `{spec.train.format(env=env_id)}`)"))
+                f"no trained model for {env_id}{' with pegs' if pegs else ''} in "
+                f"{baseline_folder_name(name, env_id, pegs)}/ (train one with `{train}`)"))
         except ValueError as exc:
             return LoadedAgent(name, None, missing=f"no usable model for {env_id}: "
                                                    f"{exc}".splitlines()[0])
@@ -332,7 +384,11 @@ def load_agent(name: str, config: BenchmarkConfig, env: Any,
         shapes = getattr(shape_model, "info", {}).get("n_train")
         costs.append(f"{_steps(shapes)} simulated shapes" if shapes else "simulated shapes")
     if spec.transition_model:
-        path = config.cords_transition_model if spec.cords else config.transition_model
+        path = config.transition_model
+        if spec.cords:
+            path = config.cords_transition_model
+        elif pegs and config.pegs_transition_model:
+            path = config.pegs_transition_model
         try:
             transition = load_transition_model(path, cords=spec.cords)
         except (FileNotFoundError, ValueError) as exc:
@@ -398,7 +454,8 @@ def cell_key(config: BenchmarkConfig, agent: LoadedAgent, env_id: str,
     """What a cell's result depends on; a saved cell is reused only when its key matches."""
     key = asdict(config)
     for name in ("agents", "envs", "difficulties", "thresholds", "designed", "cords",
-                 "cord_agents", "cord_envs", "cords_transition_model"):
+                 "cord_agents", "cord_envs", "cords_transition_model", "pegs", "peg_agents",
+                 "peg_envs", "pegs_transition_model"):
         key.pop(name)  # the model file used is in the key by its digest
     where = {"difficulty": SUITES[suite]} if suite in SUITES else {"suite": suite}
     return {**key, "agent": agent.name, "env_id": env_id, **where, "threshold": threshold,
@@ -423,7 +480,7 @@ def row_of(agent: LoadedAgent, env_id: str, suite: str, threshold: float,
         "cell": suite_label(suite),
         "threshold": threshold,
         "suite": f"{suite}/test",
-        "status": "ok" if not agent.missing else "missing",
+        "status": "ok" if not agent.missing else "missing" if agent.applicable else "n/a",
         "note": agent.missing,
         "episodes": episodes if evaluation is not None else 0,
         "success_rate": None,
@@ -492,6 +549,17 @@ def designed_tasks(suite: str, env_id: str, count: int) -> tuple[tuple[int, str]
     grasp = "both" if ENVIRONMENTS[env_id][1] == "dual-endpoint" else "head"
     return tuple((t.seed, t.family)
                  for t in load_designed_suite(suite, "test", grasp=grasp, limit=count))
+
+
+@functools.lru_cache(maxsize=16)
+def peg_tasks(suite: str, env_id: str, count: int) -> tuple[Any, ...]:
+    """The first ``count`` test tasks (``dlo_env.tasks.Task``, with their pegs) of a suite with
+    pegs in ``env_id`` (made once per process)."""
+    from dlo_env.peg_suites import PEG_SUITES, load_peg_suite, load_route_suite
+
+    grasp = "both" if ENVIRONMENTS[env_id][1] == "dual-endpoint" else "head"
+    load = load_peg_suite if suite in PEG_SUITES else load_route_suite
+    return tuple(load(suite, "test", grasp=grasp, limit=count))
 
 
 #: An agent is near the reference on a designed task when its error at rest is within this
@@ -811,20 +879,23 @@ def run_benchmark(config: BenchmarkConfig, out_dir: str | os.PathLike, *,
     rows: list[dict[str, Any]] = []
     todo: list[tuple[int, str, str, str, float, LoadedAgent, dict[str, Any]]] = []
     for name in config.all_agents:
-        agents: dict[str, LoadedAgent] = {}
-        for env_id in dict.fromkeys(env for env, _, _ in config.cells(name)):
-            with gym.make(env_id) as env:
+        # one agent per environment, and another where the environment observes pegs
+        agents: dict[tuple[str, bool], LoadedAgent] = {}
+        for env_id, pegged in dict.fromkeys((env, suite in PEGGED_SUITES)
+                                            for env, suite, _ in config.cells(name)):
+            with gym.make(env_id, max_pegs=SUITE_MAX_PEGS if pegged else 0) as env:
                 agent = load_agent(name, config, env, shape_model)
             if agent.missing.startswith("no shape model") and why:
                 agent = LoadedAgent(name, None, missing=f"no shape model: {why}")
-            agents[env_id] = agent
+            agents[env_id, pegged] = agent
         for env_id, suite, threshold in config.cells(name):
-            agent = agents[env_id]
+            agent = agents[env_id, suite in PEGGED_SUITES]
             cell = cell_name(name, env_id, suite, threshold)
             if agent.policy is None:
                 rows.append(row_of(agent, env_id, suite, threshold, None, 0))
                 if progress:
-                    print(f"{cell}: missing ({agent.missing})", flush=True)
+                    print(f"{cell}: {'missing' if agent.applicable else 'n/a'} "
+                          f"({agent.missing})", flush=True)
                 continue
             key = cell_key(config, agent, env_id, suite, threshold)
             path = folder / f"{cell}.json"
@@ -882,11 +953,17 @@ def run_benchmark(config: BenchmarkConfig, out_dir: str | os.PathLike, *,
         cell = cell_name(name, env_id, suite, threshold)
         result, facts = merge_parts([done[k][a] for a, _ in pieces], name, env_id)
         extra: dict[str, Any] = {"benchmark_key": key, **facts}
+        shapes = {"goals": [g.tolist() for g in result.goals],
+                  "rest": [r.tolist() for r in result.rest_shapes]}
         if suite in DESIGNED_SUITES:  # for the figure of designed shapes
             tasks = designed_tasks(suite, env_id, len(result.records))
             extra["shapes"] = {"seeds": [s for s, _ in tasks], "families": [f for _, f in tasks],
-                               "goals": [g.tolist() for g in result.goals],
-                               "rest": [r.tolist() for r in result.rest_shapes]}
+                               **shapes}
+        elif suite in PEGGED_SUITES:  # for the figure of routed cords
+            made = peg_tasks(suite, env_id, len(result.records))
+            extra["shapes"] = {"seeds": [t.seed for t in made], "families": [suite] * len(made),
+                               "pegs": [np.asarray(t.pegs).tolist() for t in made],
+                               "peg_radius": [float(t.peg_radius) for t in made], **shapes}
         write_evaluation(result, folder, cell, extra=extra)
         rows[slot] = {**row_of(agent, env_id, suite, threshold, result, config.episodes),
                       **facts}
@@ -921,7 +998,8 @@ def absolute_paths(config: BenchmarkConfig) -> BenchmarkConfig:
     """``config`` with its model and baseline paths made absolute."""
     from dataclasses import replace
 
-    fields_ = ("model", "transition_model", "cords_transition_model", "baselines")
+    fields_ = ("model", "transition_model", "cords_transition_model", "pegs_transition_model",
+               "baselines")
     return replace(config, **{f: str(Path(getattr(config, f)).resolve()) for f in fields_
                               if getattr(config, f)})
 

@@ -154,7 +154,7 @@ def headline_first(thresholds: list[float | None]) -> list[float | None]:
 def success_table(rows: list[dict[str, Any]], threshold: float | None = None) -> list[str]:
     """Markdown: one row per agent, one column per cell, success rate (– when missing), of the
     rows at ``threshold`` (None: rows without one, or all when they have a single one)."""
-    rows = [r for r in rows if not is_cords_row(r)]  # their own section: cords_section
+    rows = [r for r in rows if is_main_row(r)]  # the others: cords_section, pegs_section
     if threshold is not None or len(thresholds_of(rows)) > 1:
         rows = [r for r in rows if r.get("threshold") == threshold]
     cells = list(dict.fromkeys(cell_label(r) for r in rows))
@@ -167,7 +167,7 @@ def success_table(rows: list[dict[str, Any]], threshold: float | None = None) ->
         for cell in cells:
             r = by.get((agent, cell))
             ok = r is not None and r["status"] == "ok"
-            values.append(_fmt(r["success_rate"], "{:.0%}") if ok else "–")
+            values.append(_fmt(r["success_rate"], "{:.0%}") if ok else _status(r))
             cost = cost or (r.get("sample_cost", "") if ok else "")
         lines.append(f"| {agent} | " + " | ".join(values) + f" | {cost or '–'} |")
     return lines
@@ -178,11 +178,74 @@ def _suite(row: dict[str, Any]) -> str:
     return str(row.get("suite", f"linear-{row['difficulty']}")).split("/")[0]
 
 
+def _status(row: dict[str, Any] | None) -> str:
+    """What a cell without a result shows: "n/a" (the agent cannot act there), else "–"."""
+    return "n/a" if row is not None and row["status"] == "n/a" else "–"
+
+
 def is_cords_row(row: dict[str, Any]) -> bool:
     """Whether ``row`` is a cell of the ``cords`` section (a cord suite)."""
     from dlo_env.cord_suites import CORD_SUITES
 
     return _suite(row) in CORD_SUITES
+
+
+def is_pegs_row(row: dict[str, Any]) -> bool:
+    """Whether ``row`` is a cell of the ``pegs`` section (a suite with pegs on the table)."""
+    from dlo_bench.benchmark import PEGGED_SUITES
+
+    return _suite(row) in PEGGED_SUITES
+
+
+def is_main_row(row: dict[str, Any]) -> bool:
+    """Whether ``row`` belongs in the main success tables and chart (not in a section of its
+    own: unknown cords, pegs)."""
+    return not (is_cords_row(row) or is_pegs_row(row))
+
+
+def pegs_section(rows: list[dict[str, Any]]) -> list[str]:
+    """Markdown: per environment and threshold, each agent's success and median error at rest
+    on every suite with pegs, its planning seconds per episode (mean over those cells) and
+    sample cost; [] without peg rows."""
+    pegs = [r for r in rows if is_pegs_row(r)]
+    if not pegs:
+        return []
+    from dlo_env.peg_suites import SUITE_MAX_PEGS
+
+    lines = [
+        "## Pegs",
+        "",
+        f"`pegs-K`: goals made by K straight moves with 1 to {SUITE_MAX_PEGS} pegs near the "
+        "start; `route-K`: of those, goals that rest against a peg and that one straight move "
+        "of the held end(s) misses by more than 2 cm (`dlo_env.peg_suites`). The environment "
+        f"observes {SUITE_MAX_PEGS} peg slots; its RL agents are the ones trained there "
+        "(`dlo baseline --max-pegs`). Success at the threshold, judged at rest (median error "
+        "at rest, cm).",
+        "",
+    ]
+    for key in dict.fromkeys((r["env"], r.get("threshold")) for r in pegs):
+        group = [r for r in pegs if (r["env"], r.get("threshold")) == key]
+        suites = list(dict.fromkeys(_suite(r) for r in group))
+        by = {(r["agent"], _suite(r)): r for r in group}
+        t = "–" if key[1] is None else threshold_label(key[1])
+        lines += [f"**{key[0]}, {t}**", "",
+                  "| agent | " + " | ".join(suites) + " | seconds/episode | sample cost |",
+                  "|---|" + "---|" * (len(suites) + 2)]
+        for agent in dict.fromkeys(r["agent"] for r in group):
+            cells, seconds, cost = [], [], ""
+            for suite in suites:
+                r = by.get((agent, suite))
+                if r is None or r["status"] != "ok":
+                    cells.append(_status(r))
+                    continue
+                cells.append(f"{_fmt(r['success_rate'], '{:.0%}')} "
+                             f"({_fmt(r.get('median_rest_error'), '{:.2f}', 100)})")
+                seconds.append(r["seconds_per_episode"])
+                cost = cost or r.get("sample_cost", "")
+            mean = _fmt(sum(seconds) / len(seconds), "{:.2f}") if seconds else "–"
+            lines.append(f"| {agent} | " + " | ".join(cells) + f" | {mean} | {cost or '–'} |")
+        lines.append("")
+    return lines
 
 
 def cords_section(rows: list[dict[str, Any]]) -> list[str]:
@@ -221,7 +284,7 @@ def cords_section(rows: list[dict[str, Any]]) -> list[str]:
                   + " | sample cost |", "|---|" + "---|" * (len(TEST_CORDS) + 4)]
         for r in group:
             if r["status"] != "ok":
-                lines.append(f"| {r['agent']} | missing | – | – | "
+                lines.append(f"| {r['agent']} | {r['status']} | – | – | "
                              + " | ".join("–" for _ in TEST_CORDS) + " | – |")
                 continue
             per = r.get("cords", {})
@@ -285,19 +348,25 @@ def designed_section(rows: list[dict[str, Any]]) -> list[str]:
 
 #: Tasks of each curve family shown in the figure of designed shapes.
 FIGURE_TASKS_PER_FAMILY = 2
+#: Tasks of each suite with pegs shown in the figure of routed cords.
+FIGURE_TASKS_PER_PEG_SUITE = 1
 
 
 def designed_panels(rows: list[dict[str, Any]], out_dir: str | os.PathLike,
-                    per_family: int = FIGURE_TASKS_PER_FAMILY
-                    ) -> list[tuple[str, dict[str, tuple[Any, Any, float]]]]:
+                    per_family: int = FIGURE_TASKS_PER_FAMILY, pegs: bool = False
+                    ) -> list[tuple[str, dict[str, tuple[Any, ...]]]]:
     """The figure's panels from the designed cells' files in ``out_dir``: the first
     ``per_family`` tasks of each curve family, per suite and environment, with each agent's
-    goal, rest shape and direction-free error (cells written without shapes are skipped)."""
+    goal, rest shape and direction-free error (cells written without shapes are skipped).
+    ``pegs``: the same of the cells with pegs (a family per suite), with the error at rest
+    and the task's pegs (``(k, 2)`` centres, radius)."""
     import numpy as np
 
     from dlo_bench.benchmark import CELLS_DIR, cell_name
 
-    designed = [r for r in rows if r.get("designed") and r["status"] == "ok"]
+    designed = [r for r in rows if r["status"] == "ok"
+                and (is_pegs_row(r) if pegs else r.get("designed"))]
+    error_key = "rest_error" if pegs else "rest_direction_free_error"
     panels = []
     for suite, env_id in dict.fromkeys((_suite(r), r["env_id"]) for r in designed):
         cells = {}
@@ -324,7 +393,10 @@ def designed_panels(rows: list[dict[str, Any]], out_dir: str | os.PathLike,
                 shapes = data["shapes"]
                 if i < len(shapes["rest"]):
                     entry[agent] = (np.asarray(shapes["goals"][i]), np.asarray(shapes["rest"][i]),
-                                    float(data["records"][i]["rest_direction_free_error"]))
+                                    float(data["records"][i][error_key]))
+                    if pegs:
+                        entry[agent] += (np.asarray(shapes["pegs"][i], float).reshape(-1, 2),
+                                         float(shapes["peg_radius"][i]))
             panels.append((f"{env} {families[i]} #{i}", entry))
     return panels
 
@@ -362,7 +434,7 @@ def results_markdown(rows: list[dict[str, Any]], machine: dict[str, Any], comman
     """The Markdown report: success per cell, the detailed table, the speed ratios, missing
     agents, machine and command."""
     episodes = max((r["episodes"] for r in rows), default=0)
-    thresholds = headline_first(thresholds_of([r for r in rows if not is_cords_row(r)]))
+    thresholds = headline_first(thresholds_of([r for r in rows if is_main_row(r)]))
     lines = [
         "# Benchmark results",
         "",
@@ -395,7 +467,7 @@ def results_markdown(rows: list[dict[str, Any]], machine: dict[str, Any], comman
         t = r.get("threshold")
         tl = "–" if t is None else threshold_label(t)
         if r["status"] != "ok":
-            lines.append(f"| {r['agent']} | {env} | {_suite(r)} | {tl} | – | missing | – "
+            lines.append(f"| {r['agent']} | {env} | {_suite(r)} | {tl} | – | {r['status']} | – "
                          "| – | – |")
             continue
         lines.append(
@@ -408,13 +480,16 @@ def results_markdown(rows: list[dict[str, Any]], machine: dict[str, Any], comman
     lines.append("")
     lines += designed_section(rows)
     lines += cords_section(rows)
+    lines += pegs_section(rows)
     ratios = ratio_lines(rows)
     lines += ratios if ratios else ["Planning time ratios: not measured (physics-mpc did not "
                                     "run with a cheaper planner)."]
-    missing = sorted({(r["agent"], r["note"]) for r in rows if r["status"] != "ok"})
-    if missing:
-        lines += ["", "Missing cells:"]
-        lines += [f"- `{agent}`: {note}" for agent, note in missing]
+    for status, title in (("missing", "Missing cells"), ("n/a", "Cells where an agent cannot "
+                                                             "act (n/a)")):
+        notes = sorted({(r["agent"], r["note"]) for r in rows if r["status"] == status})
+        if notes:
+            lines += ["", f"{title}:"]
+            lines += [f"- `{agent}`: {note}" for agent, note in notes]
     models = sorted({(r["agent"], m) for r in rows for m in r.get("models", [])})
     if models:
         lines += ["", "Models (SHA-256 prefix): " + "; ".join(
@@ -440,11 +515,12 @@ def results_markdown(rows: list[dict[str, Any]], machine: dict[str, Any], comman
 def write_results(rows: list[dict[str, Any]], out_dir: str | os.PathLike, command: str,
                   seconds: float) -> dict[str, Path]:
     """Write ``results.json``, ``results.md`` and ``results.png`` (the cells outside the
-    section on unknown cords; none without any) into ``out_dir`` atomically, and
-    ``results_designed.png`` (designed goals and the shapes reached) with designed cells.
+    sections on unknown cords and pegs; none without any) into ``out_dir`` atomically, and
+    ``results_designed.png`` (designed goals and the shapes reached) with designed cells,
+    ``results_pegs.png`` (goals among pegs and the shapes reached) with cells with pegs.
 
     Returns:
-        The paths, by kind (``json``, ``md``, ``png``, ``designed_png``).
+        The paths, by kind (``json``, ``md``, ``png``, ``designed_png``, ``pegs_png``).
     """
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
@@ -452,14 +528,20 @@ def write_results(rows: list[dict[str, Any]], out_dir: str | os.PathLike, comman
     paths = {"json": out / "results.json", "md": out / "results.md"}
     write_text_atomic(paths["json"], json.dumps(json_ready(rows), indent=2) + "\n")
     write_text_atomic(paths["md"], results_markdown(rows, machine, command, seconds))
-    from dlo_bench.charts import plot_designed, plot_results
+    from dlo_bench.charts import plot_results, plot_shapes
 
-    charted = [r for r in rows if not is_cords_row(r)]
+    charted = [r for r in rows if is_main_row(r)]
     if charted:
         paths["png"] = out / "results.png"
         plot_results(charted, paths["png"])
     panels = designed_panels(rows, out)
     if panels:
         paths["designed_png"] = out / "results_designed.png"
-        plot_designed(panels, paths["designed_png"])
+        plot_shapes(panels, paths["designed_png"])
+    panels = designed_panels(rows, out, FIGURE_TASKS_PER_PEG_SUITE, pegs=True)
+    if panels:
+        paths["pegs_png"] = out / "results_pegs.png"
+        plot_shapes(panels, paths["pegs_png"],
+                    title="goals among pegs (green), the cord at rest after the last step\n"
+                          "(blue, head red) and the pegs (grey); error at rest")
     return paths

@@ -146,15 +146,19 @@ def plot_results(rows: list[dict[str, Any]], png: str | os.PathLike) -> None:
     _save(fig, png, dpi=100)
 
 
-def plot_designed(panels: list[tuple[str, dict[str, tuple[np.ndarray, np.ndarray, float]]]],
-                  png: str | os.PathLike) -> None:
-    """Designed goals and the shapes agents left the cord in: one row per task, one column per
-    agent; each panel shows the goal (green), the cord at rest after the last step (blue, its
-    head a red dot) and the direction-free error.
+def plot_shapes(panels: list[tuple[str, dict[str, tuple[Any, ...]]]],
+                png: str | os.PathLike, *,
+                title: str = "designed goals (green) and the cord at rest after the last step\n"
+                             "(blue, head red); direction-free error") -> None:
+    """Goals and the shapes agents left the cord in: one row per task, one column per agent;
+    each panel shows the goal (green), the cord at rest after the last step (blue, its head a
+    red dot), the task's pegs when it has any (grey discs) and the error.
 
     Args:
-        panels: ``(row label, {agent: (goal, rest shape, error in metres)})`` per task.
+        panels: ``(row label, {agent: (goal, rest shape, error in metres[, pegs' centres
+            (k, 2), their radius])})`` per task.
         png: Output file.
+        title: The figure's title.
     """
     plt = _pyplot()
     agents = list(dict.fromkeys(a for _, entry in panels for a in entry))
@@ -173,13 +177,14 @@ def plot_designed(panels: list[tuple[str, dict[str, tuple[np.ndarray, np.ndarray
                 ax.set_ylabel(label, fontsize=7)
             if agent not in entry:
                 continue
-            goal, rest, err = entry[agent]
+            goal, rest, err, *pegs = entry[agent]
+            for x, y in (pegs[0] if pegs else []):
+                ax.add_patch(plt.Circle((x, y), pegs[1], color="0.55", zorder=0))
             ax.plot(goal[:, 0], goal[:, 1], "-", color="tab:green", lw=4, alpha=0.45)
             ax.plot(rest[:, 0], rest[:, 1], "-", color="tab:blue", lw=1.4)
             ax.plot(rest[0, 0], rest[0, 1], "o", color="tab:red", ms=3)
             ax.text(0.03, 0.03, f"{100 * err:.1f} cm", transform=ax.transAxes, fontsize=7)
-    fig.suptitle("designed goals (green) and the cord at rest after the last step\n(blue, head "
-                 "red); direction-free error", fontsize=9)
+    fig.suptitle(title, fontsize=9)
     fig.tight_layout(rect=(0, 0, 1, 1 - 0.5 / (1.9 * rows + 0.9)))
     _save(fig, png, dpi=90)
 

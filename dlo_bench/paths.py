@@ -22,20 +22,25 @@ def default_out(command: str) -> Path:
     return RUNS_DIR / command
 
 
-def baseline_folder_name(name: str, env_id: str = "dlo_env/DLOEndpoint-v0") -> str:
+def baseline_folder_name(name: str, env_id: str = "dlo_env/DLOEndpoint-v0",
+                         pegs: bool = False) -> str:
     """The folder of an RL agent for an environment in a baselines folder: ``ppo`` for
-    ``DLOEndpoint-v0``, ``ppo-dual-endpoint`` for ``DLODualEndpoint-v0``."""
+    ``DLOEndpoint-v0``, ``ppo-dual-endpoint`` for ``DLODualEndpoint-v0``; with ``pegs`` (an
+    environment that observes pegs, ``dlo baseline --max-pegs``) ``ppo-pegs``,
+    ``ppo-pegs-dual-endpoint``."""
     from dlo_env.envs import ENVIRONMENTS
 
     if env_id not in ENVIRONMENTS:
         raise ValueError(f"env_id must be one of {tuple(ENVIRONMENTS)}, got {env_id!r}")
+    name = f"{name}-pegs" if pegs else name
     return name if env_id == "dlo_env/DLOEndpoint-v0" else f"{name}-{ENVIRONMENTS[env_id][1]}"
 
 
-def shipped_baseline(name: str, env_id: str = "dlo_env/DLOEndpoint-v0") -> Path:
+def shipped_baseline(name: str, env_id: str = "dlo_env/DLOEndpoint-v0",
+                     pegs: bool = False) -> Path:
     """The folder of the shipped baseline ``name`` (``ppo``, ``sac-her``, ``bc``) for
-    ``env_id``."""
-    return PRETRAINED_BASELINES / baseline_folder_name(name, env_id)
+    ``env_id`` (``pegs``: the one trained where pegs are observed)."""
+    return PRETRAINED_BASELINES / baseline_folder_name(name, env_id, pegs)
 
 
 def shape_model_file(path: str | os.PathLike | None) -> Path:

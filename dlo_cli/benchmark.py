@@ -25,7 +25,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     from dlo_bench.benchmark import (
         DEFAULT_CORDS,
         DEFAULT_DIFFICULTIES,
+        DEFAULT_PEGS,
         HEADLINE_THRESHOLD,
+        PEGGED_SUITES,
         QUICK_EPISODES,
         BenchmarkConfig,
     )
@@ -78,6 +80,15 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                              + " ".join(BenchmarkConfig.cord_agents) + ") among --agent "
                              "(default: " + " ".join(DEFAULT_CORDS) + "; none with "
                              "--quick or --difficulty; `--cords` alone: none)")
+    parser.add_argument("--pegs", nargs="*", metavar="SUITE", default=None,
+                        choices=tuple(PEGGED_SUITES),
+                        help="suites with pegs of the pegs section (pegs-K: goals made among "
+                             "pegs; route-K: goals that need the cord routed around a peg), run "
+                             "in " + " ".join(e.split("/")[-1] for e in BenchmarkConfig.peg_envs)
+                             + " observing the pegs, at the headline threshold, by --agent "
+                             "(RL agents: those trained with pegs, BASELINES/ALGO-pegs) "
+                             "(default: " + " ".join(DEFAULT_PEGS) + "; none with --quick or "
+                             "--difficulty; `--pegs` alone: none)")
     parser.add_argument("--baselines", default=BenchmarkConfig.baselines,
                         help="folder with one `dlo baseline` output folder per RL agent and "
                              "environment (BASELINES/ppo, BASELINES/sac-her, BASELINES/bc; "
@@ -89,6 +100,10 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help="transition model of several cords (dlo train --stage transition "
                              "--cord-inputs), file or folder, for latent-mpc-adaptive (None: "
                              "the shipped latent_model/pretrained/transition-cords.pt)")
+    parser.add_argument("--pegs-transition-model", default=None, metavar="FILE",
+                        help="transition model of the pegs section's agents, file or folder (a "
+                             "model that sees pegs: dlo train --stage transition --peg-reach; "
+                             "None: the --transition-model)")
     add_planner_flags(parser)
     add_seed(parser, "the planners' sampling (the tasks are the suites')",
              default=BenchmarkConfig.seed)
@@ -148,15 +163,16 @@ def _command(args: argparse.Namespace, parser_defaults: dict) -> str:
 
 
 def section_suites(args: argparse.Namespace, flag: str = "designed") -> list[str]:
-    """The designed (or with ``flag="cords"``, cord) suites to run: ``--designed`` as given
-    (alone: none); by default the config's, or none with ``--quick`` or ``--difficulty`` (a
-    smoke test, a subset of cells)."""
-    from dlo_bench.benchmark import DEFAULT_CORDS, BenchmarkConfig
+    """The designed (or with ``flag="cords"``, cord; ``"pegs"``, peg) suites to run:
+    ``--designed`` as given (alone: none); by default the config's, or none with ``--quick`` or
+    ``--difficulty`` (a smoke test, a subset of cells)."""
+    from dlo_bench.benchmark import DEFAULT_CORDS, DEFAULT_PEGS, BenchmarkConfig
 
     given = getattr(args, flag)
     if given is not None:
         return list(dict.fromkeys(given))
-    defaults = {"designed": BenchmarkConfig.designed, "cords": DEFAULT_CORDS}[flag]
+    defaults = {"designed": BenchmarkConfig.designed, "cords": DEFAULT_CORDS,
+                "pegs": DEFAULT_PEGS}[flag]
     return [] if args.quick or args.difficulty is not None else list(defaults)
 
 
@@ -206,18 +222,23 @@ def run(args: argparse.Namespace) -> int:
     torch.set_num_threads(args.threads)
     designed = section_suites(args)
     cords = section_suites(args, "cords")
+    pegs = section_suites(args, "pegs")
     agents, cord_agents = split_agents(args.agent, bool(cords))
+    from dlo_bench.benchmark import PEG_AGENTS
+
+    peg_agents = tuple(a for a in agents if a in PEG_AGENTS)
     episodes = args.episodes if args.episodes is not None else (
         QUICK_EPISODES if args.quick else BenchmarkConfig.episodes)
     config = BenchmarkConfig(
         agents=agents, cord_agents=cord_agents, envs=tuple(args.env),
         difficulties=tuple(args.difficulty) if args.difficulty is not None else None,
         thresholds=tuple(thresholds), designed=tuple(dict.fromkeys(designed)),
-        cords=tuple(cords),
+        cords=tuple(cords), pegs=tuple(pegs), peg_agents=peg_agents,
         episodes=episodes,
         seed=args.seed, baselines=args.baselines, model=args.model,
         transition_model=args.transition_model,
         cords_transition_model=args.cords_transition_model,
+        pegs_transition_model=args.pegs_transition_model,
         replan_every=args.replan_every, max_seconds=args.max_seconds,
         fidelity=not args.no_fidelity,
     )
@@ -246,20 +267,21 @@ def run(args: argparse.Namespace) -> int:
     from dlo_bench.benchmark_report import (
         cords_section,
         headline_first,
-        is_cords_row,
+        is_main_row,
+        pegs_section,
         success_table,
         thresholds_of,
     )
 
-    for t in headline_first(thresholds_of([r for r in rows if not is_cords_row(r)])):
+    for t in headline_first(thresholds_of([r for r in rows if is_main_row(r)])):
         print(f"success at {threshold_label(t)}, judged at rest:")
         print("\n".join(success_table(rows, t)))
-    cords = cords_section(rows)
-    if cords:
-        print("\n".join(line for line in cords[4:] if line))  # the tables, not the prose
+    for section in (cords_section(rows), pegs_section(rows)):
+        if section:
+            print("\n".join(line for line in section[4:] if line))  # the tables, not prose
     print("\n".join(ratio_lines(rows)) or "planning time ratios not measured: physics-mpc did "
                                           "not run with a cheaper planner")
-    missing = sorted({r["agent"] for r in rows if r["status"] != "ok"})
+    missing = sorted({r["agent"] for r in rows if r["status"] == "missing"})
     if missing:
         print("agents with missing cells (reported in the table): " + ", ".join(missing))
     print(f"wrote {', '.join(str(p) for p in paths.values())} in {seconds:.0f} s")

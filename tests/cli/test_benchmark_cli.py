@@ -199,3 +199,71 @@ def test_a_fine_tuned_model_counts_the_data_of_the_model_it_started_from():
         "info": {"env_steps": 50, "data_transitions": 5, "sources": [
             {"digest": "a", "transitions": 5}]}}}) == (100, 10)
     assert training_data({}) == (None, None)
+
+
+def test_the_pegs_section_runs_among_pegs_with_the_rl_agents_trained_there(tmp_path, capsys):
+    """--pegs runs the suites with pegs in an environment that observes them: an RL agent reads
+    its ALGO-pegs folder, behaviour cloning (no demonstrations with pegs) is n/a, not missing;
+    the section has its own table, outside the main ones."""
+    from dlo_bench.baselines import BaselineConfig, train_baseline
+
+    baselines = tmp_path / "baselines"
+    train_baseline(BaselineConfig(algo="sac-her", timesteps=256, n_envs=1, net_arch=(16, 16),
+                                  sac_buffer_size=1000, sac_batch_size=32,
+                                  sac_learning_starts=150, checkpoint_every=0, max_pegs=4),
+                   baselines / "sac-her-pegs", progress_bar=False)
+    out = tmp_path / "bench"
+    assert main(["benchmark", "--agent", "straight-line", "sac-her", "bc", "--difficulty",
+                 "--designed", "--cords", "--pegs", "route-2", "--threshold", "0.02",
+                 "--episodes", "1", "--baselines", str(baselines), "--allow-dirty",
+                 "--out", str(out)]) == 0
+    rows = json.loads((out / "results.json").read_text())
+    assert [(r["agent"], r["env"], r["suite"], r["status"]) for r in rows] == [
+        ("straight-line", "endpoint", "route-2/test", "ok"),
+        ("sac-her", "endpoint", "route-2/test", "ok"),
+        ("bc", "endpoint", "route-2/test", "n/a")]
+    assert rows[1]["models"] == [str(baselines / "sac-her-pegs" / "model.zip")]
+    assert "no pegs" in rows[2]["note"]
+    table = (out / "results.md").read_text()
+    assert "## Success" not in table and "## Pegs" in table
+    assert "| bc | n/a |" in table.split("## Pegs")[1]
+    assert "Cells where an agent cannot act (n/a):" in table
+    cell = json.loads((out / "results_episodes" / "straight-line-endpoint-route-2-2cm.json")
+                      .read_text())
+    from dlo_env.peg_suites import load_route_suite
+
+    task = load_route_suite("route-2", limit=1)[0]
+    assert cell["shapes"]["pegs"] == [task.pegs.tolist()]  # the figure draws the task's pegs
+    assert cell["shapes"]["goals"] == [task.goal.tolist()]
+    assert (out / "results_pegs.png").stat().st_size > 0 and not (out / "results.png").exists()
+    printed = capsys.readouterr().out
+    assert "| sac-her | " in printed.split("**endpoint, 2 cm**")[1]
+
+
+def test_the_pegs_section_has_its_own_transition_model_and_rl_folders(tmp_path):
+    import gymnasium as gym
+
+    from dlo_bench.benchmark import PEG_AGENTS, BenchmarkConfig, load_agent
+
+    config = BenchmarkConfig(agents=("straight-line",), designed=())
+    assert not any(suite.startswith(("pegs-", "route-")) for _, suite, _ in config.cells())
+    asked = BenchmarkConfig(agents=("straight-line",), designed=(), pegs=("pegs-1",),
+                            pegs_transition_model=str(tmp_path / "none.pt"),
+                            baselines=str(tmp_path))
+    assert asked.all_agents == ("straight-line", *(a for a in PEG_AGENTS if a != "straight-line"))
+    assert asked.cells("bc") == [("dlo_env/DLOEndpoint-v0", "pegs-1", 0.01)]
+    with gym.make("dlo_env/DLOEndpoint-v0") as plain, \
+            gym.make("dlo_env/DLOEndpoint-v0", max_pegs=4) as pegged:
+        assert load_agent("latent-mpc", asked, plain).policy is not None  # the shipped model
+        assert load_agent("latent-mpc", asked, pegged).missing.startswith("no transition model")
+        ppo = load_agent("ppo", asked, pegged)
+        assert ppo.policy is None and ppo.applicable and "ppo-pegs/" in ppo.missing
+        assert "--max-pegs 4" in ppo.missing
+        from dlo_bench.agents import build_agent
+
+        with pytest.raises(ValueError, match="'bc' does not act where pegs are observed"):
+            build_agent("bc", pegged)
+    with pytest.raises(ValueError, match="peg_agents must be"):
+        BenchmarkConfig(pegs=("pegs-1",), peg_agents=("latent-mpc-adaptive",))
+    with pytest.raises(ValueError, match="pegs must be distinct suites"):
+        BenchmarkConfig(pegs=("linear-1",))

@@ -28,7 +28,7 @@ def test_every_registered_agent_acts_in_each_of_its_environments(name, toy_model
         with gym.make(env_id) as env:
             if spec.extra == "rl" and not shipped_baseline(name, env_id).is_dir():
                 # Trainable there (`dlo baseline --env-id`), but nothing is shipped: one line.
-                with pytest.raises(FileNotFoundError, match="baseline folder") as info:
+                with pytest.raises(FileNotFoundError, match="dlo baseline --algo") as info:
                     build_agent(name, env)
                 assert "\n" not in str(info.value)
                 continue
@@ -104,9 +104,13 @@ def test_the_shipped_ppo_acts_in_the_dual_environment():
 def test_a_policy_trained_on_the_empty_table_is_refused_where_pegs_are_observed():
     import gymnasium as gym
 
+    from dlo_bench.paths import shipped_baseline
+
     with gym.make("dlo_env/DLOEndpoint-v0", max_pegs=2) as env:
         with pytest.raises(ValueError, match=r"agent 'ppo' was trained on observations of shape "
                                              r"\(42,\), but this environment observes \(48,\)"):
+            build_agent("ppo", env, baseline=shipped_baseline("ppo"))
+        with pytest.raises(FileNotFoundError, match="ppo-pegs"):  # its default: trained there
             build_agent("ppo", env)
         build_agent("latent-mpc", env)  # planners read the pegs, or ignore them
 
