@@ -3,16 +3,36 @@
 :class:`ProcessBackend` has the ``map`` of :class:`dlo_env.dataset.ray_backend.RayBackend`,
 so a command that hands its work units (benchmark cells) to a backend runs them on Ray or on
 the cores of one machine alike, without Ray installed. The workers are spawned (no state
-inherited from the parent) and each runs one call at a time.
+inherited from the parent) and each runs one call at a time; a worker whose parent has died
+(killed, say, by SIGTERM, which runs no clean-up) exits within a second, so no orphan goes on
+computing calls nobody reads.
 """
 
 from __future__ import annotations
 
 import multiprocessing
+import os
+import threading
+import time
 from collections.abc import Callable, Iterator
 from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
 from dataclasses import dataclass
 from typing import Any
+
+#: Seconds between a worker's checks that its parent is alive.
+PARENT_CHECK_SECONDS = 1.0
+
+
+def _exit_with(parent: int) -> None:
+    """End this process when its parent ``parent`` is gone (it is then re-parented)."""
+    while os.getppid() == parent:
+        time.sleep(PARENT_CHECK_SECONDS)
+    os._exit(1)
+
+
+def _watch_parent(parent: int) -> None:
+    """A worker's initializer: a daemon thread that ends the worker when its parent dies."""
+    threading.Thread(target=_exit_with, args=(parent,), daemon=True).start()
 
 
 @dataclass(frozen=True)
@@ -36,7 +56,8 @@ class ProcessBackend:
         result)`` as each finishes. A call's exception is raised here; interrupting the
         iteration cancels the calls not started and waits for the running ones."""
         context = multiprocessing.get_context("spawn")
-        with ProcessPoolExecutor(max_workers=self.workers, mp_context=context) as pool:
+        with ProcessPoolExecutor(max_workers=self.workers, mp_context=context,
+                                 initializer=_watch_parent, initargs=(os.getpid(),)) as pool:
             pending = {pool.submit(function, *args): i for i, args in enumerate(calls)}
             try:
                 while pending:

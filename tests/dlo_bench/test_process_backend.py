@@ -34,3 +34,46 @@ def test_benchmark_cells_in_two_processes_equal_the_local_ones(tmp_path, capsys)
     capsys.readouterr()
     assert main([*args, "--out", str(tmp_path / "x"), "--jobs", "2", "--backend", "ray"]) == 2
     assert "--jobs runs the cells in local processes" in capsys.readouterr().err
+
+
+def test_workers_exit_when_their_parent_is_killed(tmp_path):
+    """SIGTERM on a run with --jobs runs no clean-up: its workers must not go on as orphans."""
+    import os
+    import signal
+    import subprocess
+    import sys
+    import time
+
+    pids = tmp_path / "worker.pid"
+    script = (
+        "import os, sys, time\n"
+        "from dlo_env.dataset.process_backend import ProcessBackend\n"
+        "def work(path):\n"
+        "    open(path, 'w').write(str(os.getpid()))\n"
+        "    time.sleep(120)\n"
+        "if __name__ == '__main__':\n"
+        f"    list(ProcessBackend(1).map(work, [({str(pids)!r},)]))\n"
+    )
+    (tmp_path / "parent.py").write_text(script)  # a file: spawned workers import its `work`
+    parent = subprocess.Popen([sys.executable, str(tmp_path / "parent.py")])
+    try:
+        deadline = time.monotonic() + 60
+        while not (pids.is_file() and pids.read_text()) and time.monotonic() < deadline:
+            time.sleep(0.1)
+        worker = int(pids.read_text())
+        parent.send_signal(signal.SIGTERM)
+        parent.wait(timeout=30)
+
+        def alive(pid: int) -> bool:
+            try:
+                os.kill(pid, 0)
+            except ProcessLookupError:
+                return False
+            return True
+
+        deadline = time.monotonic() + 15
+        while alive(worker) and time.monotonic() < deadline:
+            time.sleep(0.2)
+        assert not alive(worker)
+    finally:
+        parent.kill()
