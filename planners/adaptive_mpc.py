@@ -178,9 +178,11 @@ class AdaptiveLatentMPCPolicy(LatentMPCPolicy):
         starts = np.stack([m.start for m in moves])
         ends = np.stack([m.end for m in moves])
         shifts = np.stack([m.displacement for m in moves])
-        pred = self.model.predict(np.tile(starts, (c, 1, 1)), self.grasp, np.tile(shifts, (c, 1)),
-                                  params=np.repeat(rows, h, axis=0), members=self.members,
-                                  inextensible=self.config.inextensible)
+        # the pegs observed this episode stop the grippers as they did (a move that touched one
+        # is not blamed on the cord)
+        pred = super()._predict(np.tile(starts, (c, 1, 1)), np.tile(shifts, (c, 1)),
+                                params=np.repeat(rows, h, axis=0), members=self.members,
+                                inextensible=self.config.inextensible)
         return np.asarray(error(pred, np.tile(ends, (c, 1, 1)))).reshape(c, h).mean(axis=1)
 
     # ------------------------------------------------------------------ planning

@@ -134,3 +134,33 @@ def test_planners_on_the_transition_model_pass_it_the_pegs_they_observe(name):
         obs, _ = env.reset(options={"task": task})
         policy.predict(obs, episode_start=np.array([True]), deterministic=True)
     assert seen and all(p is not None and np.array_equal(p, task.pegs) for p in seen)
+
+
+def test_the_adaptive_planner_fits_the_cord_with_the_pegs_it_observes():
+    """A move stopped by a peg is predicted stopped while the cord is fitted, so the contact is
+    not blamed on the cord."""
+    from dlo_env.peg_suites import load_peg_suite
+
+    task = load_peg_suite("pegs-1", limit=3)[2]
+    with gym.make("dlo_env/DLOEndpoint-v0", max_pegs=4) as env:
+        policy = build_agent("latent-mpc-adaptive", env)
+        seen = []
+        predict = policy.model.predict
+
+        def spy(*args, **kwargs):
+            seen.append((kwargs.get("params") is not None and np.ndim(kwargs["params"]) == 2,
+                         kwargs.get("pegs")))
+            return predict(*args, **kwargs)
+
+        policy.model.predict = spy
+        obs, _ = env.reset(options={"task": task})
+        start = np.array([True])
+        for _ in range(40):
+            action, _ = policy.predict(obs, episode_start=start, deterministic=True)
+            obs, _, done, truncated, _ = env.step(action)
+            start = np.array([False])
+            if policy.adapt_stats.errors or done or truncated:
+                break
+    fits = [pegs for fitting, pegs in seen if fitting]  # the fit's calls: a cord per row
+    assert policy.adapt_stats.errors and fits
+    assert all(p is not None and np.array_equal(p, task.pegs) for p in fits)
