@@ -92,6 +92,13 @@ def observes_pegs(env: Any) -> bool:
     return int(getattr(env.unwrapped, "max_pegs", 0)) > 0
 
 
+def train_command(spec: AgentSpec, env: Any) -> str:
+    """How the trained model of ``spec`` for ``env`` is made: its ``train`` text for the
+    environment, with ``--max-pegs N`` where pegs are observed."""
+    command = spec.train.format(env=env.unwrapped.spec.id)
+    return command + (f" --max-pegs {env.unwrapped.max_pegs}" if observes_pegs(env) else "")
+
+
 def _loaded_or_file(model: Any, loaded: type, load: Callable[[Any], Any], what: str,
                     train: str) -> Any:
     """``model`` itself when it is a ``loaded`` instance, else ``load(model)``; a missing file
@@ -231,9 +238,8 @@ def _sb3(algo: str, shipped: str = "", cords: str = "") -> Callable[[Any, AgentO
                 where = f" where {env.unwrapped.max_pegs} pegs are observed" if pegs else ""
                 raise FileNotFoundError(
                     f"no {shipped or algo} trained{where} in {env_id} is shipped ({folder.name}/):"
-                    f" train one with `dlo baseline --algo {algo} --env {env_id}"
-                    + (f" --max-pegs {env.unwrapped.max_pegs}" if pegs else "")
-                    + "` and run it as agent sb3:FOLDER")
+                    f" train one with `{train_command(AGENTS[shipped or algo], env)}` and run "
+                    "it as agent sb3:FOLDER")
         return load_baseline(folder, device=options.device, algo=algo, cords=cords)
 
     return build

@@ -47,6 +47,7 @@ from dlo_bench.agents import (
     build_agent,
     load_transition_model,
     observes_pegs,
+    train_command,
 )
 from dlo_bench.evaluation import (
     EpisodeRecord,
@@ -54,6 +55,7 @@ from dlo_bench.evaluation import (
     FidelityProfile,
     divergence,
     evaluate,
+    suite_tasks,
     summarise,
     task_env_kwargs,
 )
@@ -68,7 +70,7 @@ from dlo_env.atomic import file_digest
 from dlo_env.cord_suites import CORD_SUITES
 from dlo_env.designed_suites import DESIGNED_SUITES
 from dlo_env.envs import ENVIRONMENTS
-from dlo_env.peg_suites import PEG_SUITES, ROUTE_SUITES, SUITE_MAX_PEGS
+from dlo_env.peg_suites import PEGGED_SUITES
 from dlo_env.tasks import SPLIT_SIZES, SUITES
 from planners.interfaces import Policy, ShapeSurrogate
 from planners.policy import DEFAULT_REPLAN_EVERY
@@ -90,8 +92,6 @@ CORD_AGENTS = ("straight-line", "latent-mpc", "latent-mpc-adaptive", "physics-mp
                "physics-mpc-true-cord", "sac-her-cords")
 #: The environments of the ``cords`` section.
 CORD_ENVS = (ENDPOINT,)
-#: Every suite with pegs on the table, by name: the ``pegs`` section's choices.
-PEGGED_SUITES = {**PEG_SUITES, **ROUTE_SUITES}
 #: The suites of the ``pegs`` section (goals made among pegs; goals that need routing).
 DEFAULT_PEGS = tuple(PEGGED_SUITES)
 #: The agents of the ``pegs`` section, in table order: every agent of the main table.
@@ -126,7 +126,7 @@ class BenchmarkConfig:
         cord_envs: The environments of the ``cords`` section.
         pegs: Suites with pegs (``dlo_env.peg_suites``: ``pegs-K``, ``route-K``) of the
             ``pegs`` section, run at the designed threshold in an environment observing
-            ``SUITE_MAX_PEGS`` pegs (none by default here; ``dlo benchmark`` runs
+            ``dlo_env.peg_suites.SUITE_MAX_PEGS`` pegs (none by default here; ``dlo benchmark`` runs
             ``DEFAULT_PEGS``).
         peg_agents: The agents of the ``pegs`` section, when it runs.
         peg_envs: The environments of the ``pegs`` section.
@@ -352,15 +352,14 @@ def load_agent(name: str, config: BenchmarkConfig, env: Any,
         from dlo_bench.baselines import read_baseline_metadata
 
         folder = _baseline_folder(name, config, env_id, pegs)
-        train = spec.train.format(env=env_id) + (
-            f" --max-pegs {env.unwrapped.max_pegs}" if pegs else "")
         try:
             meta = read_baseline_metadata(folder)
             policy = build_agent(name, env, baseline=folder)
         except FileNotFoundError:
             return LoadedAgent(name, None, missing=(
                 f"no trained model for {env_id}{' with pegs' if pegs else ''} in "
-                f"{baseline_folder_name(name, env_id, pegs)}/ (train one with `{train}`)"))
+                f"{baseline_folder_name(name, env_id, pegs)}/ (train one with "
+                f"`{train_command(spec, env)}`)"))
         except ValueError as exc:
             return LoadedAgent(name, None, missing=f"no usable model for {env_id}: "
                                                    f"{exc}".splitlines()[0])
@@ -543,23 +542,15 @@ def cords_summary(records: list[EpisodeRecord]) -> dict[str, dict[str, float]]:
 def designed_tasks(suite: str, env_id: str, count: int) -> tuple[tuple[int, str], ...]:
     """``(seed, family)`` of the first ``count`` test tasks of a designed suite in ``env_id``
     (made once per process: each goal is relaxed in the simulator)."""
-    from dlo_env.designed_suites import load_designed_suite
-    from dlo_env.envs import ENVIRONMENTS
-
-    grasp = "both" if ENVIRONMENTS[env_id][1] == "dual-endpoint" else "head"
     return tuple((t.seed, t.family)
-                 for t in load_designed_suite(suite, "test", grasp=grasp, limit=count))
+                 for t in suite_tasks(suite, "test", ENVIRONMENTS[env_id][0], limit=count))
 
 
 @functools.lru_cache(maxsize=16)
 def peg_tasks(suite: str, env_id: str, count: int) -> tuple[Any, ...]:
     """The first ``count`` test tasks (``dlo_env.tasks.Task``, with their pegs) of a suite with
     pegs in ``env_id`` (made once per process)."""
-    from dlo_env.peg_suites import PEG_SUITES, load_peg_suite, load_route_suite
-
-    grasp = "both" if ENVIRONMENTS[env_id][1] == "dual-endpoint" else "head"
-    load = load_peg_suite if suite in PEG_SUITES else load_route_suite
-    return tuple(load(suite, "test", grasp=grasp, limit=count))
+    return tuple(suite_tasks(suite, "test", ENVIRONMENTS[env_id][0], limit=count))
 
 
 #: An agent is near the reference on a designed task when its error at rest is within this
@@ -879,17 +870,18 @@ def run_benchmark(config: BenchmarkConfig, out_dir: str | os.PathLike, *,
     rows: list[dict[str, Any]] = []
     todo: list[tuple[int, str, str, str, float, LoadedAgent, dict[str, Any]]] = []
     for name in config.all_agents:
-        # one agent per environment, and another where the environment observes pegs
-        agents: dict[tuple[str, bool], LoadedAgent] = {}
-        for env_id, pegged in dict.fromkeys((env, suite in PEGGED_SUITES)
-                                            for env, suite, _ in config.cells(name)):
-            with gym.make(env_id, max_pegs=SUITE_MAX_PEGS if pegged else 0) as env:
+        # one agent per environment and number of peg slots it observes
+        agents: dict[tuple[str, int], LoadedAgent] = {}
+        for env_id, pegs in dict.fromkeys(
+                (env, task_env_kwargs(suite=suite).get("max_pegs", 0))
+                for env, suite, _ in config.cells(name)):
+            with gym.make(env_id, max_pegs=pegs) as env:
                 agent = load_agent(name, config, env, shape_model)
             if agent.missing.startswith("no shape model") and why:
                 agent = LoadedAgent(name, None, missing=f"no shape model: {why}")
-            agents[env_id, pegged] = agent
+            agents[env_id, pegs] = agent
         for env_id, suite, threshold in config.cells(name):
-            agent = agents[env_id, suite in PEGGED_SUITES]
+            agent = agents[env_id, task_env_kwargs(suite=suite).get("max_pegs", 0)]
             cell = cell_name(name, env_id, suite, threshold)
             if agent.policy is None:
                 rows.append(row_of(agent, env_id, suite, threshold, None, 0))

@@ -192,7 +192,7 @@ def is_cords_row(row: dict[str, Any]) -> bool:
 
 def is_pegs_row(row: dict[str, Any]) -> bool:
     """Whether ``row`` is a cell of the ``pegs`` section (a suite with pegs on the table)."""
-    from dlo_bench.benchmark import PEGGED_SUITES
+    from dlo_env.peg_suites import PEGGED_SUITES
 
     return _suite(row) in PEGGED_SUITES
 
@@ -439,7 +439,7 @@ def results_markdown(rows: list[dict[str, Any]], machine: dict[str, Any], comman
         "# Benchmark results",
         "",
         f"Every agent on the first {episodes} tasks of the test split of the suites `linear-K` "
-        "and of the designed suites (below) "
+        "and of the designed, cord and peg suites of the sections below "
         "(fixed tasks: every agent sees the same episodes) in `dlo_env/DLOEndpoint-v0` "
         "(*endpoint*) and `dlo_env/DLODualEndpoint-v0` (*dual-endpoint*); *dK* is difficulty "
         "K (K straight moves from start to goal). Success means the cord at rest within the "

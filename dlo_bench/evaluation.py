@@ -213,36 +213,39 @@ def summarise(records: list[EpisodeRecord], agent: str = "", env_id: str = "") -
     }
 
 
+def suite_tasks(suite: str, split: str = "test", grasp: str = "head",
+                limit: int | None = None) -> list[Any]:
+    """The tasks of a named suite's split, in order, whatever its kind: ``linear-K``, designed,
+    cord, peg and route suites (each task's ``options()`` are its ``reset`` options).
+
+    Args:
+        suite: The suite's name.
+        split: ``"train"`` or ``"test"``.
+        grasp: ``"head"`` (``DLOEndpoint-v0``) or ``"both"`` (``DLODualEndpoint-v0``).
+        limit: Only the first ``limit`` tasks.
+    """
+    from dlo_env.cord_suites import CORD_SUITES, load_cord_suite
+    from dlo_env.designed_suites import DESIGNED_SUITES, load_designed_suite
+    from dlo_env.peg_suites import PEG_SUITES, ROUTE_SUITES, load_peg_suite, load_route_suite
+    from dlo_env.tasks import load_suite
+
+    for names, load in ((DESIGNED_SUITES, load_designed_suite),
+                        (CORD_SUITES, load_cord_suite), (PEG_SUITES, load_peg_suite),
+                        (ROUTE_SUITES, load_route_suite)):
+        if suite in names:
+            return list(load(suite, split, grasp=grasp, limit=limit))
+    return list(load_suite(suite, split, grasp=grasp, limit=limit))
+
+
 def _episode_options(
     difficulty: int | None, suite: str | None, split: str, episodes: int, grasp: str
 ) -> list[dict[str, Any] | None]:
     if suite is not None:
-        from dlo_env.cord_suites import CORD_SUITES, load_cord_suite
-        from dlo_env.designed_suites import DESIGNED_SUITES, load_designed_suite
-        from dlo_env.peg_suites import (
-            PEG_SUITES,
-            ROUTE_SUITES,
-            load_peg_suite,
-            load_route_suite,
-        )
-        from dlo_env.tasks import load_suite
-
-        for names, load in ((DESIGNED_SUITES, load_designed_suite),
-                            (CORD_SUITES, load_cord_suite), (PEG_SUITES, load_peg_suite),
-                            (ROUTE_SUITES, load_route_suite)):
-            if suite in names:
-                made = load(suite, split, grasp=grasp, limit=episodes)
-                if len(made) < episodes:
-                    raise ValueError(f"first + episodes must be at most the {len(made)} tasks of "
-                                     f"suite {suite!r} split {split!r}, got {episodes}")
-                return [t.options() for t in made]
-        tasks = load_suite(suite, split, grasp=grasp, limit=episodes)
-        if len(tasks) < episodes:
-            raise ValueError(
-                f"first + episodes must be at most the {len(tasks)} tasks of suite {suite!r} "
-                f"split {split!r}, got {episodes}"
-            )
-        return [{"task": t} for t in tasks]
+        made = suite_tasks(suite, split, grasp, limit=episodes)
+        if len(made) < episodes:
+            raise ValueError(f"first + episodes must be at most the {len(made)} tasks of "
+                             f"suite {suite!r} split {split!r}, got {episodes}")
+        return [t.options() for t in made]
     return [None if difficulty is None else {"difficulty": difficulty}] * episodes
 
 
@@ -324,12 +327,11 @@ def task_env_kwargs(difficulty: int | None = None, suite: str | None = None
     direction-free."""
     from dlo_env.cord_suites import CORD_SUITES
     from dlo_env.designed_suites import DESIGNED_MAX_STEPS, DESIGNED_SUITES
-    from dlo_env.peg_suites import PEG_SUITES, ROUTE_SUITES, SUITE_MAX_PEGS
+    from dlo_env.peg_suites import PEGGED_SUITES, SUITE_MAX_PEGS
     from dlo_env.tasks import difficulty_max_steps, suite_max_steps
 
-    pegged = {**PEG_SUITES, **ROUTE_SUITES}
-    if suite in pegged:
-        return {"max_episode_steps": difficulty_max_steps(pegged[suite]),
+    if suite in PEGGED_SUITES:
+        return {"max_episode_steps": difficulty_max_steps(PEGGED_SUITES[suite]),
                 "max_pegs": SUITE_MAX_PEGS}
     if suite in DESIGNED_SUITES:
         return {"max_episode_steps": DESIGNED_MAX_STEPS, "success_metric": "direction_free_error"}

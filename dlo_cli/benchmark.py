@@ -27,10 +27,10 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         DEFAULT_DIFFICULTIES,
         DEFAULT_PEGS,
         HEADLINE_THRESHOLD,
-        PEGGED_SUITES,
         QUICK_EPISODES,
         BenchmarkConfig,
     )
+    from dlo_env.peg_suites import PEGGED_SUITES
     from dlo_env.tasks import SPLIT_SIZES
 
     size = SPLIT_SIZES["test"]
@@ -52,7 +52,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                          for e, d in DEFAULT_DIFFICULTIES.items())
     add_difficulty(parser, None, "each runs the test split of suite linear-K in every "
                                  f"--env (None: {defaults}; `--difficulty` alone: none, to run "
-                                 "the designed or cord suites alone)", suites=True, nargs="*")
+                                 "the designed, cord or peg suites alone)", suites=True, nargs="*")
     parser.add_argument("--threshold", nargs="+", metavar="METRES", default=None,
                         type=number_in(float, 1e-4, 1.0, expected="a number of metres in "
                                                                   "[0.0001, 1]"),
@@ -85,7 +85,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help="suites with pegs of the pegs section (pegs-K: goals made among "
                              "pegs; route-K: goals that need the cord routed around a peg), run "
                              "in " + " ".join(e.split("/")[-1] for e in BenchmarkConfig.peg_envs)
-                             + " observing the pegs, at the headline threshold, by --agent "
+                             + " observing the pegs, at the headline threshold (1 cm; the first "
+                             "--threshold without it), by --agent "
                              "(RL agents: those trained with pegs, BASELINES/ALGO-pegs) "
                              "(default: " + " ".join(DEFAULT_PEGS) + "; none with --quick or "
                              "--difficulty; `--pegs` alone: none)")

@@ -44,6 +44,8 @@ PEG_SUITES: dict[str, int] = {f"pegs-{k}": k for k in (1, 2, 3)}
 SUITE_MAX_PEGS = 4
 #: Route suite -> difficulty (straight moves per task).
 ROUTE_SUITES: dict[str, int] = {f"route-{k}": k for k in (2, 3, 4)}
+#: Every suite with pegs on the table: suite -> difficulty.
+PEGGED_SUITES: dict[str, int] = {**PEG_SUITES, **ROUTE_SUITES}
 #: A route goal rests within this of a peg's surface (its centre line), metres.
 ROUTE_CONTACT = 0.01
 #: One straight move to the goal's end positions leaves a route goal farther than this, metres.

@@ -30,9 +30,9 @@ def _exit_with(parent: int) -> None:
     os._exit(1)
 
 
-def _watch_parent(parent: int) -> None:
+def _watch_parent() -> None:
     """A worker's initializer: a daemon thread that ends the worker when its parent dies."""
-    threading.Thread(target=_exit_with, args=(parent,), daemon=True).start()
+    threading.Thread(target=_exit_with, args=(os.getppid(),), daemon=True).start()
 
 
 @dataclass(frozen=True)
@@ -57,7 +57,7 @@ class ProcessBackend:
         iteration cancels the calls not started and waits for the running ones."""
         context = multiprocessing.get_context("spawn")
         with ProcessPoolExecutor(max_workers=self.workers, mp_context=context,
-                                 initializer=_watch_parent, initargs=(os.getpid(),)) as pool:
+                                 initializer=_watch_parent) as pool:
             pending = {pool.submit(function, *args): i for i, args in enumerate(calls)}
             try:
                 while pending:

@@ -4,10 +4,12 @@ from __future__ import annotations
 
 import json
 import shutil
+from pathlib import Path
 
 import pytest
 
 from dlo_bench.paths import shipped_baseline
+from dlo_bench.report import threshold_label
 from dlo_cli.main import main
 
 AGENTS = ["straight-line", "latent-tree", "latent-tree-closed", "latent-tree-kino", "physics-mpc",
@@ -238,9 +240,18 @@ def test_the_pegs_section_runs_among_pegs_with_the_rl_agents_trained_there(tmp_p
     assert (out / "results_pegs.png").stat().st_size > 0 and not (out / "results.png").exists()
     printed = capsys.readouterr().out
     assert "| sac-her | " in printed.split("**endpoint, 2 cm**")[1]
+    assert main(["benchmark", "--agent", "straight-line", "sac-her", "--difficulty",
+                 "--designed", "--cords", "--pegs", "route-2", "--threshold", "0.02",
+                 "--episodes", "1", "--baselines", str(baselines), "--allow-dirty",
+                 "--resume", "--out", str(out)]) == 0
+    printed = capsys.readouterr().out
+    assert "straight-line-endpoint-route-2-2cm: reused" in printed
+    assert "sac-her-endpoint-route-2-2cm: reused" in printed
 
 
 def test_the_pegs_section_has_its_own_transition_model_and_rl_folders(tmp_path):
+    """Where pegs are observed the model-based agents plan with --pegs-transition-model and
+    the RL agents read ALGO-pegs folders; elsewhere neither changes."""
     import gymnasium as gym
 
     from dlo_bench.benchmark import PEG_AGENTS, BenchmarkConfig, load_agent
@@ -267,3 +278,50 @@ def test_the_pegs_section_has_its_own_transition_model_and_rl_folders(tmp_path):
         BenchmarkConfig(pegs=("pegs-1",), peg_agents=("latent-mpc-adaptive",))
     with pytest.raises(ValueError, match="pegs must be distinct suites"):
         BenchmarkConfig(pegs=("linear-1",))
+
+
+@pytest.mark.parametrize(("flags", "expected"), [
+    ([], ["pegs-1", "pegs-2", "pegs-3", "route-2", "route-3", "route-4"]),
+    (["--quick"], []),
+    (["--difficulty", "1"], []),
+    (["--difficulty"], []),
+    (["--pegs"], []),
+    (["--quick", "--pegs", "route-3", "route-3"], ["route-3"]),
+])
+def test_which_peg_suites_a_benchmark_command_runs(flags, expected):
+    from dlo_cli.benchmark import section_suites
+    from dlo_cli.main import build_parser
+
+    args = build_parser().parse_args(["benchmark", *flags])
+    assert section_suites(args, "pegs") == expected
+
+
+def test_committed_cells_keep_their_keys():
+    """A field added to BenchmarkConfig must not change the key of the committed cells (every
+    one would be run again by --resume): the key recomputed today matches the file's."""
+    import gymnasium as gym
+
+    from dlo_bench.benchmark import (
+        DEFAULT_CORDS,
+        DEFAULT_PEGS,
+        BenchmarkConfig,
+        cell_key,
+        load_agent,
+    )
+    from dlo_bench.report import json_ready
+
+    folder = Path(__file__).resolve().parents[2] / "benchmarks" / "results_episodes"
+    config = BenchmarkConfig(cords=DEFAULT_CORDS, pegs=DEFAULT_PEGS)
+    checked = 0
+    for name, suite, threshold in (("straight-line", "linear-3", 0.01),
+                                   ("latent-mpc", "linear-3", 0.01),
+                                   ("physics-mpc", "linear-1", 0.02)):
+        path = folder / f"{name}-endpoint-d{suite[-1]}-{threshold_label(threshold, '')}.json"
+        if not path.is_file():
+            continue
+        with gym.make("dlo_env/DLOEndpoint-v0") as env:
+            agent = load_agent(name, config, env)
+        key = cell_key(config, agent, "dlo_env/DLOEndpoint-v0", suite, threshold)
+        assert json.loads(path.read_text())["benchmark_key"] == json_ready(key), path.name
+        checked += 1
+    assert checked

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import json
 import operator
+import sys
 
 import pytest
 
@@ -36,13 +37,16 @@ def test_benchmark_cells_in_two_processes_equal_the_local_ones(tmp_path, capsys)
     assert "--jobs runs the cells in local processes" in capsys.readouterr().err
 
 
+@pytest.mark.skipif(not sys.platform.startswith("linux"), reason="reads /proc")
 def test_workers_exit_when_their_parent_is_killed(tmp_path):
     """SIGTERM on a run with --jobs runs no clean-up: its workers must not go on as orphans."""
     import os
     import signal
     import subprocess
-    import sys
     import time
+    from pathlib import Path
+
+    import dlo_env
 
     pids = tmp_path / "worker.pid"
     script = (
@@ -55,7 +59,20 @@ def test_workers_exit_when_their_parent_is_killed(tmp_path):
         f"    list(ProcessBackend(1).map(work, [({str(pids)!r},)]))\n"
     )
     (tmp_path / "parent.py").write_text(script)  # a file: spawned workers import its `work`
-    parent = subprocess.Popen([sys.executable, str(tmp_path / "parent.py")])
+    code = str(Path(dlo_env.__file__).resolve().parents[1])  # this checkout's code
+    env = {**os.environ, "PYTHONPATH": os.pathsep.join(
+        p for p in (code, os.environ.get("PYTHONPATH")) if p)}
+    parent = subprocess.Popen([sys.executable, str(tmp_path / "parent.py")], env=env)
+
+    def running(pid: int) -> bool:
+        """Alive and not a zombie (an exited child its new parent has not reaped yet)."""
+        try:
+            stat = Path(f"/proc/{pid}/stat").read_text()
+        except (FileNotFoundError, ProcessLookupError):
+            return False
+        return stat.rsplit(")", 1)[1].split()[0] != "Z"
+
+    worker = None
     try:
         deadline = time.monotonic() + 60
         while not (pids.is_file() and pids.read_text()) and time.monotonic() < deadline:
@@ -63,17 +80,11 @@ def test_workers_exit_when_their_parent_is_killed(tmp_path):
         worker = int(pids.read_text())
         parent.send_signal(signal.SIGTERM)
         parent.wait(timeout=30)
-
-        def alive(pid: int) -> bool:
-            try:
-                os.kill(pid, 0)
-            except ProcessLookupError:
-                return False
-            return True
-
         deadline = time.monotonic() + 15
-        while alive(worker) and time.monotonic() < deadline:
+        while running(worker) and time.monotonic() < deadline:
             time.sleep(0.2)
-        assert not alive(worker)
+        assert not running(worker)
     finally:
         parent.kill()
+        if worker is not None and running(worker):
+            os.kill(worker, signal.SIGKILL)
