@@ -125,7 +125,7 @@ def plot_results(rows: list[dict[str, Any]], png: str | os.PathLike) -> None:
                 v = by.get((agent, cell), {}).get(key)
                 values.append(np.nan if v is None else v * scale)
             ax.bar(x + (i - (len(agents) - 1) / 2) * width, values, width, label=agent)
-        ax.set_xticks(x, cells, fontsize=8)
+        ax.set_xticks(x, [c.replace(" ", "\n", 1) for c in cells], fontsize=8)  # env, cell
         ax.set_ylabel(label)
         if log:
             ax.set_yscale("log")
