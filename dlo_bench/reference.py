@@ -207,7 +207,10 @@ def make_references(suite: str, env_id: str, out: str | Path, *, split: str = "t
     else:
         from multiprocessing import get_context
 
-        with get_context("spawn").Pool(jobs) as pool:
+        from dlo_env.dataset.process_backend import watch_parent
+
+        # workers end with a parent killed outright (finished searches are in the file)
+        with get_context("spawn").Pool(jobs, initializer=watch_parent) as pool:
             for index, result in pool.imap_unordered(_search, todo):
                 save(index, result)
     return path

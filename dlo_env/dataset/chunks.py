@@ -13,7 +13,6 @@ import json
 import multiprocessing
 import os
 import signal
-import threading
 import time
 from collections.abc import Callable
 from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
@@ -96,14 +95,9 @@ def _init_worker(queue: Any) -> None:
     signal.signal(signal.SIGINT, signal.SIG_IGN)
     # A parent killed outright (SIGTERM, SIGKILL) cannot stop its workers: they stop themselves
     # (their unfinished chunk is made again by the resumed run; finished ones are on disk).
-    parent = os.getppid()
-    threading.Thread(target=_exit_with_parent, args=(parent,), daemon=True).start()
+    from dlo_env.dataset.process_backend import watch_parent
 
-
-def _exit_with_parent(parent: int) -> None:
-    while os.getppid() == parent:
-        time.sleep(1.0)
-    os._exit(1)
+    watch_parent()
 
 
 def _worker_chunk(job: ChunkJob, index: int, size: int, parts: str) -> int:

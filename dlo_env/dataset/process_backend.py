@@ -30,8 +30,10 @@ def _exit_with(parent: int) -> None:
     os._exit(1)
 
 
-def _watch_parent() -> None:
-    """A worker's initializer: a daemon thread that ends the worker when its parent dies."""
+def watch_parent() -> None:
+    """Start a daemon thread that ends this (worker) process when its parent dies: the
+    initializer, or part of it, of every worker pool here (benchmark cells, data chunks,
+    reference searches)."""
     threading.Thread(target=_exit_with, args=(os.getppid(),), daemon=True).start()
 
 
@@ -57,7 +59,7 @@ class ProcessBackend:
         iteration cancels the calls not started and waits for the running ones."""
         context = multiprocessing.get_context("spawn")
         with ProcessPoolExecutor(max_workers=self.workers, mp_context=context,
-                                 initializer=_watch_parent) as pool:
+                                 initializer=watch_parent) as pool:
             pending = {pool.submit(function, *args): i for i, args in enumerate(calls)}
             try:
                 while pending:
