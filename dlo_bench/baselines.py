@@ -326,6 +326,7 @@ def train_baseline(
     """
     import torch
     from stable_baselines3 import PPO, SAC
+    from stable_baselines3.common.logger import Logger
 
     if threads is not None:
         torch.set_num_threads(threads)
@@ -349,6 +350,8 @@ def train_baseline(
                 model.learning_starts = model.num_timesteps + config.sac_learning_starts
         else:
             model = build_model(config, env, device=device)
+        # SB3's default logger makes an empty SB3-<time> folder in the temp dir on every learn()
+        model.set_logger(Logger(folder=None, output_formats=[]))
         start = int(model.num_timesteps)
         callback = _training_callback(
             config.timesteps, start, checkpoint if config.checkpoint_every else None,

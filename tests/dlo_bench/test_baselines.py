@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import json
 import shutil
+import tempfile
 
 import gymnasium as gym
 import numpy as np
@@ -199,6 +200,20 @@ def test_training_resumes_from_a_checkpoint(tiny_models, tmp_path):
     train_baseline(config, folder, progress_bar=False, resume=True)
     meta = read_baseline_metadata(folder)
     assert meta["resumed_at"] == 256 and meta["trained_timesteps"] >= 384
+
+
+def test_training_leaves_no_log_folder_in_the_temp_dir(tmp_path, monkeypatch):
+    temp = tmp_path / "temp"
+    temp.mkdir()
+    monkeypatch.setattr(tempfile, "tempdir", str(temp))
+    monkeypatch.delenv("SB3_LOGDIR", raising=False)
+    folder = tmp_path / "ppo"
+    train_baseline(BaselineConfig(algo="ppo", **{**TINY, "timesteps": 128}), folder,
+                   progress_bar=False)
+    shutil.copy(folder / "model.zip", folder / "checkpoint.zip")
+    train_baseline(BaselineConfig(algo="ppo", **{**TINY, "timesteps": 256}), folder,
+                   progress_bar=False, resume=True)
+    assert list(temp.iterdir()) == []  # SB3's default logger would leave SB3-<time> folders
 
 
 def test_load_baseline_names_a_folder_without_a_model(tmp_path):
