@@ -42,7 +42,8 @@ class EnsembleChainNet(nn.Module):
         members: Networks.
         n_points: Points of the cord.
         rim_targets: Targets with rim vectors in the input (``TransitionModelConfig``).
-        rim_blocks: Rim vectors per point: 1, or 2 with ``contact_reach``.
+        rim_blocks: Vectors per point and target in the layout of the rim's: the rim's, the
+            contact's with ``contact_reach`` and the pegs' with ``peg_reach``.
         width: Channels of the convolutions.
         depth: Residual blocks; block ``i`` has dilation ``2 ** (i % 4)``.
         extra_globals: Global inputs between the rim vectors and the move (the cord's

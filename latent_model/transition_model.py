@@ -208,7 +208,8 @@ class TransitionModelConfig:
         peg_reach: The points and the held ends' targets also get a peg vector (0: none, a
             model of the empty table): each peg whose surface lies within this of them adds
             its outward direction scaled by ``1 - distance / peg_reach``, so far from every
-            peg the vector is exactly zero, as on the empty table. ``mlp`` only.
+            peg the vector is exactly zero, as on the empty table. The chain network reads
+            them as one more vector per point, like the rim's.
         peg_radius: Radius of the pegs the model was trained with, metres.
     """
 
@@ -237,9 +238,6 @@ class TransitionModelConfig:
         if not math.isfinite(self.peg_reach):
             raise ValueError(f"TransitionModelConfig.peg_reach must be finite, got "
                              f"{self.peg_reach!r}")
-        if self.peg_reach and self.architecture != "mlp":
-            raise ValueError("TransitionModelConfig.peg_reach needs architecture='mlp' (the "
-                             "chain network has no peg inputs)")
         if self.architecture not in ARCHITECTURES:
             raise ValueError(f"TransitionModelConfig.architecture must be one of "
                              f"{ARCHITECTURES}, got {self.architecture!r}")
@@ -475,8 +473,9 @@ class TransitionModel(nn.Module):
         c = self.config
         width = c.width if width is None else width
         if design == "chain":
-            return EnsembleChainNet(members, c.n_points, RIM_TARGETS,
-                                    2 if c.contact_reach else 1, width, c.depth,
+            # Rim, contact and peg vectors share one layout: a vector per point and target.
+            blocks = (c.rim_inputs + c.peg_inputs) // (c.n_points + RIM_TARGETS)
+            return EnsembleChainNet(members, c.n_points, RIM_TARGETS, blocks, width, c.depth,
                                     extra_globals=c.cord_features)
         return EnsembleMLP(members, c.inputs, width, c.depth, 2 * c.n_points)
 

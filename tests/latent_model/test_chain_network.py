@@ -56,3 +56,32 @@ def test_the_model_builds_a_chain_ensemble_with_an_mlp_mean_network():
         TransitionModelConfig(architecture="transformer")
     with pytest.raises(ValueError, match="does not grow new inputs"):
         model.net.with_inputs(0, 2)
+
+
+def test_a_chain_model_reads_the_peg_vectors_per_point_and_trains_around_pegs(tmp_path):
+    from dlo_env.dataset.transitions import TransitionCollectConfig, collect_transition_chunk
+    from latent_model.transition_training import TransitionTrainConfig, train_transition_model
+
+    config = TransitionModelConfig(architecture="chain", width=8, depth=2, members=2,
+                                   contact_reach=0.03, peg_reach=0.1)
+    model = TransitionModel(config, device="cpu")
+    assert model.net.rim_blocks == 3 and model.net.inputs == config.inputs
+    shape = torch.stack([torch.linspace(-0.4, 0.4, 20), torch.zeros(20)], 1).numpy()
+    move = torch.tensor([0.2, 0.1]).numpy()
+    with torch.no_grad():
+        model.net.head[0].mul_(10.0)  # outputs that depend on every input
+    far = model.predict(shape, "head", move, pegs=[[0.8, 0.8]], inextensible=False)
+    empty = model.predict(shape, "head", move, inextensible=False)
+    near = model.predict(shape, "head", move, pegs=[[0.0, 0.04]], inextensible=False)
+    assert abs(far - empty).max() < 1e-6  # a peg beyond peg_reach is no peg
+    assert abs(near - empty).max() > 1e-4  # the points near a peg see it
+    data = collect_transition_chunk(TransitionCollectConfig(seed=5, max_pegs=2), 0, 30)
+    trained = train_transition_model(
+        data, tmp_path / "m", TransitionTrainConfig(steps=2, batch_size=16, eval_every=2), config)
+    loaded = TransitionModel.load(tmp_path / "m")
+    assert loaded.config.architecture == "chain" and loaded.config.peg_reach == 0.1
+    i = int(torch.tensor(data.peg_count).nonzero()[0])
+    name = ("head", "tail", "both")[int(data.grasp[i])]
+    args = (data.start[i], name, data.end_displacement(torch.tensor([i]).numpy())[0])
+    assert abs(loaded.predict(*args, pegs=data.peg_list(i))
+               - trained.predict(*args, pegs=data.peg_list(i))).max() < 1e-3

@@ -899,8 +899,6 @@ def test_peg_inputs_added_at_zero_weight_predict_as_the_model_without_them():
     move = np.array([0.1, 0.1], dtype=np.float32)
     np.testing.assert_allclose(seeing.predict(shape, "head", move, pegs=pegs),
                                plain.predict(shape, "head", move, pegs=pegs), atol=1e-6)
-    with pytest.raises(ValueError, match="peg_reach needs architecture='mlp'"):
-        TransitionModelConfig(peg_reach=0.1, architecture="chain")
 
 
 def test_a_model_that_sees_pegs_trains_on_data_around_pegs(tmp_path):
