@@ -9,13 +9,21 @@ grippers at them. The floors of issue 36 (``FLOORS``): moves that touch a peg at
 mean; moves that touch none within 10 % of the first model's error (give the peg-free model
 first).
 
+``--replay N`` also measures what limits any model: the simulator itself, N moves of each group
+(at rest, from a start of rest-length segments) replayed from their recorded start and compared
+with the recorded shape after. The reset from a stored shape loses what the shape does not hold
+(velocities, the contact solver's state, float32 rounding), so a move whose outcome turns on
+those (a cord that may slip either way round a peg) differs on replay: a floor for any model of
+the stored start.
+
     python benchmarks/pegs_model.py --model latent_model/pretrained/transition.pt FILE \
-        --data data/pegs-heldout-32.npz [--out runs/pegs-model]
+        --data data/pegs-heldout-32.npz [--out runs/pegs-model] [--replay 1000]
 """
 
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import json
 from pathlib import Path
 
@@ -23,9 +31,17 @@ import numpy as np
 import torch
 
 from dlo_env.atomic import file_digest, write_text_atomic
-from dlo_env.cord import peg_clearance
-from dlo_env.dataset.transitions import GRASP_NAMES, TransitionDataset, load_transitions
+from dlo_env.cord import PEG_RADIUS, Cord, CordParams, peg_clearance
+from dlo_env.dataset.transitions import (
+    GRASP_ENDS,
+    GRASP_NAMES,
+    PARAM_COLUMNS,
+    TransitionDataset,
+    carry_out,
+    load_transitions,
+)
 from dlo_env.shapes import error
+from dlo_env.tasks import DEFAULT_MAX_STEP
 from latent_model.transition_metrics import cords_of, pegs_of
 from latent_model.transition_model import TransitionModel
 
@@ -62,13 +78,50 @@ def errors(model: TransitionModel, data: TransitionDataset) -> np.ndarray:
     return out
 
 
+def replay_errors(data: TransitionDataset, idx: np.ndarray) -> np.ndarray:
+    """``(len(idx),)`` distance between the recorded shape after each move and the simulator's
+    when the move is replayed from its recorded start, metres."""
+    collected = data.metadata.get("collect", {})
+    base = CordParams(**collected["cord"]) if collected.get("cord") else CordParams()
+    radius = float(collected.get("peg_radius", PEG_RADIUS))
+    max_step = float(collected.get("max_step", DEFAULT_MAX_STEP))
+    out = np.zeros(len(idx))
+    for k, i in enumerate(idx):
+        params = dataclasses.replace(base, **{c: float(v) for c, v in
+                                              zip(PARAM_COLUMNS, data.params[i])})
+        cord = Cord(params, grasp=GRASP_NAMES[int(data.grasp[i])], peg_radius=radius)
+        pegs = data.peg_list(i)
+        if len(pegs):
+            cord.set_pegs(pegs)
+        cord.reset(data.start[i].astype(np.float64))
+        move = np.concatenate([data.displacement[i, 0 if end == "head" else 1]
+                               for end in GRASP_ENDS[cord.grasp]])
+        out[k] = error(carry_out(cord, move, max_step)[0], data.next[i])
+    return out
+
+
+def replayable(data: TransitionDataset) -> np.ndarray:
+    """``(T,)`` moves that can be replayed from their start: ended at rest, and started with
+    every segment within 2 % of rest length (a cord held taut round pegs may start stretched,
+    a shape ``Cord.reset`` refuses)."""
+    seg = np.linalg.norm(np.diff(data.start, axis=1), axis=-1)
+    rest = data.params[:, PARAM_COLUMNS.index("length")] / (data.start.shape[1] - 1)
+    return data.at_rest & (seg.max(axis=1) <= 1.02 * rest)
+
+
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--model", nargs="+", required=True, help="transition model files")
     parser.add_argument("--data", required=True, help="held-out transitions around pegs")
     parser.add_argument("--out", default="runs/pegs-model", help="folder of results.json")
     parser.add_argument("--threads", type=int, default=1, help="torch threads")
+    parser.add_argument("--replay", type=int, default=0, metavar="N",
+                        help="also replay N moves of each group in the simulator from their "
+                        "recorded start (what limits any model; default 0: none)")
+    parser.add_argument("--seed", type=int, default=0, help="which moves --replay draws")
     args = parser.parse_args(argv)
+    if args.replay < 0:
+        parser.error(f"--replay must be >= 0, got {args.replay}")
     torch.set_num_threads(args.threads)
     data = load_transitions(args.data)
     if not data.peg_count.any():
@@ -95,7 +148,7 @@ def main(argv: list[str] | None = None) -> int:
                 "within_1cm": float((e[sel] <= WITHIN).mean()),
             }
             r = row[label]
-            print(f"{Path(path).name[-40:]:>40}  {label:>10}  {r['one_end_cm'] or 0:10.3f}  "
+            print(f"{str(path)[-40:]:>40}  {label:>10}  {r['one_end_cm'] or 0:10.3f}  "
                   f"{r['both_cm'] or 0:8.3f}  {r['mean_cm']:7.3f}  {r['within_1cm']:11.1%}")
         results[path] = {"digest": file_digest(path)[:16], "peg_reach": model.config.peg_reach,
                          **row}
@@ -108,10 +161,34 @@ def main(argv: list[str] | None = None) -> int:
               f"{100 * FLOORS['touching']:.1f}: {'met' if ok_touch else 'NOT met'}); untouched "
               f"{rise:+.1%} against {Path(args.model[0]).name} (floor +"
               f"{FLOORS['untouched_rise']:.0%}: {'met' if ok_rise else 'NOT met'})")
+    replays: dict[str, dict] = {}
+    if args.replay:
+        rng = np.random.default_rng(args.seed)
+        can = replayable(data)
+        print(f"the simulator replaying up to {args.replay} moves of each group from their "
+              f"recorded start ({int((~can).sum())} moves left out: not at rest after, or a "
+              "stretched start); distance to the recorded shape after:")
+        for label, sel in groups.items():
+            pool = np.flatnonzero(sel & can)
+            if not len(pool):
+                continue
+            idx = np.sort(rng.choice(pool, min(args.replay, len(pool)), replace=False))
+            e = replay_errors(data, idx)
+            ends = data.grasp[idx] < 2
+            replays[label] = {
+                "count": len(idx), "mean_cm": 100 * float(e.mean()),
+                "one_end_cm": 100 * float(e[ends].mean()) if ends.any() else None,
+                "both_cm": 100 * float(e[~ends].mean()) if (~ends).any() else None,
+                "median_cm": 100 * float(np.median(e)), "over_1cm": float((e > WITHIN).mean())}
+            r = replays[label]
+            print(f"{'simulator replay':>40}  {label:>10}  {r['one_end_cm'] or 0:10.3f}  "
+                  f"{r['both_cm'] or 0:8.3f}  {r['mean_cm']:7.3f}  {1 - r['over_1cm']:11.1%}  "
+                  f"({len(idx)} moves, median {r['median_cm']:.3f} cm)")
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
     write_text_atomic(out / "results.json", json.dumps(
-        {"data": args.data, "touch_m": TOUCH, "models": results}, indent=2) + "\n")
+        {"data": args.data, "touch_m": TOUCH, "models": results, "replay": replays},
+        indent=2) + "\n")
     print(f"wrote {out / 'results.json'}")
     return 0
 
