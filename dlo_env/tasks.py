@@ -43,6 +43,7 @@ from dlo_env.shapes import (
     is_cord_like,
     on_table,
     random_cord_shape,
+    segment_lengths,
     validate_shape,
 )
 
@@ -73,6 +74,11 @@ PEG_CLEARANCE = 0.02
 PEG_NEAR = 0.15
 #: Drawn pegs leave at least this gap between their surfaces (a cord passes between), metres.
 PEG_GAP = 0.04
+#: A goal's segments stay within this share of their rest length: both grippers can hold a cord
+#: taut round pegs, stretched (up to 11 % in tasks drawn before this rule), a shape the cord does
+#: not rest in and ``reset(options={"goal": ...})`` refuses; such a goal is redrawn. Goals
+#: without pegs stay within 0.1 %.
+GOAL_STRETCH = 0.02
 #: Version of the ``.npz`` task file layout written by :func:`save_tasks` (2 adds the pegs;
 #: files of version 1, without pegs, stay readable).
 FORMAT_VERSION = 2
@@ -382,7 +388,8 @@ def make_task(
         max_step: Gripper displacement of an action of 1.0, metres.
         start: Use this start shape (as given, not settled) instead of a random one.
         min_error: The goal is redrawn until ``error(start, goal) > min_error``, so a new task
-            is never solved at the start (and until every goal point is on the table).
+            is never solved at the start (and until every goal point is on the table and
+            every segment within ``GOAL_STRETCH`` of its rest length).
         pegs: Pegs on the table while the moves run: ``(k, 2)`` centres (a drawn start keeps
             ``PEG_CLEARANCE`` from them; a given one must not cross them), or a count drawn
             near the start (:func:`draw_pegs`), or None: none.
@@ -430,7 +437,8 @@ def make_task(
             moves.append(steps.astype(np.float64).sum(axis=0) * max_step)
         actions.append(np.zeros((wait_for_rest(cord, max_step), dim), dtype=np.float32))
         goal = cord.shape
-        if error(start, goal) > min_error and on_table(goal):
+        stretch = float(np.abs(segment_lengths(goal) / p.segment - 1.0).max())
+        if error(start, goal) > min_error and on_table(goal) and stretch <= GOAL_STRETCH:
             return Task(
                 start=start,
                 goal=goal,

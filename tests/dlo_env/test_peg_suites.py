@@ -21,7 +21,8 @@ from dlo_env.peg_suites import (
     route_seeds,
     straight_miss,
 )
-from dlo_env.tasks import SPLIT_SIZES, suite_seeds
+from dlo_env.shapes import segment_lengths, validate_shape
+from dlo_env.tasks import GOAL_STRETCH, SPLIT_SIZES, suite_seeds
 
 
 def test_peg_suite_tasks_have_their_pegs_and_replay_to_their_goals():
@@ -42,6 +43,21 @@ def test_peg_suite_tasks_have_their_pegs_and_replay_to_their_goals():
     assert not linear & ours and len(ours) == 3 * sum(SPLIT_SIZES.values())
     with pytest.raises(ValueError, match="suite must be one of"):
         load_peg_suite("pegs-9")
+
+
+def test_a_goal_held_taut_round_a_peg_is_redrawn_so_every_goal_is_one_the_cord_rests_in():
+    # Task 8 of pegs-1's dual test split: both grippers once pulled its goal cord round its peg
+    # with a segment 11 % over rest length; now its goal is redrawn.
+    task = load_peg_suite("pegs-1", "test", grasp="both", limit=9)[8]
+    rest = 1.0 / 19
+    assert np.abs(segment_lengths(task.goal) / rest - 1.0).max() <= GOAL_STRETCH
+    # a goal that reset(options={"goal": ...}) accepts
+    validate_shape(task.goal, n_points=20, length=1.0, name="goal")
+    env = gym.make("dlo_env/DLODualEndpoint-v0", max_pegs=4, judge_at_rest=False)
+    env.reset(options=task.options())
+    for action in task.reference_actions:
+        obs, *_ = env.step(action)
+    np.testing.assert_array_equal(obs["achieved_goal"], task.goal.reshape(-1))
 
 
 @pytest.mark.parametrize("grasp", ["head", "both"])
