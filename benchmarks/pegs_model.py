@@ -10,8 +10,8 @@ mean; moves that touch none within 10 % of the first model's error (give the peg
 first).
 
 ``--replay N`` also measures what limits any model: the simulator itself, N moves of each group
-(at rest, from a start of rest-length segments) replayed from their recorded start and compared
-with the recorded shape after. The reset from a stored shape loses what the shape does not hold
+(from a start at rest, ending at rest) replayed from their recorded start and compared with the
+recorded shape after. The reset from a stored shape loses what the shape does not hold
 (velocities, the contact solver's state, float32 rounding), so a move whose outcome turns on
 those (a cord that may slip either way round a peg) differs on replay: a floor for any model of
 the stored start.
@@ -41,7 +41,7 @@ from dlo_env.dataset.transitions import (
     load_transitions,
 )
 from dlo_env.shapes import error
-from dlo_env.tasks import DEFAULT_MAX_STEP
+from dlo_env.tasks import GOAL_STRETCH
 from latent_model.transition_metrics import cords_of, pegs_of
 from latent_model.transition_model import TransitionModel
 
@@ -80,15 +80,24 @@ def errors(model: TransitionModel, data: TransitionDataset) -> np.ndarray:
 
 def replay_errors(data: TransitionDataset, idx: np.ndarray) -> np.ndarray:
     """``(len(idx),)`` distance between the recorded shape after each move and the simulator's
-    when the move is replayed from its recorded start, metres."""
+    when the move is replayed from its recorded start, metres (the cord, pegs, peg radius and
+    action size of the collection, read from the file's metadata)."""
     collected = data.metadata.get("collect", {})
-    base = CordParams(**collected["cord"]) if collected.get("cord") else CordParams()
-    radius = float(collected.get("peg_radius", PEG_RADIUS))
-    max_step = float(collected.get("max_step", DEFAULT_MAX_STEP))
+    recorded = data.metadata.get("cord") or collected.get("cord")
+    if recorded is None or "max_step" not in collected or (
+            data.peg_count.any() and "peg_radius" not in collected):
+        raise ValueError("replaying needs the collection's cord, max_step and peg_radius in "
+                         "the file's metadata (a file written by dlo collect --kind "
+                         "transitions)")
+    base = CordParams(**recorded)
+    radius = float(collected.get("peg_radius", PEG_RADIUS))  # only read where pegs stand
+    max_step = float(collected["max_step"])
     out = np.zeros(len(idx))
     for k, i in enumerate(idx):
-        params = dataclasses.replace(base, **{c: float(v) for c, v in
-                                              zip(PARAM_COLUMNS, data.params[i])})
+        # The file keeps the cord's parameters as float32: the collection's own where they match.
+        params = dataclasses.replace(base, **{
+            c: getattr(base, c) if np.float32(getattr(base, c)) == v else float(v)
+            for c, v in zip(PARAM_COLUMNS, data.params[i])})
         cord = Cord(params, grasp=GRASP_NAMES[int(data.grasp[i])], peg_radius=radius)
         pegs = data.peg_list(i)
         if len(pegs):
@@ -101,12 +110,18 @@ def replay_errors(data: TransitionDataset, idx: np.ndarray) -> np.ndarray:
 
 
 def replayable(data: TransitionDataset) -> np.ndarray:
-    """``(T,)`` moves that can be replayed from their start: ended at rest, and started with
-    every segment within 2 % of rest length (a cord held taut round pegs may start stretched,
-    a shape ``Cord.reset`` refuses)."""
+    """``(T,)`` moves that can be replayed from their start: the move ended at rest, its start
+    is the first of an episode or the end of a move that came to rest, and every segment of the
+    start lies within ``GOAL_STRETCH`` of its rest length (a cord held taut round pegs can be
+    stretched, a state a reset does not reproduce)."""
     seg = np.linalg.norm(np.diff(data.start, axis=1), axis=-1)
     rest = data.params[:, PARAM_COLUMNS.index("length")] / (data.start.shape[1] - 1)
-    return data.at_rest & (seg.max(axis=1) <= 1.02 * rest)
+    unstretched = np.abs(seg / rest[:, None] - 1.0).max(axis=1) <= GOAL_STRETCH
+    previous = np.ones(len(data), dtype=bool)  # the move before, in the same episode
+    same = (data.episode[1:] == data.episode[:-1]) & (data.step[1:] == data.step[:-1] + 1)
+    previous[1:] = np.where(same, data.at_rest[:-1], data.step[1:] == 0)
+    previous[0] = data.step[0] == 0
+    return data.at_rest & previous & unstretched
 
 
 def main(argv: list[str] | None = None) -> int:

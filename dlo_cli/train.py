@@ -66,13 +66,14 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         default=None, metavar="METRES",
                         help="--stage transition: networks that also see the pegs within this "
                              "of each point and target (TransitionModelConfig.peg_reach), for "
-                             "data around pegs (dlo collect --max-pegs); with --init of a "
+                             "data around pegs (dlo collect --max-pegs); with --init of an MLP "
                              "model without them, their inputs start at zero weight")
     parser.add_argument("--init", default=None,
                         help="--stage transition: start from this transition model file "
-                             "(fine-tuning; the same architecture, or one without the contact "
-                             "vectors of --contact-reach, the cord inputs of --cord-inputs or "
-                             "the peg vectors of --peg-reach, which start at zero weight), "
+                             "(fine-tuning; the same architecture, or an MLP one without the "
+                             "contact vectors of --contact-reach, the cord inputs of "
+                             "--cord-inputs or the peg vectors of --peg-reach, which start at "
+                             "zero weight), "
                              "None: random weights")
     parser.add_argument("--teacher", default=None,
                         help="--stage transition: distil a mean network for this transition "

@@ -165,5 +165,6 @@ class EnsembleChainNet(nn.Module):
                          "ensemble is an MLP trained from scratch")
 
     def with_inputs(self, at: int, count: int) -> EnsembleChainNet:
-        raise ValueError("a chain network does not grow new inputs (--contact-reach or "
-                         "--cord-inputs with --init of a model without them needs an MLP model)")
+        raise ValueError("a chain network does not grow new inputs (--contact-reach, "
+                         "--cord-inputs or --peg-reach with --init of a model without them "
+                         "needs an MLP model)")

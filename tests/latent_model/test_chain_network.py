@@ -66,6 +66,13 @@ def test_a_chain_model_reads_the_peg_vectors_per_point_and_trains_around_pegs(tm
                                    contact_reach=0.03, peg_reach=0.1)
     model = TransitionModel(config, device="cpu")
     assert model.net.rim_blocks == 3 and model.net.inputs == config.inputs
+    # The flat input's peg vector of point j is point j's third vector block (after its
+    # position, the segments on either side, its rim and contact vectors).
+    j, x = 7, torch.zeros(1, 1, config.inputs)
+    x[0, 0, config.peg_at + 2 * j + 1] = 1.0
+    per_point = model.net._unflatten(x)[0, 0]  # (n, features)
+    hot = torch.nonzero(per_point[:, :model.net.point_features - 1])  # less where it lies
+    assert hot.tolist() == [[j, 2 + 4 + 2 * 2 + 1]]  # the y of its third vector
     shape = torch.stack([torch.linspace(-0.4, 0.4, 20), torch.zeros(20)], 1).numpy()
     move = torch.tensor([0.2, 0.1]).numpy()
     with torch.no_grad():
