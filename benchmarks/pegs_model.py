@@ -182,7 +182,7 @@ def main(argv: list[str] | None = None) -> int:
         can = replayable(data)
         print(f"the simulator replaying up to {args.replay} moves of each group from their "
               f"recorded start ({int((~can).sum())} moves left out: not at rest after, or a "
-              "stretched start); distance to the recorded shape after:")
+              "start not at rest or stretched); distance to the recorded shape after:")
         for label, sel in groups.items():
             pool = np.flatnonzero(sel & can)
             if not len(pool):
