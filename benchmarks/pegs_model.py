@@ -146,7 +146,8 @@ def main(argv: list[str] | None = None) -> int:
     groups = {"touching": touch, "untouched": ~touch}
     print(f"{args.data}: {len(data)} moves, {int(touch.sum())} touch a peg "
           f"({int((data.peg_count > 0).sum())} with pegs on the table)")
-    header = f"{'model':>40}  {'moves':>10}  {'one end cm':>10}  {'both cm':>8}  " \
+    w = max(16, *(len(str(m)) for m in args.model))  # the model column's width
+    header = f"{'model':>{w}}  {'moves':>10}  {'one end cm':>10}  {'both cm':>8}  " \
              f"{'all cm':>7}  {'within 1 cm':>11}"
     print(header)
     results: dict[str, dict] = {}
@@ -163,7 +164,7 @@ def main(argv: list[str] | None = None) -> int:
                 "within_1cm": float((e[sel] <= WITHIN).mean()),
             }
             r = row[label]
-            print(f"{str(path)[-40:]:>40}  {label:>10}  {r['one_end_cm'] or 0:10.3f}  "
+            print(f"{str(path):>{w}}  {label:>10}  {r['one_end_cm'] or 0:10.3f}  "
                   f"{r['both_cm'] or 0:8.3f}  {r['mean_cm']:7.3f}  {r['within_1cm']:11.1%}")
         results[path] = {"digest": file_digest(path)[:16], "peg_reach": model.config.peg_reach,
                          **row}
@@ -196,7 +197,7 @@ def main(argv: list[str] | None = None) -> int:
                 "both_cm": 100 * float(e[~ends].mean()) if (~ends).any() else None,
                 "median_cm": 100 * float(np.median(e)), "over_1cm": float((e > WITHIN).mean())}
             r = replays[label]
-            print(f"{'simulator replay':>40}  {label:>10}  {r['one_end_cm'] or 0:10.3f}  "
+            print(f"{'simulator replay':>{w}}  {label:>10}  {r['one_end_cm'] or 0:10.3f}  "
                   f"{r['both_cm'] or 0:8.3f}  {r['mean_cm']:7.3f}  {1 - r['over_1cm']:11.1%}  "
                   f"({len(idx)} moves, median {r['median_cm']:.3f} cm)")
     out = Path(args.out)

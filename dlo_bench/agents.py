@@ -125,9 +125,10 @@ def load_shape_model(model: ShapeSurrogate | str | Path | None) -> ShapeSurrogat
     return _loaded_or_file(model, ShapeSurrogate, load, "shape model", "dlo train")
 
 
-def load_transition_model(model: Any, cords: bool = False) -> Any:
+def load_transition_model(model: Any, cords: bool = False, pegs: bool = False) -> Any:
     """``model`` itself when it is loaded, else ``TransitionModel.load_or_pretrained(model,
-    cords=cords)`` (``cords``: the shipped model of several cords when ``model`` is None).
+    cords=cords, pegs=pegs)`` (when ``model`` is None, ``cords``: the shipped model of several
+    cords, ``pegs``: the shipped model that sees pegs).
 
     Raises:
         FileNotFoundError: Saying "no transition model" and where, when the file is missing.
@@ -136,9 +137,9 @@ def load_transition_model(model: Any, cords: bool = False) -> Any:
 
     return _loaded_or_file(model, TransitionModel,
                            lambda m: TransitionModel.load_or_pretrained(m, device="cpu",
-                                                                       cords=cords),
+                                                                       cords=cords, pegs=pegs),
                            "transition model", "dlo train --stage transition"
-                           + (" --cord-inputs" if cords else ""))
+                           + (" --cord-inputs" if cords else " --peg-reach" if pegs else ""))
 
 
 def _goal_for(config: Any, env: Any) -> Any:
@@ -182,7 +183,8 @@ def _latent_tree_kino(env: Any, options: AgentOptions) -> Policy:
     if options.max_seconds is not None:
         config = with_fields(config, max_seconds=options.max_seconds)
     planner = LatentTreePlanner(model, config, seed=options.seed,
-                                transition_model=load_transition_model(options.transition_model))
+                                transition_model=load_transition_model(
+                                    options.transition_model, pegs=observes_pegs(env)))
     policy = PlannerPolicy(model, planner, max_step=_max_step(env), moves_per_plan=1,
                            partial_plans=True)
     policy.check_env(env)
@@ -205,7 +207,8 @@ def _latent_mpc(env: Any, options: AgentOptions) -> Policy:
     from planners.latent_mpc import LatentMPCConfig, LatentMPCPolicy
 
     return LatentMPCPolicy.for_env(env, LatentMPCConfig(seed=options.seed),
-                                   model=load_transition_model(options.transition_model))
+                                   model=load_transition_model(options.transition_model,
+                                                               pegs=observes_pegs(env)))
 
 
 def _latent_mpc_adaptive(env: Any, options: AgentOptions) -> Policy:

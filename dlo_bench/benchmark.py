@@ -141,8 +141,8 @@ class BenchmarkConfig:
         cords_transition_model: Transition model of several cords of the agents marked
             ``cords`` (latent-mpc-adaptive; None: the shipped ``transition-cords.pt``).
         pegs_transition_model: Transition model of the agents of the ``pegs`` section (a
-            model that sees pegs, ``dlo train --stage transition --peg-reach``; None: the one
-            of ``transition_model``).
+            model that sees pegs, ``dlo train --stage transition --peg-reach``; None: the
+            shipped ``transition-pegs.pt``).
         replan_every: Steps between replans of ``latent-tree-closed``.
         max_seconds: Time budget of one latent-tree plan (None: the planner's default).
         fidelity: Compute the transition fidelity of each first latent-tree plan.
@@ -386,14 +386,15 @@ def load_agent(name: str, config: BenchmarkConfig, env: Any,
         path = config.transition_model
         if spec.cords:
             path = config.cords_transition_model
-        elif pegs and config.pegs_transition_model:
+        elif pegs:
             path = config.pegs_transition_model
         try:
-            transition = load_transition_model(path, cords=spec.cords)
+            transition = load_transition_model(path, cords=spec.cords, pegs=pegs and not spec.cords)
         except (FileNotFoundError, ValueError) as exc:
             return LoadedAgent(name, None, missing=str(exc).splitlines()[0])
         options.update(transition_model=transition)
-        models.append(str(transition_model_file(path, cords=spec.cords)))
+        models.append(str(transition_model_file(path, cords=spec.cords,
+                                                pegs=pegs and not spec.cords)))
         steps, moves = training_data(transition.info)
         costs.insert(0, "unknown (the model does not record its data)" if not steps
                      else f"{_steps(steps)} env steps" + (f" ({_steps(moves)} moves)" if moves

@@ -54,14 +54,16 @@ def shape_model_file(path: str | os.PathLike | None) -> Path:
     return p / MODEL_FILE if p.is_dir() else p
 
 
-def transition_model_file(path: str | os.PathLike | None, cords: bool = False) -> Path:
+def transition_model_file(path: str | os.PathLike | None, cords: bool = False,
+                          pegs: bool = False) -> Path:
     """The file of a transition model: ``path`` (a file, or a folder holding
     ``transition.pt``), or when None the shipped ``latent_model/pretrained/transition.pt``
-    (``transition-cords.pt`` with ``cords``: the model of several cords)."""
-    from latent_model.transition_model import CORDS_MODEL_FILE, MODEL_FILE
+    (``transition-cords.pt`` with ``cords``: the model of several cords;
+    ``transition-pegs.pt`` with ``pegs``: the model that sees pegs)."""
+    from latent_model.transition_model import MODEL_FILE, pretrained_file
 
     if not path:
-        name = CORDS_MODEL_FILE if cords else MODEL_FILE
+        name = pretrained_file(cords, pegs)
         return Path(str(resources.files("latent_model") / "pretrained" / name))
     p = Path(path)
     return p / MODEL_FILE if p.is_dir() else p

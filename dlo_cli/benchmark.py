@@ -104,7 +104,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--pegs-transition-model", default=None, metavar="FILE",
                         help="transition model of the pegs section's agents, file or folder (a "
                              "model that sees pegs: dlo train --stage transition --peg-reach; "
-                             "None: the --transition-model)")
+                             "None: the shipped latent_model/pretrained/transition-pegs.pt)")
     add_planner_flags(parser)
     add_seed(parser, "the planners' sampling (the tasks are the suites')",
              default=BenchmarkConfig.seed)

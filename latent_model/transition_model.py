@@ -67,6 +67,17 @@ FORMAT_VERSION = 1
 MODEL_FILE = "transition.pt"
 #: The shipped model of several cords (``cord_inputs``), beside ``MODEL_FILE``.
 CORDS_MODEL_FILE = "transition-cords.pt"
+#: The shipped model that sees pegs (``peg_reach``), beside ``MODEL_FILE``.
+PEGS_MODEL_FILE = "transition-pegs.pt"
+
+
+def pretrained_file(cords: bool = False, pegs: bool = False) -> str:
+    """The name of a shipped model in ``pretrained/``: the default cord's on the empty table,
+    the model of several cords (``cords``) or the one that sees pegs (``pegs``)."""
+    if cords and pegs:
+        raise ValueError("no shipped transition model is both of several cords and of pegs: "
+                         "give cords=True or pegs=True, or a model file")
+    return CORDS_MODEL_FILE if cords else PEGS_MODEL_FILE if pegs else MODEL_FILE
 #: Predictions per network call in ``predict`` (keeps activations in cache).
 PREDICT_CHUNK = 4096
 #: Config fields every file must state: files from before they existed are no longer read
@@ -914,26 +925,28 @@ class TransitionModel(nn.Module):
 
     @classmethod
     def load_pretrained(cls, device: str | torch.device = "auto", *,
-                        cords: bool = False) -> TransitionModel:
+                        cords: bool = False, pegs: bool = False) -> TransitionModel:
         """The shipped model for the default cord (``latent_model/pretrained/transition.pt``),
-        or with ``cords`` the shipped model of several cords (``transition-cords.pt``,
-        ``predict(params=...)``)."""
-        name = CORDS_MODEL_FILE if cords else MODEL_FILE
+        with ``cords`` the shipped model of several cords (``transition-cords.pt``,
+        ``predict(params=...)``), with ``pegs`` the one that sees pegs (``transition-pegs.pt``,
+        ``predict(pegs=...)``)."""
+        name = pretrained_file(cords, pegs)
         with resources.as_file(resources.files("latent_model") / "pretrained" / name) as p:
             return cls.load(p, device)
 
     @classmethod
     def load_or_pretrained(cls, path: str | os.PathLike | None = None,
                            device: str | torch.device = "auto", *,
-                           cords: bool = False) -> TransitionModel:
+                           cords: bool = False, pegs: bool = False) -> TransitionModel:
         """``load(path)`` when a path is given (not ``None`` or ""), else
-        ``load_pretrained(cords=cords)``.
+        ``load_pretrained(cords=cords, pegs=pegs)``.
 
         The one call for code whose model argument defaults to the shipped model (a CLI flag,
         an agent option): ``load_pretrained()`` always loads the shipped file, ``load(path)``
         always the given one.
         """
-        return cls.load(path, device) if path else cls.load_pretrained(device, cords=cords)
+        return cls.load(path, device) if path else cls.load_pretrained(device, cords=cords,
+                                                                       pegs=pegs)
 
     def extra_repr(self) -> str:
         c = self.config
