@@ -4,6 +4,7 @@ through its own entry points, and its enjoy script loads the result."""
 from __future__ import annotations
 
 import json
+import os
 import subprocess
 import sys
 from pathlib import Path
@@ -44,9 +45,12 @@ def test_shipped_yaml_files_hold_what_the_baseline_config_gives(zoo_algo):
 
 
 def run_zoo(script: str, args: list[str], cwd: Path) -> str:
-    """``python -m rl_zoo3.SCRIPT ARGS`` in ``cwd``; its stdout (stderr shown on failure)."""
+    """``python -m rl_zoo3.SCRIPT ARGS`` in ``cwd``; its stdout (stderr shown on failure).
+    SB3's logger writes into ``cwd`` (``SB3_LOGDIR``), not an ``SB3-<time>`` folder in the
+    temp dir."""
+    env = {**os.environ, "SB3_LOGDIR": str(cwd / "sb3-log")}
     result = subprocess.run([sys.executable, "-m", f"rl_zoo3.{script}", *args], cwd=cwd,
-                            capture_output=True, text=True, timeout=600)
+                            capture_output=True, text=True, timeout=600, env=env)
     assert result.returncode == 0, (result.stdout[-2000:], result.stderr[-3000:])
     return result.stdout
 
