@@ -142,6 +142,27 @@ def load_transition_model(model: Any, cords: bool = False, pegs: bool = False) -
                            + (" --cord-inputs" if cords else " --peg-reach" if pegs else ""))
 
 
+def model_files(name: str, env: Any, model: Any = None, transition_model: Any = None
+                ) -> list[str]:
+    """The model files agent ``name`` plans with in ``env``: its shape model (``model``, a
+    path or None for the shipped one) and its transition model (``transition_model``; None: the
+    shipped one it loads there, the model that sees pegs where pegs are observed), for the
+    provenance of its results. A model passed already loaded is named by its type."""
+    from dlo_bench.paths import shape_model_file, transition_model_file
+
+    spec = agent_spec(name)
+    files = []
+    for wanted, given, file in (
+            (spec.shape_model, model, shape_model_file),
+            (spec.transition_model, transition_model,
+             lambda p: transition_model_file(p, cords=spec.cords,
+                                             pegs=observes_pegs(env) and not spec.cords))):
+        if wanted:
+            files.append(str(file(given)) if given is None or isinstance(given, (str, Path))
+                         else f"<{type(given).__name__} passed in>")
+    return files
+
+
 def _goal_for(config: Any, env: Any) -> Any:
     """``config`` (a ``TreeConfig``) for ``env``: its grasp (the end(s) the environment holds),
     and its ``goal_threshold`` scaled to the environment's success threshold (the defaults

@@ -76,7 +76,7 @@ def evaluate_row(agent: str, difficulty: int | None, suite: str | None,
     import gymnasium as gym
 
     import dlo_env  # noqa: F401  (registers the environments)
-    from dlo_bench.agents import agent_spec, build_agent, load_shape_model
+    from dlo_bench.agents import agent_spec, build_agent, load_shape_model, model_files
     from dlo_bench.evaluation import evaluate
 
     if settings.get("threads"):
@@ -95,10 +95,13 @@ def evaluate_row(agent: str, difficulty: int | None, suite: str | None,
                              transition_model=settings["transition_model"],
                              replan_every=settings["replan_every"],
                              max_seconds=settings["max_seconds"])
-        return evaluate(policy, env, difficulty=difficulty, suite=suite,
-                        episodes=settings["episodes"], seed=settings["seed"],
-                        split=settings["split"], agent=agent,
-                        fidelity=not settings["no_fidelity"], progress=settings["progress"])
+        result = evaluate(policy, env, difficulty=difficulty, suite=suite,
+                          episodes=settings["episodes"], seed=settings["seed"],
+                          split=settings["split"], agent=agent,
+                          fidelity=not settings["no_fidelity"], progress=settings["progress"])
+        result.summary["models"] = model_files(agent, env, settings["model"],
+                                               settings["transition_model"])
+        return result
 
 
 def run(args: argparse.Namespace) -> int:

@@ -1,6 +1,7 @@
 from __future__ import annotations
 
 import json
+from pathlib import Path
 
 import pytest
 
@@ -51,6 +52,25 @@ def test_evaluate_runs_the_latent_tree_agents_on_a_given_model(tmp_path, untrain
     printed = capsys.readouterr().out
     assert "where plans and the real cord part ways" in printed
     assert "travel 0-5 cm" in printed
+
+
+def test_evaluate_records_the_model_files_each_agent_planned_with(tmp_path, capsys):
+    """latent-mpc among pegs loads the shipped model that sees pegs unless told another; the
+    summary names it (and names none for an agent without a model)."""
+    out = tmp_path / "eval"
+    code = main(["evaluate", "--agent", "latent-mpc", "straight-line", "--suite", "pegs-1",
+                 "--episodes", "1", "--no-fidelity", "--out", str(out)])
+    assert code == 0
+    models = {row["agent"]: row["models"]
+              for row in json.loads((out / "summary.json").read_text())}
+    assert [Path(f).name for f in models["latent-mpc"]] == ["transition-pegs.pt"]
+    assert models["straight-line"] == []
+    given = Path(__file__).parents[2] / "latent_model" / "pretrained" / "transition.pt"
+    code = main(["evaluate", "--agent", "latent-mpc", "--suite", "pegs-1", "--episodes", "1",
+                 "--no-fidelity", "--transition-model", str(given), "--out", str(out)])
+    assert code == 0
+    row = json.loads((out / "summary.json").read_text())[0]
+    assert row["models"] == [str(given)]
 
 
 def test_evaluate_rejects_an_unknown_agent(tmp_path, capsys):
