@@ -97,7 +97,7 @@ DEFAULT_PEGS = tuple(PEGGED_SUITES)
 #: The agents of the ``pegs`` section, in table order: every agent of the main table.
 PEG_AGENTS = tuple(name for name, spec in AGENTS.items() if not spec.cords)
 #: The environments of the ``pegs`` section.
-PEG_ENVS = (ENDPOINT,)
+PEG_ENVS = (ENDPOINT, DUAL_ENDPOINT)
 #: Episodes of every cell in ``--quick`` runs.
 QUICK_EPISODES = 2
 #: Subfolder of the output folder holding one CSV/JSON of episodes per cell.

@@ -47,8 +47,10 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help="other BaselineConfig fields, values in JSON "
                              "(e.g. ppo_n_steps=512 net_arch=[64,64])")
     parser.add_argument("--out", default=None,
-                        help="output folder (None: runs/baseline/ALGO, or ALGO-cords with "
-                             "--cords train)")
+                        help="output folder (None: runs/baseline/NAME, the folder name "
+                             "dlo benchmark looks for: ALGO, ALGO-cords with --cords train, "
+                             "ALGO-pegs with --max-pegs, and -dual-endpoint in "
+                             "DLODualEndpoint-v0)")
     parser.add_argument("--resume", action="store_true",
                         help="continue an interrupted run from OUT/checkpoint.zip")
     parser.add_argument("--device", default="cpu", help="torch device: cpu or cuda")
@@ -96,7 +98,7 @@ def run(args: argparse.Namespace) -> int:
     import stable_baselines3  # noqa: F401  (first, so a core install is told to add the rl extra)
 
     from dlo_bench.baselines import BaselineConfig, read_monitor_logs, train_baseline
-    from dlo_bench.paths import default_out
+    from dlo_bench.paths import baseline_folder_name, default_out
 
     settings = dict(
         algo=args.algo, env_id=args.env_id, difficulties=list(args.difficulty),
@@ -109,9 +111,10 @@ def run(args: argparse.Namespace) -> int:
         config = BaselineConfig.from_dict(settings)
     except TypeError as exc:  # a --set value of the wrong type
         raise ValueError(f"--set: {exc}") from exc
-    # the benchmark's folder names
-    suffix = ("-cords" if config.cords == "train" else "") + ("-pegs" if config.max_pegs else "")
-    out = Path(args.out) if args.out else default_out("baseline") / f"{config.algo}{suffix}"
+    # the benchmark's folder names (sac-her-pegs-dual-endpoint...)
+    name = baseline_folder_name(config.algo + ("-cords" if config.cords == "train" else ""),
+                                config.env_id, pegs=bool(config.max_pegs))
+    out = Path(args.out) if args.out else default_out("baseline") / name
     print(f"training {config.algo} on {config.env_id} (difficulties {config.difficulties}, "
           f"{config.cords} cords, up to {config.max_pegs} pegs) for "
           f"{config.timesteps} steps with {config.n_envs} envs -> {out}")

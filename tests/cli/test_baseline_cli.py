@@ -36,6 +36,22 @@ def test_evaluate_runs_the_physics_planner(tmp_path):
     assert record["plans"] >= 1 and record["planning_seconds"] > 0
 
 
+@pytest.mark.slow
+def test_baseline_writes_by_default_where_the_benchmark_looks(tmp_path, monkeypatch, capsys):
+    """Without --out, a baseline trained in the dual environment with pegs lands in the folder
+    that ``dlo benchmark`` reads for it (``baseline_folder_name``)."""
+    import dlo_bench.paths
+    from dlo_bench.paths import baseline_folder_name
+
+    monkeypatch.setattr(dlo_bench.paths, "RUNS_DIR", tmp_path / "runs")
+    env = "dlo_env/DLODualEndpoint-v0"
+    assert main(["baseline", "--algo", "ppo", *TINY_FLAGS, "--env", env, "--max-pegs", "2"]) == 0
+    folder = tmp_path / "runs" / "baseline" / "ppo-pegs-dual-endpoint"
+    assert folder.name == baseline_folder_name("ppo", env, pegs=True)
+    assert (folder / "model.zip").is_file()
+    assert str(folder) in capsys.readouterr().out
+
+
 def test_baseline_rejects_an_unknown_setting(tmp_path, capsys):
     code = main(["baseline", "--algo", "ppo", "--set", "learning_rte=0.1", "--out",
                  str(tmp_path)])

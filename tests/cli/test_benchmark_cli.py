@@ -222,10 +222,16 @@ def test_the_pegs_section_runs_among_pegs_with_the_rl_agents_trained_there(tmp_p
     rows = json.loads((out / "results.json").read_text())
     assert [(r["agent"], r["env"], r["suite"], r["status"]) for r in rows] == [
         ("straight-line", "endpoint", "route-2/test", "ok"),
+        ("straight-line", "dual-endpoint", "route-2/test", "ok"),
         ("sac-her", "endpoint", "route-2/test", "ok"),
-        ("bc", "endpoint", "route-2/test", "n/a")]
-    assert rows[1]["models"] == [str(baselines / "sac-her-pegs" / "model.zip")]
-    assert "no pegs" in rows[2]["note"]
+        ("sac-her", "dual-endpoint", "route-2/test", "missing"),
+        ("bc", "endpoint", "route-2/test", "n/a"),
+        ("bc", "dual-endpoint", "route-2/test", "n/a")]
+    assert rows[2]["models"] == [str(baselines / "sac-her-pegs" / "model.zip")]
+    # the dual environment's RL agent is its own folder, named with the command that makes it
+    assert "sac-her-pegs-dual-endpoint" in rows[3]["note"]
+    assert "--max-pegs 4" in rows[3]["note"]
+    assert "no pegs" in rows[4]["note"]
     table = (out / "results.md").read_text()
     assert "## Success" not in table and "## Pegs" in table
     assert "| bc | n/a |" in table.split("## Pegs")[1]
@@ -262,7 +268,8 @@ def test_the_pegs_section_has_its_own_transition_model_and_rl_folders(tmp_path):
                             pegs_transition_model=str(tmp_path / "none.pt"),
                             baselines=str(tmp_path))
     assert asked.all_agents == ("straight-line", *(a for a in PEG_AGENTS if a != "straight-line"))
-    assert asked.cells("bc") == [("dlo_env/DLOEndpoint-v0", "pegs-1", 0.01)]
+    assert asked.cells("bc") == [("dlo_env/DLOEndpoint-v0", "pegs-1", 0.01),
+                                 ("dlo_env/DLODualEndpoint-v0", "pegs-1", 0.01)]
     with gym.make("dlo_env/DLOEndpoint-v0") as plain, \
             gym.make("dlo_env/DLOEndpoint-v0", max_pegs=4) as pegged:
         assert load_agent("latent-mpc", asked, plain).policy is not None  # the shipped model
