@@ -18,7 +18,7 @@ import numpy as np
 
 from dlo_env.checks import non_negative_ints, positive_ints
 from dlo_env.cord import PEG_RADIUS, Cord, CordParams
-from dlo_env.shapes import cord_length
+from dlo_env.shapes import cord_length, segment_lengths, shape_from_headings
 from planners.cem import CEMConfig, CEMPolicy
 from planners.observation import CordObservation
 
@@ -57,6 +57,22 @@ class PhysicsMPCConfig(CEMConfig):
 #: Relative difference between the observed length (the shape's polyline at rest) and
 #: ``params.length`` above which physics-mpc simulates the observed length.
 LENGTH_TOLERANCE = 0.01
+
+
+def unstretched(shape: np.ndarray) -> np.ndarray:
+    """``shape`` ``(n, 2)`` as the simulator can start from it: a cord whose segments differ
+    by more than ``LENGTH_TOLERANCE`` is held taut (both grippers pulling it round a peg open
+    some joints), which no reset can build; it becomes the cord with the same segment
+    directions at the length of its shortest segment (tension only lengthens a segment),
+    around the same centroid. A cord with even segments is returned as it is."""
+    shape = np.asarray(shape, dtype=np.float64)
+    seg = segment_lengths(shape)
+    if seg.max() <= (1.0 + LENGTH_TOLERANCE) * seg.min():
+        return shape
+    steps = np.diff(shape, axis=0)
+    rebuilt = shape_from_headings(np.arctan2(steps[:, 1], steps[:, 0]), float(seg.min()),
+                                  shape[0])
+    return rebuilt + (shape.mean(axis=0) - rebuilt.mean(axis=0))
 
 
 class PhysicsMPCPolicy(CEMPolicy):
@@ -124,8 +140,9 @@ class PhysicsMPCPolicy(CEMPolicy):
         self._check_threshold(base)
 
     def plan(self, shape: np.ndarray, goal: np.ndarray) -> tuple[np.ndarray, float]:
-        """Simulate the cord at its observed length when that differs from ``params``'s, then
-        plan (CEM over straight moves)."""
+        """Simulate the cord at its observed length when that differs from ``params``'s (a
+        taut cord ``unstretched`` first), then plan (CEM over straight moves)."""
+        shape = unstretched(shape)
         length = cord_length(shape)
         params = self.params
         if abs(length - params.length) > LENGTH_TOLERANCE * params.length:
