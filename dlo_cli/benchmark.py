@@ -87,7 +87,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                              "in " + " ".join(e.split("/")[-1] for e in BenchmarkConfig.peg_envs)
                              + " observing the pegs, at the headline threshold (1 cm; the first "
                              "--threshold without it), by --agent "
-                             "(RL agents: those trained with pegs, BASELINES/ALGO-pegs) "
+                             "(RL agents: those trained with pegs, BASELINES/ALGO-pegs and "
+                             "ALGO-pegs-dual-endpoint) "
                              "(default: " + " ".join(DEFAULT_PEGS) + "; none with --quick or "
                              "--difficulty; `--pegs` alone: none)")
     parser.add_argument("--baselines", default=BenchmarkConfig.baselines,

@@ -18,7 +18,7 @@ import numpy as np
 
 from dlo_env.checks import non_negative_ints, positive_ints
 from dlo_env.cord import PEG_RADIUS, Cord, CordParams
-from dlo_env.shapes import cord_length, segment_lengths, shape_from_headings
+from dlo_env.shapes import TABLE_HALF, cord_length, segment_lengths, shape_from_headings
 from planners.cem import CEMConfig, CEMPolicy
 from planners.observation import CordObservation
 
@@ -67,12 +67,16 @@ def unstretched(shape: np.ndarray) -> np.ndarray:
     around the same centroid. A cord with even segments is returned as it is."""
     shape = np.asarray(shape, dtype=np.float64)
     seg = segment_lengths(shape)
-    if seg.max() <= (1.0 + LENGTH_TOLERANCE) * seg.min():
-        return shape
+    if seg.min() <= 0 or seg.max() <= (1.0 + LENGTH_TOLERANCE) * seg.min():
+        return shape  # even, or two points on one spot: nothing to rebuild from
     steps = np.diff(shape, axis=0)
     rebuilt = shape_from_headings(np.arctan2(steps[:, 1], steps[:, 0]), float(seg.min()),
                                   shape[0])
-    return rebuilt + (shape.mean(axis=0) - rebuilt.mean(axis=0))
+    rebuilt += shape.mean(axis=0) - rebuilt.mean(axis=0)
+    # a shift back onto the table where the rebuilt cord pokes over the rim
+    rebuilt -= np.clip(rebuilt.max(axis=0) - TABLE_HALF, 0.0, None)
+    rebuilt += np.clip(-TABLE_HALF - rebuilt.min(axis=0), 0.0, None)
+    return rebuilt
 
 
 class PhysicsMPCPolicy(CEMPolicy):

@@ -110,9 +110,15 @@ def test_a_policy_trained_on_the_empty_table_is_refused_where_pegs_are_observed(
         with pytest.raises(ValueError, match=r"agent 'ppo' was trained on observations of shape "
                                              r"\(42,\), but this environment observes \(48,\)"):
             build_agent("ppo", env, baseline=shipped_baseline("ppo"))
-        with pytest.raises(FileNotFoundError, match="ppo-pegs"):  # its default: trained there
+        # its default, the shipped ppo-pegs, was trained where 4 pegs are observed
+        with pytest.raises(ValueError, match=r"\(54,\), but this environment observes \(48,\)"):
             build_agent("ppo", env)
         build_agent("latent-mpc", env)  # planners read the pegs, or ignore them
+    with gym.make("dlo_env/DLOEndpoint-v0", max_pegs=4) as env:
+        assert build_agent("ppo", env) is not None
+    with gym.make("dlo_env/DLODualEndpoint-v0", max_pegs=4) as env:
+        with pytest.raises(FileNotFoundError, match="ppo-pegs-dual-endpoint"):  # not shipped
+            build_agent("ppo", env)
 
 
 @pytest.mark.parametrize("name", ["latent-mpc", "latent-tree-kino"])

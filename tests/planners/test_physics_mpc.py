@@ -32,13 +32,23 @@ def test_a_taut_cord_is_simulated_at_its_rest_length_with_the_same_directions():
     assert np.array_equal(unstretched(at_rest), at_rest)
 
 
+def test_a_rebuilt_cord_stays_on_the_table_and_a_degenerate_one_is_left_alone():
+    taut = _taut_cord()
+    taut += 0.995 - taut.max(axis=0)  # touching the rim's corner
+    assert (np.abs(unstretched(taut)) <= 1.0).all()
+    degenerate = np.zeros((20, 2))
+    assert np.array_equal(unstretched(degenerate), degenerate)
+
+
 def test_physics_mpc_plans_from_a_cord_held_taut_round_a_peg():
-    """Both grippers can pull the cord taut round a peg; no reset builds that shape, and
-    physics-mpc once stopped the benchmark with "shape must be a cord of length ..."."""
+    """Regression: both grippers can pull the cord taut round a peg, a shape no reset builds
+    ("shape must be a cord of length ...")."""
+    taut = _taut_cord()
+    bend = taut[9] + np.array([-0.03, 0.03])  # a peg inside the bend, by the opened joints
     with gym.make("dlo_env/DLODualEndpoint-v0", max_pegs=4) as env:
         policy = PhysicsMPCPolicy.for_env(env, PhysicsMPCConfig(samples=4, elites=2,
                                                                 iterations=1, moves=1))
         policy.reset()
-        taut = _taut_cord()
+        policy._cord.set_pegs(bend[None])
         plan, error = policy.plan(taut, np.roll(taut, 1, axis=1))
         assert plan.shape == (1, 2, 2) and np.isfinite(error)
