@@ -144,14 +144,20 @@ def load_transition_model(model: Any, cords: bool = False, pegs: bool = False) -
 
 def model_files(name: str, env: Any, model: Any = None, transition_model: Any = None
                 ) -> list[str]:
-    """The model files agent ``name`` plans with in ``env``: its shape model (``model``, a
-    path or None for the shipped one) and its transition model (``transition_model``; None: the
-    shipped one it loads there, the model that sees pegs where pegs are observed), for the
-    provenance of its results. A model passed already loaded is named by its type."""
+    """The model files agent ``name`` plans or acts with in ``env``: its shape model
+    (``model``, a path or None for the shipped one), its transition model
+    (``transition_model``; None: the shipped one it loads there, the model that sees pegs where
+    pegs are observed) and a trained policy's ``model.zip`` (its ``sb3:`` folder, or the shipped
+    one for the environment), for the provenance of its results. A model passed already loaded
+    is named by its type."""
     from dlo_bench.paths import shape_model_file, transition_model_file
 
     spec = agent_spec(name)
     files = []
+    if spec.extra == "rl":  # the folder _sb3 and _bc load
+        folder = Path(spec.defaults.get("baseline") or shipped_baseline(
+            name, env.unwrapped.spec.id, pegs=observes_pegs(env)))
+        files.append(str(folder if folder.suffix == ".zip" else folder / "model.zip"))
     for wanted, given, file in (
             (spec.shape_model, model, shape_model_file),
             (spec.transition_model, transition_model,

@@ -73,6 +73,18 @@ def test_evaluate_records_the_model_files_each_agent_planned_with(tmp_path, caps
     assert row["models"] == [str(given)]
 
 
+@pytest.mark.slow
+def test_evaluate_records_the_policy_file_of_an_rl_agent(tmp_path):
+    from dlo_bench.paths import shipped_baseline
+
+    out = tmp_path / "eval"
+    folder = shipped_baseline("ppo")
+    assert main(["evaluate", "--agent", "ppo", f"sb3:{folder}", "--episodes", "1",
+                 "--no-fidelity", "--out", str(out)]) == 0
+    rows = json.loads((out / "summary.json").read_text())
+    assert [row["models"] for row in rows] == [[str(folder / "model.zip")]] * 2
+
+
 def test_evaluate_rejects_an_unknown_agent(tmp_path, capsys):
     code = main(["evaluate", "--agent", "teleport", "--out", str(tmp_path)])
     assert code == 2
