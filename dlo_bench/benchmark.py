@@ -46,6 +46,7 @@ from dlo_bench.agents import (
     ENDPOINT,
     build_agent,
     load_transition_model,
+    model_files,
     observes_pegs,
     train_command,
 )
@@ -61,9 +62,7 @@ from dlo_bench.evaluation import (
 )
 from dlo_bench.paths import (
     baseline_folder_name,
-    shape_model_file,
     shipped_baseline,
-    transition_model_file,
 )
 from dlo_bench.report import json_ready, threshold_label, write_evaluation
 from dlo_env.atomic import file_digest
@@ -364,37 +363,28 @@ def load_agent(name: str, config: BenchmarkConfig, env: Any,
             return LoadedAgent(name, None, missing=f"no usable model for {env_id}: "
                                                    f"{exc}".splitlines()[0])
         steps = int(meta["trained_timesteps"])
-        if name == "bc":  # trained offline on the oracle's demonstrations
-            cost = f"{_steps(steps)} demonstration steps"
-            return LoadedAgent(name, policy, training_env_steps=steps, sample_cost=cost,
-                               models=(str(folder / "model.zip"),))
-        return LoadedAgent(name, policy, training_env_steps=steps,
-                           sample_cost=f"{_steps(steps)} env steps",
+        # bc trains offline on the oracle's demonstrations
+        cost = f"{_steps(steps)} {'demonstration' if name == 'bc' else 'env'} steps"
+        return LoadedAgent(name, policy, training_env_steps=steps, sample_cost=cost,
                            models=(str(folder / "model.zip"),))
     options: dict[str, Any] = {"seed": config.seed}
-    costs, steps, models = [], None, []
+    costs, steps = [], None
+    path = (config.cords_transition_model if spec.cords
+            else config.pegs_transition_model if pegs else config.transition_model)
     if spec.shape_model:
         if shape_model is None:
             return LoadedAgent(name, None, missing="no shape model (pass --model, or ship "
                                                    "latent_model/pretrained/model.pt)")
         options.update(model=shape_model, replan_every=config.replan_every,
                        max_seconds=config.max_seconds)
-        models.append(str(shape_model_file(config.model)))
         shapes = getattr(shape_model, "info", {}).get("n_train")
         costs.append(f"{_steps(shapes)} simulated shapes" if shapes else "simulated shapes")
     if spec.transition_model:
-        path = config.transition_model
-        if spec.cords:
-            path = config.cords_transition_model
-        elif pegs:
-            path = config.pegs_transition_model
         try:
             transition = load_transition_model(path, cords=spec.cords, pegs=pegs and not spec.cords)
         except (FileNotFoundError, ValueError) as exc:
             return LoadedAgent(name, None, missing=str(exc).splitlines()[0])
         options.update(transition_model=transition)
-        models.append(str(transition_model_file(path, cords=spec.cords,
-                                                pegs=pegs and not spec.cords)))
         steps, moves = training_data(transition.info)
         costs.insert(0, "unknown (the model does not record its data)" if not steps
                      else f"{_steps(steps)} env steps" + (f" ({_steps(moves)} moves)" if moves
@@ -405,7 +395,8 @@ def load_agent(name: str, config: BenchmarkConfig, env: Any,
         return LoadedAgent(name, None, missing=str(exc).splitlines()[0])
     return LoadedAgent(name, policy, training_env_steps=steps,
                        sample_cost=" + ".join(costs) or "none (no learned model)",
-                       models=tuple(models), settings=policy_settings(policy))
+                       models=tuple(model_files(name, env, config.model, path)),
+                       settings=policy_settings(policy))
 
 
 def training_data(info: dict[str, Any]) -> tuple[int | None, int | None]:
