@@ -14,7 +14,7 @@ non_negative_float = number_in(float, 0.0, expected="a number >= 0")
 STAGE_FLAGS = {
     "transition": ("steps", "members", "architecture", "depth", "cord_inputs", "rim_reach",
                    "peg_reach", "contact_reach", "init",
-                   "teacher", "mean_by_grasp", "mean_width", "teacher_weight", "teacher_moves",
+                   "teacher", "mean_by_grasp", "teacher_weight", "teacher_moves",
                    "miss_weight", "miss_margin", "lr"),
     "shape": ("minutes", "gan_steps", "encoder_steps", "representation", "output", "paper",
               "d_steps", "report_size"),
@@ -82,12 +82,6 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help="--stage transition with --teacher: the mean network is two, one "
                              "for moves of one end and one for moves of both ends (each "
                              "prediction runs one)")
-    parser.add_argument("--mean-width", type=positive_int, default=None,
-                        help="--stage transition with --teacher: hidden units per layer of the "
-                             "mean network (default: the width of the teacher's ensemble); a "
-                             "wider one starts from the ensemble's first network, widened, and "
-                             "fits more at more cost per prediction; a narrower one starts from "
-                             "random weights")
     parser.add_argument("--teacher-weight", type=non_negative_float, default=None,
                         help="--stage transition with --teacher: weight of the error to the "
                              "teacher's mean against the error to the data (None: 1)")

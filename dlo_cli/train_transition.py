@@ -75,12 +75,8 @@ def run(args: argparse.Namespace) -> int:
     if args.mean_by_grasp and not args.teacher:
         raise ValueError("--mean-by-grasp shapes the mean network a distillation makes; it "
                          "needs --teacher")
-    if args.mean_width is not None and not args.teacher:
-        raise ValueError("--mean-width sizes the mean network a distillation makes; it needs "
-                         "--teacher")
     if args.teacher:  # what shapes the mean network a distillation makes
-        model_kw = {"mean_network": True, "mean_by_grasp": args.mean_by_grasp,
-                    "mean_width": args.mean_width}
+        model_kw = {"mean_network": True, "mean_by_grasp": args.mean_by_grasp}
     tc = replace(TransitionTrainConfig(), **train_kw)
     mc = replace(TransitionModelConfig(), **model_kw)
     out = Path(args.out)

@@ -160,10 +160,6 @@ class EnsembleChainNet(nn.Module):
         """A copy of the first ``members`` networks alone."""
         return self.first_from(0, members)
 
-    def widened(self, width: int, seed: int = 0) -> EnsembleChainNet:
-        raise ValueError("a chain network is not widened; a wider mean network of a chain "
-                         "ensemble is an MLP trained from scratch")
-
     def with_inputs(self, at: int, count: int) -> EnsembleChainNet:
         raise ValueError("a chain network does not grow new inputs (--contact-reach, "
                          "--cord-inputs or --peg-reach with --init of a model without them "

@@ -86,8 +86,9 @@ PREDICT_CHUNK = 4096
 REQUIRED_CONFIG = ("rim_targets", "mean_network", "mirror", "mean_by_grasp", "contact_reach")
 #: Config fields retired with the only value any shipped model had: files still state them
 #: (so older readers and ``REQUIRED_CONFIG`` read them), and a file with another value (both
-#: handednesses, the leading end's rim alone) is refused.
-RETIRED_CONFIG = {"rim_targets": 2, "mirror": True}
+#: handednesses, the leading end's rim alone, a mean network wider than the ensemble) is
+#: refused; a file from before ``mean_width`` existed may omit it.
+RETIRED_CONFIG = {"rim_targets": 2, "mirror": True, "mean_width": None}
 #: The held ends' targets whose rim (and peg) vectors the network sees: both (the other end's
 #: target is its start when it is not held).
 RIM_TARGETS = RETIRED_CONFIG["rim_targets"]
@@ -104,7 +105,8 @@ def check_config_keys(config: dict[str, Any], name: str, checkpoint: bool = Fals
     if missing:
         raise ValueError(f"{name}: a {what} from before {', '.join(missing)} existed, which "
                          f"this version no longer reads: {fix}")
-    retired = [f"{k}={config[k]!r}" for k, v in RETIRED_CONFIG.items() if config[k] != v]
+    retired = [f"{k}={config[k]!r}" for k, v in RETIRED_CONFIG.items()
+               if config.get(k, v) != v]
     if retired:
         raise ValueError(f"{name}: a {what} with {', '.join(retired)}, which this version no "
                          f"longer supports: {fix}")
@@ -206,9 +208,6 @@ class TransitionModelConfig:
         mean_by_grasp: The mean network is two networks of this size, one for moves of one
             end and one for moves of both ends (``GraspRoutedMLP``): twice the weights, each
             prediction still at the cost of one network. Needs ``mean_network``.
-        mean_width: Hidden units per layer of the mean network (None: ``width``). A wider
-            mean network fits more at a higher cost per prediction; the ensemble keeps
-            ``width``. Needs ``mean_network``.
         cord_inputs: The networks also see the cord (``cord_features``: the logarithm of
             each of ``PARAM_COLUMNS`` over the default cord's), so one model predicts cords
             that differ; ``predict(params=...)`` says which. Off: a model of one cord.
@@ -236,7 +235,6 @@ class TransitionModelConfig:
     contact_reach: float = 0.0
     mean_network: bool = False
     mean_by_grasp: bool = False
-    mean_width: int | None = None
     architecture: str = "mlp"
     cord_inputs: bool = False
     peg_reach: float = 0.0
@@ -260,11 +258,6 @@ class TransitionModelConfig:
         if self.mean_by_grasp and not self.mean_network:
             raise ValueError("TransitionModelConfig.mean_by_grasp needs mean_network=True "
                              "(it splits the mean network by grasp)")
-        if self.mean_width is not None:
-            positive_ints(self, "mean_width")
-            if not self.mean_network:
-                raise ValueError("TransitionModelConfig.mean_width needs mean_network=True "
-                                 "(it sizes the mean network)")
 
     @property
     def rim_inputs(self) -> int:
@@ -300,11 +293,6 @@ class TransitionModelConfig:
     def cord_features(self) -> int:
         """Inputs that describe the cord: ``len(PARAM_COLUMNS)`` with ``cord_inputs``, else 0."""
         return len(PARAM_COLUMNS) if self.cord_inputs else 0
-
-    @property
-    def mean_units(self) -> int:
-        """Hidden units per layer of the mean network: ``mean_width``, else ``width``."""
-        return self.width if self.mean_width is None else self.mean_width
 
 
 class EnsembleMLP(nn.Module):
@@ -343,31 +331,6 @@ class EnsembleMLP(nn.Module):
             if i < last:
                 h = nn.functional.silu(h)
         return h
-
-    def widened(self, width: int, seed: int = 0) -> EnsembleMLP:
-        """A copy with ``width`` hidden units per layer that computes exactly what this one
-        does: every new unit gets random incoming weights and zero outgoing weights (silent
-        until training moves them)."""
-        old = self.weights[0].shape[-1]
-        if not (isinstance(width, Integral) and not isinstance(width, bool) and width >= old):
-            raise ValueError(f"width must be an int >= the networks' {old}, got {width!r}")
-        members, inputs, depth = self.members, self.weights[0].shape[1], len(self.weights) - 1
-        wide = EnsembleMLP(members, inputs, int(width), depth, self.weights[-1].shape[-1])
-        gen = torch.Generator().manual_seed(seed)
-        with torch.no_grad():
-            for i, (w_old, b_old, w_new, b_new) in enumerate(zip(
-                    self.weights, self.biases, wide.weights, wide.biases)):
-                rows, cols = w_old.shape[1:]
-                w_new.zero_()
-                b_new.zero_()
-                if i < depth:  # the new units of this layer: random weights from every input
-                    bound = 1.0 / math.sqrt(w_new.shape[1])
-                    w_new[:, :, cols:] = torch.empty(
-                        members, w_new.shape[1], w_new.shape[2] - cols).uniform_(
-                        -bound, bound, generator=gen)
-                w_new[:, :rows, :cols] = w_old.detach().cpu()  # new inputs' rows stay zero
-                b_new[:, :, :cols] = b_old.detach().cpu()
-        return wide.to(self.weights[0].device)
 
     def with_inputs(self, at: int, count: int) -> EnsembleMLP:
         """A copy that takes ``count`` more inputs, inserted before input ``at``, and computes
@@ -464,8 +427,8 @@ class TransitionModel(nn.Module):
         self.net = self.networks(c.members, design=c.architecture)
         self.mean_net: EnsembleMLP | GraspRoutedMLP | None = None
         if c.mean_network:
-            self.mean_net = (GraspRoutedMLP(self.networks(2, c.mean_units)) if c.mean_by_grasp
-                             else self.networks(1, c.mean_units))
+            self.mean_net = (GraspRoutedMLP(self.networks(2)) if c.mean_by_grasp
+                             else self.networks(1))
         self.device = resolve_device(device)
         self.info = dict(info or {})
         self.to(self.device)
@@ -477,12 +440,11 @@ class TransitionModel(nn.Module):
         return CordParams(n_points=self.config.n_points, length=self.config.cord_length)
 
     # ------------------------------------------------------------- torch core
-    def networks(self, members: int, width: int | None = None, design: str = "mlp"
-                 ) -> EnsembleMLP | EnsembleChainNet:
+    def networks(self, members: int, design: str = "mlp") -> EnsembleMLP | EnsembleChainNet:
         """``members`` new networks (the ensemble, or one: the mean network) of ``design``
-        (``ARCHITECTURES``), ``width`` hidden units or channels (None: the ensemble's)."""
+        (``ARCHITECTURES``), of the config's width (hidden units or channels)."""
         c = self.config
-        width = c.width if width is None else width
+        width = c.width
         if design == "chain":
             # Rim, contact and peg vectors share one layout: a vector per point and target.
             blocks = (c.rim_inputs + c.peg_inputs) // (c.n_points + RIM_TARGETS)
@@ -952,5 +914,5 @@ class TransitionModel(nn.Module):
         c = self.config
         return (f"members={c.members}, width={c.width}, depth={c.depth}, "
                 f"mean_network={c.mean_network}, mean_by_grasp={c.mean_by_grasp}, "
-                f"mean_width={c.mean_width}, contact_reach={c.contact_reach}, "
+                f"contact_reach={c.contact_reach}, "
                 f"n_points={c.n_points}, device={self.device}")

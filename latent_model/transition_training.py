@@ -293,8 +293,7 @@ def _distil_from(teacher_path: str, mc: TransitionModelConfig
         if getattr(tcfg, field) != getattr(mc, field):
             raise ValueError(f"teacher {teacher_path!r} was trained for {field}="
                              f"{getattr(tcfg, field)!r}, the data has {getattr(mc, field)!r}")
-    return teacher, replace(tcfg, mean_network=True, mean_by_grasp=mc.mean_by_grasp,
-                            mean_width=mc.mean_width)
+    return teacher, replace(tcfg, mean_network=True, mean_by_grasp=mc.mean_by_grasp)
 
 
 def train_transition_model(
@@ -369,14 +368,9 @@ def train_transition_model(
         model.net.load_state_dict(teacher.net.state_dict())
         model.net.requires_grad_(False)
         trained = model.mean_net
-        # Start from the ensemble's first member (widened to a wider student, which then
-        # predicts as it does; a narrower student, or the MLP student of a chain ensemble,
-        # starts from its own random weights).
-        first = None
-        if mc.mean_units >= mc.width and mc.architecture == "mlp":
-            first = model.net.first(1)
-            if mc.mean_units > mc.width:
-                first = first.widened(mc.mean_units, seed=tc.seed)
+        # Start from the ensemble's first member (the MLP student of a chain ensemble starts
+        # from its own random weights).
+        first = model.net.first(1) if mc.architecture == "mlp" else None
         with torch.no_grad():
             for mine, theirs in zip(trained.parameters(),
                                     [] if first is None else first.parameters()):
@@ -387,7 +381,7 @@ def train_transition_model(
         # default cord for one of several cords, and one of the empty table for one that
         # sees pegs (the new inputs' weights start at zero: it first predicts as before,
         # every cord as the default and every peg as absent).
-        seen = replace(start.config, mean_network=False, mean_by_grasp=False, mean_width=None)
+        seen = replace(start.config, mean_network=False, mean_by_grasp=False)
         grow_contact = not seen.contact_reach and mc.contact_reach
         grow_cord = not seen.cord_inputs and mc.cord_inputs
         grow_pegs = not seen.peg_reach and mc.peg_reach

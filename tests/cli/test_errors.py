@@ -141,7 +141,7 @@ def test_collect_runs_on_the_core_install_without_tqdm_torch_or_matplotlib(tmp_p
     ("all", ["--miss-weight", "0"], "--miss-weight applies to --stage transition only"),
     ("transition", ["--minutes", "0"], "--minutes applies to --stage gan, encoder or all"),
     ("gan", ["--contact-reach", "0.03"], "--contact-reach applies to --stage transition only"),
-    ("all", ["--mean-width", "64"], "--mean-width applies to --stage transition only"),
+    ("all", ["--mean-by-grasp"], "--mean-by-grasp applies to --stage transition only"),
 ])
 def test_a_flag_the_stage_would_ignore_is_one_line_naming_it(stage, flags, named, tmp_path,
                                                              capsys):

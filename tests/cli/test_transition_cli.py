@@ -62,18 +62,10 @@ def test_collect_then_train_a_transition_model_from_two_files(tmp_path, capsys):
     assert main(split_out + ["--mean-by-grasp"]) == 0
     split = TransitionModel.load(tmp_path / "split")
     assert split.config.mean_by_grasp and split.config.width == 16
-    wide_out = [str(tmp_path / "wide") if a == str(mean) else a for a in distil]
-    assert main(wide_out + ["--mean-by-grasp", "--mean-width", "24"]) == 0
-    wide = TransitionModel.load(tmp_path / "wide")
-    assert wide.config.mean_width == 24 and wide.config.width == 16
-    assert wide.mean_net.routes.weights[0].shape[-1] == 24
     contact = [str(tmp_path / "contact") if a == str(out) else a for a in again]
     assert main(contact + ["--contact-reach", "0.02"]) == 0
     assert TransitionModel.load(tmp_path / "contact").config.contact_reach == 0.02
     no_teacher = [str(tmp_path / "x") if a == str(out) else a for a in again]
-    assert main(no_teacher + ["--mean-width", "24"]) == 2
-    err = capsys.readouterr().err
-    assert "--mean-width" in err and "needs --teacher" in err
     assert main(no_teacher + ["--mean-by-grasp"]) == 2
     err = capsys.readouterr().err
     assert "--mean-by-grasp" in err and "needs --teacher" in err

@@ -7,7 +7,6 @@ from dataclasses import replace
 import numpy as np
 import pytest
 import torch
-from scripts import load_script
 
 from dlo_env.cord import Cord, reachable_targets
 from dlo_env.dataset.transitions import TransitionCollectConfig, collect_transition_chunk
@@ -335,8 +334,8 @@ def test_save_and_load_round_trip_and_a_corrupt_file_is_refused(model, tmp_path)
 def test_a_file_from_before_rim_targets_or_with_a_retired_setting_is_refused_in_one_line():
     old = TransitionModel(TransitionModelConfig(width=16, depth=1, members=2), device="cpu")
     state = old.state()
-    assert {k: state["config"][k] for k in ("rim_targets", "mirror")} == {
-        "rim_targets": 2, "mirror": True}  # files still state the retired fields
+    assert {k: state["config"][k] for k in ("rim_targets", "mirror", "mean_width")} == {
+        "rim_targets": 2, "mirror": True, "mean_width": None}  # files state retired fields
     del state["config"]["rim_targets"]  # as the files written before the field existed
     del state["config"]["mirror"]
     with pytest.raises(ValueError, match=r"^path: a transition model file from before "
@@ -348,6 +347,14 @@ def test_a_file_from_before_rim_targets_or_with_a_retired_setting_is_refused_in_
     with pytest.raises(ValueError, match=r"^path: a transition model file with rim_targets=1, "
                        r"mirror=False, which this version no longer supports"):
         TransitionModel.from_state(both, device="cpu")
+    wide = old.state()
+    wide["config"]["mean_width"] = 48  # a mean network wider than the ensemble
+    with pytest.raises(ValueError, match=r"^path: a transition model file with mean_width=48, "
+                       r"which this version no longer supports"):
+        TransitionModel.from_state(wide, device="cpu")
+    before = old.state()
+    del before["config"]["mean_width"]  # written before the field existed: still read
+    assert TransitionModel.from_state(before, device="cpu").config == old.config
     assert TransitionModel.from_state(old.state(), device="cpu").config == old.config
 
 
@@ -576,48 +583,30 @@ def test_a_mean_network_by_grasp_runs_one_network_per_move_and_learns_each_grasp
         TransitionModelConfig(mean_by_grasp=True)
 
 
-def test_a_wider_mean_network_starts_as_the_first_member_and_learns_at_its_own_width(
-        data, tmp_path):
+def test_the_mean_network_starts_as_the_ensembles_first_member_and_then_learns(data, tmp_path):
     tc = TransitionTrainConfig(steps=20, batch_size=64, eval_every=20,
                                validation_fraction=0.2)
     teacher = train_transition_model(data, tmp_path / "teacher", tc, TINY, device="cpu")
     shapes = _shapes(8, seed=31)
     move = np.random.default_rng(31).uniform(-0.2, 0.2, size=(8, 4))
-    for width in (48, TINY.width, 16):  # wider, the same, narrower than the ensemble
-        distil = TransitionTrainConfig(**{**tc.__dict__, "steps": 1, "lr": 1e-12,  # no change
-                                          "teacher": str(tmp_path / "teacher" / "transition.pt")})
-        mc = replace(TINY, mean_network=True, mean_by_grasp=True, mean_width=width)
-        start = train_transition_model(data, tmp_path / f"start{width}", distil, mc,
+    distil = TransitionTrainConfig(**{**tc.__dict__, "steps": 1, "lr": 1e-12,  # no change
+                                      "teacher": str(tmp_path / "teacher" / "transition.pt")})
+    for by_grasp in (True, False):
+        mc = replace(TINY, mean_network=True, mean_by_grasp=by_grasp)
+        start = train_transition_model(data, tmp_path / f"start{by_grasp}", distil, mc,
                                        device="cpu")
-        assert start.mean_net.routes.weights[0].shape[-1] == width
-        assert start.net.weights[0].shape[-1] == TINY.width  # the ensemble keeps its width
+        assert start.net.weights[0].shape[-1] == TINY.width
         for end, d in (("head", move[:, :2]), ("both", move)):
-            first = start.predict(shapes, end, d, members=1)
-            same = np.allclose(start.predict(shapes, end, d), first, atol=1e-6)
-            assert same == (width >= TINY.width)  # narrower: its own random start
-    trained = train_transition_model(data, tmp_path / "wide", TransitionTrainConfig(
-        **{**distil.__dict__, "steps": 20, "lr": 3e-3}), replace(mc, mean_width=48),
-        device="cpu")
-    loaded = TransitionModel.load(tmp_path / "wide", device="cpu")
-    assert loaded.config.mean_width == 48 and loaded.mean_net.routes.weights[1].shape[-1] == 48
+            assert np.allclose(start.predict(shapes, end, d),
+                               start.predict(shapes, end, d, members=1), atol=1e-6)
+    trained = train_transition_model(data, tmp_path / "tuned", TransitionTrainConfig(
+        **{**distil.__dict__, "steps": 20, "lr": 3e-3}), mc, device="cpu")
+    loaded = TransitionModel.load(tmp_path / "tuned", device="cpu")
+    assert loaded.mean_net.members == 1
     assert np.allclose(loaded.predict(shapes, "both", move),
                        trained.predict(shapes, "both", move), atol=1e-3)  # float16 on disk
     assert not np.allclose(trained.predict(shapes, "both", move),
                            teacher.predict(shapes, "both", move, members=1), atol=1e-4)
-    with pytest.raises(ValueError, match="mean_width needs mean_network"):
-        TransitionModelConfig(mean_width=64)
-    with pytest.raises(ValueError, match="mean_width must be an int >= 1"):
-        TransitionModelConfig(mean_network=True, mean_width=0)
-    wide = teacher.net.widened(40, seed=1)
-    x = torch.randn(5, teacher.config.inputs)
-    assert torch.allclose(wide(x), teacher.net(x), atol=1e-6)
-    assert wide.weights[0][..., TINY.width:].abs().min() > 0  # new units can learn
-    assert not wide.weights[-1][:, TINY.width:].any()  # and are silent until they do
-    alone = TransitionModelConfig(**{**mc.__dict__, "mean_by_grasp": False, "mean_width": 40})
-    plain = train_transition_model(data, tmp_path / "plain", distil, alone, device="cpu")
-    assert plain.mean_net.weights[0].shape[-1] == 40 and plain.mean_net.members == 1
-    with pytest.raises(ValueError, match="width must be an int >= the networks' 32"):
-        teacher.net.widened(16)
 
 
 def test_paired_moves_give_each_start_reachable_moves_of_its_grasp_from_other_transitions(
@@ -779,25 +768,6 @@ def test_a_model_of_one_network_reports_without_a_spread(data):
     assert np.isnan(spread_rank_correlation(one, data))
     rows, rank = transition_report(one, data, max_moves=1)
     assert np.isnan(rank) and rows[0].count == len(data)
-
-
-def test_a_widened_ensemble_predicts_exactly_as_before_and_fine_tunes_at_its_width(
-        model, data, tmp_path):
-    example = load_script("examples/widen_transition_model.py")
-    wide = example.widen(model, 48)
-    assert wide.config.width == 48 and wide.net.weights[0].shape[-1] == 48
-    shapes = _shapes(8, seed=30)
-    move = np.random.default_rng(30).uniform(-0.2, 0.2, size=(8, 4))
-    for end, d in (("head", move[:, :2]), ("both", move)):
-        assert np.array_equal(wide.predict(shapes, end, d), model.predict(shapes, end, d))
-    with pytest.raises(ValueError, match="width must be at least the model's 32"):
-        example.widen(model, 16)
-    wide.save(tmp_path / "wide.pt", half=False)
-    tc = TransitionTrainConfig(steps=2, batch_size=16, eval_every=2,
-                               init=str(tmp_path / "wide.pt"))
-    tuned = train_transition_model(data, tmp_path / "run", tc, replace(TINY, width=48),
-                                   device="cpu")
-    assert tuned.net.weights[0].shape[-1] == 48
 
 
 def test_a_model_of_one_cord_starts_a_model_of_several_cords(data, tmp_path):
