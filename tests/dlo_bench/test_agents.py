@@ -117,7 +117,9 @@ def test_a_policy_trained_on_the_empty_table_is_refused_where_pegs_are_observed(
     with gym.make("dlo_env/DLOEndpoint-v0", max_pegs=4) as env:
         assert build_agent("ppo", env) is not None
     with gym.make("dlo_env/DLODualEndpoint-v0", max_pegs=4) as env:
-        with pytest.raises(FileNotFoundError, match="ppo-pegs-dual-endpoint"):  # not shipped
+        assert build_agent("ppo", env) is not None  # the shipped ppo-pegs-dual-endpoint
+    with gym.make("dlo_env/DLODualEndpoint-v0", max_pegs=2) as env:
+        with pytest.raises(ValueError, match=r"\(56,\), but this environment observes \(50,\)"):
             build_agent("ppo", env)
 
 
