@@ -56,14 +56,16 @@ class Args:
 
 @contextmanager
 def physics_timer() -> Iterator[list[float]]:
-    """Time spent in pymunk's ``Space.step`` while the block runs: ``[seconds]``."""
+    """Time spent in pymunk's ``Space.step`` while the block runs, and the steps taken:
+    ``[seconds, steps]``."""
     original = pymunk.Space.step
-    spent = [0.0]
+    spent = [0.0, 0]
 
     def timed(space: pymunk.Space, dt: float) -> None:
         t = time.perf_counter()
         original(space, dt)
         spent[0] += time.perf_counter() - t
+        spent[1] += 1
 
     pymunk.Space.step = timed
     try:
