@@ -8,13 +8,14 @@ with ``--workers`` processes (start-up and the final file included), the CPU tim
 got, and the floor (at least 150 transitions/s with 2 workers on a quiet machine).
 
 ``--iterations N ...`` also replays the chunk's first ``--replay`` moves from their recorded
-starts with ``N`` solver iterations per physics step instead of the cord's (30): how much
+starts (the default cord of the collection) with ``N`` solver iterations per physics step
+instead of the cord's (30): how much
 faster, and how far the cord then comes to rest from where the environments' physics puts it.
 That is other physics (every shipped model and benchmark is of the cord's own), measured to
 show the trade-off, not an option of the collection.
 
     python benchmarks/transition_throughput.py [--num 4000] [--workers 2] [--seed 0] \
-        [--iterations 15 10] [--replay 200]
+        [--iterations 20 15 10] [--replay 200]
 """
 
 from __future__ import annotations
@@ -129,7 +130,7 @@ def main() -> None:
     parser.add_argument("--seed", type=int, default=0, help="collection seed")
     parser.add_argument("--single", type=int, default=400,
                         help="transitions of the single-process chunk")
-    parser.add_argument("--iterations", type=int, nargs="*", default=[],
+    parser.add_argument("--iterations", type=int, nargs="+", default=[],
                         help="solver iterations per physics step to compare with the cord's "
                              "by replaying moves (other physics; none by default)")
     parser.add_argument("--replay", type=int, default=200,

@@ -86,8 +86,8 @@ PREDICT_CHUNK = 4096
 REQUIRED_CONFIG = ("rim_targets", "mean_network", "mirror", "mean_by_grasp", "contact_reach")
 #: Config fields retired with the only value any shipped model had: files still state them
 #: (so older readers and ``REQUIRED_CONFIG`` read them), and a file with another value (both
-#: handednesses, the leading end's rim alone, a mean network wider than the ensemble) is
-#: refused; a file from before ``mean_width`` existed may omit it.
+#: handednesses, the leading end's rim alone, a mean network of another width than the
+#: ensemble's) is refused; a file from before ``mean_width`` existed may omit it.
 RETIRED_CONFIG = {"rim_targets": 2, "mirror": True, "mean_width": None}
 #: The held ends' targets whose rim (and peg) vectors the network sees: both (the other end's
 #: target is its start when it is not held).
