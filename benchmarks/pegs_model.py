@@ -33,7 +33,6 @@ import torch
 from dlo_env.atomic import file_digest, write_text_atomic
 from dlo_env.cord import PEG_RADIUS, Cord, CordParams, peg_clearance
 from dlo_env.dataset.transitions import (
-    GRASP_ENDS,
     GRASP_NAMES,
     PARAM_COLUMNS,
     TransitionDataset,
@@ -103,8 +102,7 @@ def replay_errors(data: TransitionDataset, idx: np.ndarray) -> np.ndarray:
         if len(pegs):
             cord.set_pegs(pegs)
         cord.reset(data.start[i].astype(np.float64))
-        move = np.concatenate([data.displacement[i, 0 if end == "head" else 1]
-                               for end in GRASP_ENDS[cord.grasp]])
+        move = data.end_displacement([i])[0]
         out[k] = error(carry_out(cord, move, max_step)[0], data.next[i])
     return out
 

@@ -34,7 +34,6 @@ from collect_throughput import physics_timer  # the script beside this one
 
 from dlo_env.cord import Cord
 from dlo_env.dataset.transitions import (
-    GRASP_ENDS,
     GRASP_NAMES,
     TransitionCollectConfig,
     TransitionDataset,
@@ -100,8 +99,7 @@ def replay(config: TransitionCollectConfig, data: TransitionDataset, iterations:
         grasp = GRASP_NAMES[int(data.grasp[i])]
         cord = Cord(params, grasp=grasp, pegs=data.peg_list(i), peg_radius=config.peg_radius)
         cord.reset(data.start[i])
-        rows = [0 if end == "head" else 1 for end in GRASP_ENDS[grasp]]
-        move = data.displacement[i, rows].astype(np.float64).reshape(-1)
+        move = data.end_displacement([i])[0].astype(np.float64)
         out[i] = carry_out(cord, move, config.max_step)[0]
     return out, time.perf_counter() - t
 
