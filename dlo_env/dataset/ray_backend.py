@@ -18,6 +18,8 @@ Every node needs this project installed (the same environment as the driver).
 
 from __future__ import annotations
 
+import os
+import shutil
 import tempfile
 from collections.abc import Callable, Iterator
 from dataclasses import dataclass
@@ -101,9 +103,46 @@ class RayBackend:
                 progress(size, 0)
 
 
+#: Prefix of the folder a task makes its chunk in: ``dlo-chunk-<pid>-<random>``.
+CHUNK_FOLDER_PREFIX = "dlo-chunk-"
+
+
 def make_chunk_bytes(job: Any, index: int, size: int) -> bytes:
-    """Make chunk ``index`` of ``job`` in a temporary folder; the bytes of its file."""
-    with tempfile.TemporaryDirectory(prefix="dlo-chunk-") as folder:
-        path = Path(folder) / f"chunk-{index:06d}.npz"
+    """Make chunk ``index`` of ``job`` in a temporary folder; the bytes of its file.
+
+    The folder is named after the worker's process id. A worker that is killed cannot remove
+    its folder, so each task first removes the folders of processes of this node that no
+    longer run (``remove_orphan_chunk_folders``).
+    """
+    root = Path(tempfile.gettempdir())
+    remove_orphan_chunk_folders(root)
+    folder = Path(tempfile.mkdtemp(prefix=f"{CHUNK_FOLDER_PREFIX}{os.getpid()}-", dir=root))
+    try:
+        path = folder / f"chunk-{index:06d}.npz"
         job.write(index, size, path, None)
         return path.read_bytes()
+    finally:
+        shutil.rmtree(folder, ignore_errors=True)
+
+
+def remove_orphan_chunk_folders(root: Path) -> list[Path]:
+    """Remove the chunk folders under ``root`` whose process no longer runs; those removed."""
+    removed = []
+    for folder in root.glob(f"{CHUNK_FOLDER_PREFIX}*-*"):
+        pid = folder.name[len(CHUNK_FOLDER_PREFIX):].split("-", 1)[0]
+        if folder.is_dir() and pid.isdigit() and not _process_runs(int(pid)):
+            shutil.rmtree(folder, ignore_errors=True)
+            removed.append(folder)
+    return removed
+
+
+def _process_runs(pid: int) -> bool:
+    if os.name != "posix":
+        return True  # os.kill(pid, 0) would end the process on Windows: keep the folder
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except PermissionError:
+        return True  # another user's process
+    return True

@@ -4,7 +4,9 @@ a chunk whose worker is killed is made again, once, without loss."""
 from __future__ import annotations
 
 import os
+import subprocess
 import sys
+import tempfile
 from functools import partial
 from pathlib import Path
 
@@ -13,7 +15,7 @@ import pytest
 
 from dlo_env.dataset.chunks import ChunkJob, chunk_plan, run_chunks
 from dlo_env.dataset.collect import CollectConfig, collect
-from dlo_env.dataset.ray_backend import RayBackend
+from dlo_env.dataset.ray_backend import CHUNK_FOLDER_PREFIX, RayBackend, remove_orphan_chunk_folders
 from dlo_env.dataset.transitions import TransitionCollectConfig, collect_transitions
 
 ray = pytest.importorskip("ray", reason='needs the ray extra: pip install -e ".[ray]"')
@@ -59,6 +61,10 @@ def write_numbers_dying_once(marks: str, index: int, size: int, path: Path, prog
     np.savez(path, numbers=np.arange(index * 100, index * 100 + size))
 
 
+def chunk_folders() -> set[Path]:
+    return set(Path(tempfile.gettempdir()).glob(f"{CHUNK_FOLDER_PREFIX}*"))
+
+
 def numbers_in(path: Path) -> int:
     with np.load(path) as data:
         return len(data["numbers"])
@@ -71,6 +77,7 @@ def test_a_killed_worker_chunk_is_made_again_once_and_nothing_is_lost(local_ray,
     job = ChunkJob(kind="numbers", format_version=1, settings={},
                    write=partial(write_numbers_dying_once, str(marks)), size_of=numbers_in)
     plan = chunk_plan(30, 10)
+    before = chunk_folders()
     done = []
     parts, reused, _ = run_chunks(job, tmp_path / "out.npz", plan, workers=1,
                                   progress=lambda n, _: done.append(n),
@@ -82,6 +89,21 @@ def test_a_killed_worker_chunk_is_made_again_once_and_nothing_is_lost(local_ray,
     assert sorted(p.name for p in marks.iterdir()) == [
         "attempt-0-0", "attempt-1-0", "attempt-1-1", "attempt-2-0"]  # chunk 1 ran twice
     assert done == [10, 10, 10] and reused == 0  # each chunk counted once
+    # the killed worker could not remove its chunk folder; the next task did
+    assert chunk_folders() <= before
+
+
+def test_only_the_chunk_folders_of_ended_processes_are_removed(tmp_path):
+    ended = subprocess.run([sys.executable, "-c", "import os; print(os.getpid())"],
+                           capture_output=True, text=True, check=True).stdout.strip()
+    orphan = tmp_path / f"{CHUNK_FOLDER_PREFIX}{ended}-abc"
+    running = tmp_path / f"{CHUNK_FOLDER_PREFIX}{os.getpid()}-def"
+    other = tmp_path / f"{CHUNK_FOLDER_PREFIX}notapid-ghi"
+    for folder in (orphan, running, other):
+        folder.mkdir()
+    (orphan / ".chunk-000001.npz.tmp.npz").write_bytes(b"half")
+    assert remove_orphan_chunk_folders(tmp_path) == [orphan]
+    assert sorted(p.name for p in tmp_path.iterdir()) == sorted([running.name, other.name])
 
 
 def test_ray_backend_settings_are_checked_naming_the_argument():
