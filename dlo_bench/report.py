@@ -35,6 +35,15 @@ TABLE_COLUMNS = (
     ("planning_failures", "plan fails", "{}"),
     ("mean_fidelity", "fidelity (cm)", "{:.2f}"),
 )
+#: What the columns of ``TABLE_COLUMNS`` that need a word mean (printed by ``format_legend``).
+TABLE_LEGEND = (
+    ("success", "the cord at rest within {threshold} (mean point distance) of the goal"),
+    ("err at rest", "mean point distance to the goal once the cord is at rest"),
+    ("direction-free", "the smaller of the errors against the goal and the reversed goal"),
+    ("steps", "actions per episode"),
+    ("plan s", "planning seconds per episode (the median over episodes)"),
+    ("fidelity", "mean distance of the latent tree's first plan to the simulated cord"),
+)
 _CENTIMETRES = {"median_rest_error", "mean_rest_error", "median_rest_direction_free_error",
                 "mean_fidelity"}
 def aligned(rows: list[list[str]]) -> str:
@@ -60,6 +69,13 @@ def format_table(summaries: list[dict[str, Any]]) -> str:
             row.append(fmt.format(value) if value != "" else "")
         rows.append(row)
     return aligned(rows)
+
+
+def format_legend(threshold: float) -> str:
+    """What the table's columns mean, one line each; ``threshold`` in metres."""
+    width = max(len(name) for name, _ in TABLE_LEGEND)
+    return "\n".join(f"{name.rjust(width)}: {text.format(threshold=f'{100 * threshold:g} cm')}"
+                     for name, text in TABLE_LEGEND)
 
 
 def format_divergence(summaries: list[dict[str, Any]]) -> str:

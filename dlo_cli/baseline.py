@@ -11,6 +11,7 @@ from dlo_cli.flags import (
     add_threads,
     number_in,
     positive_int,
+    writable_folder,
 )
 
 
@@ -114,7 +115,7 @@ def run(args: argparse.Namespace) -> int:
     # the benchmark's folder names (sac-her-pegs-dual-endpoint...)
     name = baseline_folder_name(config.algo + ("-cords" if config.cords == "train" else ""),
                                 config.env_id, pegs=bool(config.max_pegs))
-    out = Path(args.out) if args.out else default_out("baseline") / name
+    out = writable_folder(Path(args.out) if args.out else default_out("baseline") / name)
     print(f"training {config.algo} on {config.env_id} (difficulties {config.difficulties}, "
           f"{config.cords} cords, up to {config.max_pegs} pegs) for "
           f"{config.timesteps} steps with {config.n_envs} envs -> {out}")

@@ -17,6 +17,7 @@ from dlo_cli.flags import (
     backend_of,
     number_in,
     positive_int,
+    writable_folder,
 )
 
 
@@ -252,6 +253,7 @@ def run(args: argparse.Namespace) -> int:
         from dlo_env.dataset.process_backend import ProcessBackend
 
         backend = ProcessBackend(args.jobs)
+    writable_folder(args.out)  # the last check: a bad command line leaves no folder
     run_id = new_run_id()
     groups: dict[float, list[str]] = {}
     for env, suite, t in config.cells():

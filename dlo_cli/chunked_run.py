@@ -21,7 +21,10 @@ def run_chunked(args: argparse.Namespace, job: Callable[[Callable[[int, int], No
     import time
 
     from dlo_bench.progress import progress_bar
+    from dlo_cli.flags import writable_file
     from dlo_env.dataset.chunks import parts_dir
+
+    writable_file(args.out)
 
     bars: list = []  # opened on the first report, so argument errors print no bar
 

@@ -20,6 +20,7 @@ from dlo_cli.flags import (
     add_seed,
     add_threads,
     add_transition_model,
+    writable_folder,
 )
 
 AGENTS = ("straight-line", "latent-tree", "latent-tree-closed", "latent-mpc")
@@ -51,11 +52,12 @@ def run(args: argparse.Namespace) -> int:
 
     import dlo_env  # noqa: F401  (registers the environments)
     from dlo_bench.agents import build_agent, load_shape_model, load_transition_model
+    from dlo_bench.benchmark import HEADLINE_THRESHOLD
     from dlo_bench.charts import save_interpolation_png
     from dlo_bench.evaluation import evaluate
     from dlo_bench.fidelity import transition_fidelity
     from dlo_bench.figures import save_episode_gif
-    from dlo_bench.report import format_table, write_evaluation, write_summaries
+    from dlo_bench.report import format_legend, format_table, write_evaluation, write_summaries
     from planners.interpolation import interpolate
     from planners.latent_tree import LatentTreePlanner
 
@@ -63,26 +65,29 @@ def run(args: argparse.Namespace) -> int:
     model = load_shape_model(args.model)
     transition_model = load_transition_model(args.transition_model)
     env_id = "dlo_env/DLOEndpoint-v0"
-    out = Path(args.out)
+    env_kwargs = {"success_threshold": HEADLINE_THRESHOLD}  # success as the README defines it
+    out = Path(writable_folder(args.out))
     print(f"dlo demo: {model!r}\n{len(args.difficulty) * len(AGENTS)} runs of "
           f"{args.episodes} episodes -> {out}")
 
     summaries = []
     rows = [(d, a) for d in args.difficulty for a in AGENTS]
     for difficulty, agent in tqdm(rows, desc="demo", unit="run"):
-        with gym.make(env_id) as env:
+        with gym.make(env_id, **env_kwargs) as env:
             policy = build_agent(agent, env, model=model, transition_model=transition_model,
                                  seed=args.seed)
         result = evaluate(policy, env_id, difficulty=difficulty, episodes=args.episodes,
-                          seed=args.seed + 1000 * difficulty, agent=agent)
+                          seed=args.seed + 1000 * difficulty, agent=agent,
+                          env_kwargs=env_kwargs)
         write_evaluation(result, out, f"{agent}-d{difficulty}")
         summaries.append(result.summary)
     print(format_table(summaries))
+    print(format_legend(HEADLINE_THRESHOLD))
     write_summaries(summaries, out / "summary.json")
 
     # The best agent on the hardest suite it solves: the first solved of a few test tasks of
     # linear-5 (else linear-4, ...), recorded as a GIF of the real cord and the goal.
-    env = gym.make(env_id)
+    env = gym.make(env_id, **env_kwargs)
     policy = build_agent(GIF_AGENT, env, model=model, transition_model=transition_model,
                          seed=args.seed)
     suite, index, frames, info = _hardest_solved(policy, env)

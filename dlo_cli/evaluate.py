@@ -19,6 +19,7 @@ from dlo_cli.flags import (
     add_transition_model,
     backend_of,
     number_in,
+    writable_folder,
 )
 
 
@@ -110,7 +111,13 @@ def run(args: argparse.Namespace) -> int:
     from pathlib import Path
 
     from dlo_bench.agents import agent_spec, load_shape_model
-    from dlo_bench.report import format_divergence, format_table, write_evaluation, write_summaries
+    from dlo_bench.report import (
+        format_divergence,
+        format_legend,
+        format_table,
+        write_evaluation,
+        write_summaries,
+    )
     from dlo_env.tasks import SPLIT_SIZES
 
     specs = [agent_spec(agent) for agent in args.agent]
@@ -135,7 +142,7 @@ def run(args: argparse.Namespace) -> int:
     calls = [(agent, difficulty, suite) for agent in args.agent
              for difficulty, suite, _ in rows]
     labels = [(agent, label) for agent in args.agent for _, _, label in rows]
-    out = Path(args.out)
+    out = Path(writable_folder(args.out))
     extra = {"arguments": settings, "machine": platform.platform()}
     results: dict[int, Any] = {}
 
@@ -157,6 +164,7 @@ def run(args: argparse.Namespace) -> int:
                   f"{result.summary['success_rate']:.0%}", flush=True)
     summaries = [results[k].summary for k in range(len(calls))]
     print(format_table(summaries))
+    print(format_legend(args.threshold))
     parting = format_divergence(summaries)
     if parting:
         print("\nwhere plans and the real cord part ways: mean error (cm) of the first plan's "

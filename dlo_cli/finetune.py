@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import argparse
 
-from dlo_cli.flags import add_seed, existing_path, positive_int
+from dlo_cli.flags import add_seed, existing_path, positive_int, writable_folder
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
@@ -69,7 +69,7 @@ def run(args: argparse.Namespace) -> int:
     steps = {k: v for k, v in {"gan_steps": args.gan_steps,
                                "encoder_steps": args.encoder_steps}.items() if v is not None}
     config = replace(config, **steps)
-    out = Path(args.out) if args.out else default_out("finetune")
+    out = writable_folder(Path(args.out) if args.out else default_out("finetune"))
     print(f"fine-tuning {args.model} on {len(shapes)} shapes from {args.shapes}; "
           f"training data {data_path}; held-out {heldout_path if heldout is not None else None}")
     new_model, report = finetune(model, shapes, train_shapes, heldout, config, seed=args.seed,

@@ -127,6 +127,54 @@ def add_out(parser: argparse.ArgumentParser, command: str, what: str) -> None:
     parser.add_argument("--out", default=str(default_out(command)), help=f"folder for {what}")
 
 
+def writable_folder(path: Any, flag: str = "--out") -> Any:
+    """Make the output folder ``path`` (and its parents) and check that a file can be written
+    in it, before a command starts its work; returns ``path``.
+
+    Raises:
+        ValueError: One line naming ``flag``: ``path`` is a file, or cannot be made or
+            written (no permission, a read-only or virtual file system).
+    """
+    from pathlib import Path
+
+    if Path(path).exists() and not Path(path).is_dir():
+        raise ValueError(f"{flag} must be a folder, got the file {str(path)!r}")
+    reason = _cannot_write_in(Path(path))
+    if reason:
+        raise ValueError(f"{flag} must be a folder this user can write, got {str(path)!r} "
+                         f"({reason})")
+    return path
+
+
+def writable_file(path: Any, flag: str = "--out") -> Any:
+    """``writable_folder`` for the output file ``path``: it is not a folder, and its folder
+    can be made and written; returns ``path``."""
+    from pathlib import Path
+
+    if Path(path).is_dir():
+        raise ValueError(f"{flag} must be a file name, got the folder {str(path)!r}")
+    reason = _cannot_write_in(Path(path).parent)
+    if reason:
+        raise ValueError(f"{flag} must be a file in a folder this user can write, got "
+                         f"{str(path)!r} ({reason})")
+    return path
+
+
+def _cannot_write_in(folder: Any) -> str:
+    """Make ``folder`` and a file in it (removed at once); why that failed, "" if it did not."""
+    import os
+    import tempfile
+
+    try:
+        folder.mkdir(parents=True, exist_ok=True)
+        fd, probe = tempfile.mkstemp(dir=folder, prefix=".dlo-write-check-")
+        os.close(fd)
+        os.unlink(probe)
+    except OSError as exc:
+        return exc.strerror or str(exc)
+    return ""
+
+
 def existing_path(what: str) -> Callable[[str], str]:
     """An argparse type: a file or folder that exists, else a message naming ``what``."""
 
@@ -166,8 +214,13 @@ def agent_type(sb3: bool = True) -> Callable[[str], str]:
             raise argparse.ArgumentTypeError(
                 f"agent name must be one of {', '.join(AGENTS)}, got {text!r}")
         try:
-            agent_spec(text)
-        except ValueError as exc:
+            spec = agent_spec(text)
+            folder = spec.defaults.get("baseline")
+            if folder is not None:  # sb3:PATH: the folder is read before any work starts
+                from dlo_bench.baselines import read_baseline_metadata
+
+                read_baseline_metadata(folder)
+        except (ValueError, FileNotFoundError) as exc:
             raise argparse.ArgumentTypeError(str(exc)) from None
         return text
 

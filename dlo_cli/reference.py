@@ -12,7 +12,7 @@ from __future__ import annotations
 
 import argparse
 
-from dlo_cli.flags import add_env, add_out, positive_int
+from dlo_cli.flags import add_env, add_out, positive_int, writable_folder
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
@@ -38,6 +38,7 @@ def run(args: argparse.Namespace) -> int:
 
     from dlo_bench.reference import make_references
 
+    writable_folder(args.out)
     for env_id in args.env:
         path = make_references(args.suite, env_id, args.out, limit=args.limit, jobs=args.jobs,
                                progress=True)

@@ -4,7 +4,13 @@ from __future__ import annotations
 
 import argparse
 
-from dlo_cli.flags import add_seed, number_in, positive_float, positive_int
+from dlo_cli.flags import (
+    add_seed,
+    number_in,
+    positive_float,
+    positive_int,
+    writable_folder,
+)
 
 non_negative_int = number_in(int, 0, expected="an integer >= 0")
 non_negative_float = number_in(float, 0.0, expected="a number >= 0")
@@ -183,7 +189,7 @@ def run(args: argparse.Namespace) -> int:
         base_model, base_train = PAPER_MODEL, PAPER_TRAIN
     model_config = replace(base_model, **model_kw)
     train_config = replace(base_train, **train_kw)
-    out = Path(args.out)
+    out = Path(writable_folder(args.out))
     resumed = (out / CHECKPOINT_FILE).exists()
     print(f"{'resuming' if resumed else 'training'} in {out}: {len(data)} training shapes, "
           f"{len(heldout)} held-out shapes\n{model_config}\n{train_config}")

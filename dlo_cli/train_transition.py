@@ -21,6 +21,7 @@ def run(args: argparse.Namespace) -> int:
     import torch
 
     from dlo_bench.progress import progress_bar
+    from dlo_cli.flags import writable_folder
     from dlo_env.dataset.transitions import (
         load_transition_files,
         split_transitions,
@@ -79,7 +80,7 @@ def run(args: argparse.Namespace) -> int:
         model_kw = {"mean_network": True, "mean_by_grasp": args.mean_by_grasp}
     tc = replace(TransitionTrainConfig(), **train_kw)
     mc = replace(TransitionModelConfig(), **model_kw)
-    out = Path(args.out)
+    out = Path(writable_folder(args.out))
     resumed = (out / CHECKPOINT_FILE).exists()
     print(f"{'resuming' if resumed else 'training'} in {out}: {len(data)} transitions, "
           f"{len(heldout)} held out\n{mc if not tc.teacher else 'distilling ' + tc.teacher}"

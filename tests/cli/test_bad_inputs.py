@@ -66,6 +66,7 @@ CASES = [
     ("evaluate --agent teleport --out OUT", "--agent", ("'teleport'", "straight-line")),
     ("benchmark --agent teleport --out OUT", "--agent", ("'teleport'", "straight-line")),
     ("benchmark --agent sb3:runs/ppo --out OUT", "--agent", ("sb3:runs/ppo",)),
+    ("evaluate --agent sb3:OUT/nope --out OUT", "--agent", ("nope", "dlo baseline")),
     ("evaluate --out OUT", "--agent", ("required",)),
     ("evaluate --agent straight-line --split nope --out OUT", "--split", ("'nope'", "test")),
     ("evaluate --agent straight-line --suite linear-9 --out OUT", "--suite",
@@ -110,3 +111,34 @@ def test_a_bad_input_is_one_line_naming_the_flag_before_any_work(line, flag, wor
     assert captured.out == ""
     assert not out.exists()
 
+
+
+#: Commands with an output folder (FILE is an existing file) or file, refused before any work.
+BAD_OUTS = [
+    ("evaluate --agent straight-line --episodes 1 --out FILE", "--out must be a folder, got"),
+    ("evaluate --agent straight-line --episodes 1 --out FILE/sub", "this user can write"),
+    ("demo --episodes 1 --out FILE", "--out must be a folder, got"),
+    ("benchmark --quick --allow-dirty --out FILE/sub", "this user can write"),
+    ("reference --limit 1 --out FILE", "--out must be a folder, got"),
+    ("baseline --algo ppo --timesteps 8 --out FILE", "--out must be a folder, got"),
+    ("collect --num-shapes 10 --out FILE/d.npz", "a file in a folder this user can write"),
+    ("collect --kind transitions --num-transitions 5 --out FILE/d.npz",
+     "a file in a folder this user can write"),
+]
+
+
+@pytest.mark.parametrize("line, words", BAD_OUTS, ids=[c[0] for c in BAD_OUTS])
+def test_an_output_that_cannot_be_written_is_refused_before_any_work(line, words, tmp_path,
+                                                                     capsys):
+    file = tmp_path / "file.txt"
+    file.write_text("the user's file")
+    argv = line.replace("FILE", str(file)).split()
+    code = main(argv)
+    captured = capsys.readouterr()
+    lines = [text for text in captured.err.splitlines() if text.strip()]
+    assert code == 2, captured.err
+    assert lines == [lines[0]] and lines[0].startswith(f"dlo {argv[0]}: error: --out "), lines
+    assert words in lines[0] and str(file) in lines[0], lines[0]
+    assert captured.out == ""  # no work started: nothing printed
+    assert file.read_text() == "the user's file"
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["file.txt"]

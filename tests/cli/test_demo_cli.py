@@ -33,6 +33,7 @@ def test_demo_writes_the_table_the_episode_gif_and_the_interpolation_png(tmp_pat
     assert code == 0
     printed = capsys.readouterr().out
     assert "latent-tree-closed" in printed and "latent-mpc" in printed
+    assert "success: the cord at rest within 1 cm" in printed  # judged as the README says
     assert "episode.gif: latent-mpc on linear-5 test task" in printed
     _check_outputs(out, rows=4)
 
