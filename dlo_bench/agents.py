@@ -8,6 +8,7 @@ entry in ``AGENTS``.
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field, fields, replace
 from pathlib import Path
@@ -368,7 +369,8 @@ def build_agent(name: str, env: Any, **options: Any) -> Policy:
 
     Args:
         name: A key of ``AGENTS``, or ``sb3:PATH`` with a folder written by ``dlo baseline``.
-        env: The environment the agent will act in (wrapped or not).
+        env: The environment the agent will act in (wrapped or not), or its id (an
+            environment made with ``gym.make(env)``, its defaults, and closed again).
         **options: ``AgentOptions`` fields (``model``, ``transition_model``, ``baseline``,
             ``seed``, ``replan_every``, ``max_seconds``, ``device``); None keeps the default.
 
@@ -380,6 +382,15 @@ def build_agent(name: str, env: Any, **options: Any) -> Policy:
             or a model that does not fit the environment.
         FileNotFoundError: When a model or baseline file is missing.
     """
+    if isinstance(env, str):
+        import gymnasium as gym
+
+        import dlo_env  # noqa: F401  (registers the environments)
+
+        with gym.make(env) as made:
+            return build_agent(name, made, **options)
+    if not hasattr(env, "unwrapped") or not hasattr(env, "observation_space"):
+        raise ValueError(f"env must be a dlo_env environment or its id, got {type(env).__name__}")
     spec = agent_spec(name)
     known = {f.name for f in fields(AgentOptions)}
     unknown = sorted(set(options) - known)
@@ -396,6 +407,10 @@ def build_agent(name: str, env: Any, **options: Any) -> Policy:
     _check_observation(name, policy, env)
     from planners.episodes import EpisodicPolicy
 
-    if isinstance(policy, EpisodicPolicy):  # aim as the environment scores
+    if isinstance(policy, EpisodicPolicy):  # aim as the environment scores, in it alone
         policy.success_metric = getattr(env.unwrapped, "success_metric", "error")
+        pegs = getattr(env.unwrapped, "max_pegs", 0)
+        policy.built_for = (f"{env_id or type(env.unwrapped).__name__}"
+                            + (f" with max_pegs={pegs}" if pegs else ""),
+                            math.prod(env.observation_space["observation"].shape))
     return policy

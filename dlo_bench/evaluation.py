@@ -13,6 +13,7 @@ from __future__ import annotations
 import math
 import time
 import warnings
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any
 
@@ -224,17 +225,31 @@ def suite_tasks(suite: str, split: str = "test", grasp: str = "head",
         grasp: ``"head"`` (``DLOEndpoint-v0``) or ``"both"`` (``DLODualEndpoint-v0``).
         limit: Only the first ``limit`` tasks.
     """
+    check_suite(suite)
+    for names, load in _suite_kinds():
+        if suite in names:
+            return list(load(suite, split, grasp=grasp, limit=limit))
+    raise AssertionError(f"no loader for suite {suite!r}")
+
+
+def _suite_kinds() -> tuple[tuple[Any, Callable[..., Any]], ...]:
+    """Every kind of named suite: (its names, its loader)."""
     from dlo_env.cord_suites import CORD_SUITES, load_cord_suite
     from dlo_env.designed_suites import DESIGNED_SUITES, load_designed_suite
     from dlo_env.peg_suites import PEG_SUITES, ROUTE_SUITES, load_peg_suite, load_route_suite
-    from dlo_env.tasks import load_suite
+    from dlo_env.tasks import SUITES, load_suite
 
-    for names, load in ((DESIGNED_SUITES, load_designed_suite),
-                        (CORD_SUITES, load_cord_suite), (PEG_SUITES, load_peg_suite),
-                        (ROUTE_SUITES, load_route_suite)):
-        if suite in names:
-            return list(load(suite, split, grasp=grasp, limit=limit))
-    return list(load_suite(suite, split, grasp=grasp, limit=limit))
+    return ((SUITES, load_suite), (DESIGNED_SUITES, load_designed_suite),
+            (CORD_SUITES, load_cord_suite), (PEG_SUITES, load_peg_suite),
+            (ROUTE_SUITES, load_route_suite))
+
+
+def check_suite(suite: str) -> str:
+    """``suite`` if it names a suite of any kind, else a one-line ``ValueError`` listing them."""
+    every = [name for names, _ in _suite_kinds() for name in names]
+    if suite not in every:
+        raise ValueError(f"suite must be one of {', '.join(every)}, got {suite!r}")
+    return suite
 
 
 def _episode_options(
@@ -330,6 +345,8 @@ def task_env_kwargs(difficulty: int | None = None, suite: str | None = None
     from dlo_env.peg_suites import PEGGED_SUITES, SUITE_MAX_PEGS
     from dlo_env.tasks import difficulty_max_steps, suite_max_steps
 
+    if suite is not None:
+        check_suite(suite)
     if suite in PEGGED_SUITES:
         return {"max_episode_steps": difficulty_max_steps(PEGGED_SUITES[suite]),
                 "max_pegs": SUITE_MAX_PEGS}

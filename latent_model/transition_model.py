@@ -710,14 +710,22 @@ class TransitionModel(nn.Module):
             raise ValueError(f"grasp must be one of {tuple(GRASP_CODES)}, got {grasp!r}")
         n = self.config.n_points
         # flat shapes, as observations hold them, too
-        arr = np.ascontiguousarray(unflatten(shapes, n, dtype=np.float32))
+        try:
+            arr = np.ascontiguousarray(unflatten(shapes, n, dtype=np.float32))
+        except (TypeError, ValueError) as exc:
+            raise ValueError(f"shapes must be numbers of shape ({n}, 2), ({2 * n},), (B, {n}, 2) "
+                             f"or (B, {2 * n}): {exc}") from None
         single = arr.ndim == 2
         arr = arr[None] if single else arr
         if arr.ndim != 3 or arr.shape[1:] != (n, 2):
             raise ValueError(f"shapes must have shape ({n}, 2), ({2 * n},), (B, {n}, 2) or "
                              f"(B, {2 * n}), got {np.shape(shapes)}")
         width = 4 if grasp == "both" else 2
-        d = np.ascontiguousarray(displacement, dtype=np.float32)
+        try:
+            d = np.ascontiguousarray(displacement, dtype=np.float32)
+        except (TypeError, ValueError) as exc:
+            raise ValueError(f"displacement must be numbers of shape ({width},) or "
+                             f"(B, {width}): {exc}") from None
         d = d[None] if d.ndim == 1 else d
         if d.shape != (len(arr), width):
             want = f"({width},) or ({len(arr)}, {width})" if not single else f"({width},)"

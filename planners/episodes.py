@@ -104,6 +104,10 @@ class EpisodicPolicy:
     #: the cord at the episode's first step, for the whole episode; ``build_agent`` and the
     #: CEM planners' ``for_env`` set it from the environment (set it yourself otherwise).
     success_metric: str = "error"
+    #: The environment the policy was built for: its id and the size of its
+    #: ``observation["observation"]`` (``build_agent`` sets them). An observation of another
+    #: size (the other environment, another number of peg slots) is refused in one line.
+    built_for: tuple[str, int] | None = None
 
     def __init_subclass__(cls, **kwargs: Any) -> None:
         """A subclass's ``reset()`` also forgets the goal order chosen for the episode."""
@@ -150,6 +154,14 @@ class EpisodicPolicy:
 
     def _step(self, observation: Observation, start: bool) -> np.ndarray:
         """One environment's action: reset first when its episode is new."""
+        if self.built_for is not None and "observation" in observation:
+            env_id, size = self.built_for
+            got = np.asarray(observation["observation"]).size
+            if got != size:
+                raise ValueError(
+                    f"observation['observation'] has {got} numbers, but this policy was built "
+                    f"for {env_id}, which observes {size}: build the agent with the "
+                    "environment it acts in")
         n = self.n_points
         if n is None:
             n = np.asarray(observation["achieved_goal"]).reshape(-1).size // 2

@@ -38,6 +38,27 @@ def test_every_registered_agent_acts_in_each_of_its_environments(name, toy_model
             assert env.action_space.contains(action.astype(np.float32))
 
 
+@pytest.mark.parametrize("name", list(AGENTS))
+def test_an_agent_refuses_the_observations_of_the_environment_it_was_not_built_for(name,
+                                                                                   toy_model):
+    with gym.make(ENDPOINT) as env, gym.make(DUAL_ENDPOINT) as other:
+        if AGENTS[name].extra == "rl" and not shipped_baseline(name, ENDPOINT).is_dir():
+            pytest.skip(f"no shipped {name} for {ENDPOINT}")
+        policy = build_agent(name, env, model=toy_model)
+        obs, _ = other.reset(seed=0, options={"difficulty": 1})
+        with pytest.raises(ValueError) as info:  # one line, not a wrong-sized action
+            policy.predict(obs, deterministic=True)
+        assert "44" in str(info.value) and "42" in str(info.value), info.value
+
+
+def test_build_agent_takes_an_environment_id_as_evaluate_does():
+    policy = build_agent("straight-line", ENDPOINT)
+    with gym.make(ENDPOINT) as env:
+        assert env.action_space.contains(_first_action(policy, env))
+    with pytest.raises(ValueError, match="env must be a dlo_env environment or its id"):
+        build_agent("straight-line", 5)
+
+
 def test_planners_report_their_statistics_through_the_planning_protocol(toy_model):
     with gym.make(ENDPOINT) as env:
         for name in ("latent-tree", "latent-tree-closed", "physics-mpc"):

@@ -104,6 +104,13 @@ def test_evaluate_runs_the_fixed_tasks_of_a_suite():
     assert all(r.difficulty == 1 and r.seed == -1 for r in result.records)
 
 
+def test_an_unknown_suite_is_refused_naming_the_suites_of_every_kind():
+    with pytest.raises(ValueError) as info:
+        evaluate(StraightLinePolicy(), ENV_ID, suite="linear-99", episodes=1)
+    for name in ("linear-1", "shapes-curves", "cords-3", "pegs-2", "route-4", "'linear-99'"):
+        assert name in str(info.value)
+
+
 def test_evaluate_reports_plans_and_fidelity_of_planner_policies(toy_model):
     result = evaluate(PlannerPolicy(toy_model), ENV_ID, difficulty=1, episodes=1, seed=0)
     record = result.records[0]

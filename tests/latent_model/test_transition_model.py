@@ -309,6 +309,8 @@ def test_the_first_members_alone_are_the_first_members_of_the_ensemble(model):
     ((np.zeros((3, 20, 2)), "middle", np.zeros((3, 2))), "grasp must be one of"),
     ((np.zeros((3, 20, 2)), "both", np.zeros((3, 2))), "displacement must have shape"),
     ((np.zeros((3, 20, 2)), "head", np.full((3, 2), np.nan)), "must be finite"),
+    (("abc", "head", np.zeros(2)), "shapes must be numbers"),
+    ((np.zeros((20, 2)), "head", "xy"), "displacement must be numbers"),
 ])
 def test_bad_input_gets_one_line_naming_the_argument(model, args, message):
     with pytest.raises(ValueError, match=message) as info:
