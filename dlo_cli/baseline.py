@@ -117,7 +117,8 @@ def run(args: argparse.Namespace) -> int:
                                 config.env_id, pegs=bool(config.max_pegs))
     out = writable_folder(Path(args.out) if args.out else default_out("baseline") / name)
     print(f"training {config.algo} on {config.env_id} (difficulties {config.difficulties}, "
-          f"{config.cords} cords, up to {config.max_pegs} pegs) for "
+          f"{config.cords} cords, "
+          f"{f'up to {config.max_pegs} pegs' if config.max_pegs else 'no pegs'}) for "
           f"{config.timesteps} steps with {config.n_envs} envs -> {out}")
     print("config: " + json.dumps(asdict(config)), flush=True)
     path = train_baseline(config, out, device=args.device, resume=args.resume,

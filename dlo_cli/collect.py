@@ -111,7 +111,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                              "start, and its moves run around them (each transition records "
                              "its pegs; default 0: an empty table)")
     parser.add_argument("--resume", action="store_true",
-                        help="continue an interrupted run from OUT.parts/")
+                        help="continue an interrupted run from its finished chunks, in the "
+                             "folder named --out plus .parts (data/t.npz.parts/)")
     add_backend(parser)
 
 

@@ -14,6 +14,7 @@ import torch
 import dlo_env  # noqa: F401  (registers the environments)
 from dlo_bench import build_agent, evaluate, format_table
 from dlo_bench.agents import load_shape_model
+from dlo_bench.report import format_legend
 from planners.policy import DEFAULT_REPLAN_EVERY
 
 
@@ -53,3 +54,4 @@ if __name__ == "__main__":
                           episodes=args.episodes, seed=args.seed, agent=name)
         summaries.append(result.summary)
     print(format_table(summaries))
+    print(format_legend(gym.make(env_id).unwrapped.success_threshold))  # the default, 2 cm

@@ -1,6 +1,8 @@
 """Shape transition by latent interpolation (the paper's Fig. 2) on a random task.
 
-    python examples/interpolate_shapes.py --difficulty 1 --steps 8 --out interpolation.png
+    python examples/interpolate_shapes.py --difficulty 1 --steps 8
+
+It writes runs/examples/interpolation.png (--out elsewhere).
 """
 
 from __future__ import annotations
@@ -26,7 +28,7 @@ class Args:
     """straight head moves from start to goal"""
     steps: int = 8
     """shapes on the latent line"""
-    out: str = "interpolation.png"
+    out: str = "runs/examples/interpolation.png"
     """the figure to write"""
     model: str = ""
     """a shape model file (default: the shipped pretrained model)"""

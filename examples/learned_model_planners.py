@@ -46,7 +46,9 @@ if __name__ == "__main__":
     torch.set_num_threads(1)  # small models: more threads only contend
     env_id = "dlo_env/DLODualEndpoint-v0" if args.dual else "dlo_env/DLOEndpoint-v0"
     agents = ["latent-mpc", "physics-mpc"] + ([] if args.dual else ["latent-tree-kino"])
-    print(f"{env_id}, difficulty {args.difficulty}, task seed {args.seed}")
+    threshold = gym.make(env_id).unwrapped.success_threshold  # the environment's default
+    print(f"{env_id}, difficulty {args.difficulty}, task seed {args.seed}; solved: the cord at "
+          f"rest within {100 * threshold:g} cm of the goal")
     for name in agents:
         env = gym.make(env_id)
         policy = build_agent(name, env)

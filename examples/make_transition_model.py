@@ -172,7 +172,7 @@ def main(argv: list[str] | None = None) -> None:
     data_dir.mkdir(parents=True, exist_ok=True)
     for path, (_, count, settings) in zip(files, DATA):
         if path.exists():
-            print(f"{path}: there, {count} transitions as the recipe says", flush=True)
+            print(f"{path}: there, {scaled(count)} transitions as the recipe says", flush=True)
         else:
             dlo("collect", "--kind", "transitions", "--num-transitions", scaled(count),
                 *flags(settings), "--workers", args.workers, "--out", path, "--resume")

@@ -1,7 +1,7 @@
 """One episode of the cord environment: random actions, or the task's reference actions.
 
     python examples/random_episode.py --difficulty 2
-    python examples/random_episode.py --policy reference --gif episode.gif
+    python examples/random_episode.py --policy reference --gif runs/examples/episode.gif
 
 Random actions rarely solve a task; the reference actions (the moves that made the goal,
 returned by ``reset``) always do. ``--gif`` needs pillow and pygame-ce (the ``render`` extra).
@@ -76,8 +76,11 @@ if __name__ == "__main__":
     if args.gif:
         from PIL import Image
 
+        from dlo_env.atomic import atomic_path
+
         images = [Image.fromarray(f) for f in frames]
         fps = env.metadata["render_fps"]
-        images[0].save(args.gif, save_all=True, append_images=images[1:],
-                       duration=round(1000 / fps), loop=0)
+        with atomic_path(args.gif) as tmp:  # makes the folder; a crash leaves no half file
+            images[0].save(tmp, save_all=True, append_images=images[1:],
+                           duration=round(1000 / fps), loop=0)
         print(f"wrote {args.gif} ({len(images)} frames)")

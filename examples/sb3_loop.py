@@ -6,7 +6,8 @@ A plain loop (``obs, info = env.reset()`` then ``policy.predict(obs)`` until the
 ends) does not tell a policy where an episode starts; SB3's ``evaluate_policy`` passes
 ``episode_start``. The planners notice a new episode either way, so both columns agree. The
 last column runs the same tasks in a Gymnasium vector env of 2 environments with one policy
-(``predict`` on the batch: one plan per environment).
+(``predict`` on the batch: one plan per environment; ``physics-mpc-true-cord``, which reads the
+cord of the environment it was built from, one policy per environment).
 """
 
 from __future__ import annotations
@@ -23,6 +24,7 @@ import dlo_env  # noqa: F401  (registers the environments)
 from dlo_bench import AGENTS, build_agent
 from dlo_bench.agents import agent_spec
 from dlo_env.tasks import Task, load_suite
+from planners import PerEnvPolicy
 from planners.interfaces import Policy
 
 
@@ -76,14 +78,18 @@ class TaskSequence(gym.Wrapper):
         return self.env.reset(seed=seed, options={"task": task})
 
 
-def vector_loop(policy: Policy, env_id: str, tasks: list[Task], num_envs: int = 2
-                ) -> list[bool]:
+def vector_loop(name: str, env_id: str, tasks: list[Task], num_envs: int = 2) -> list[bool]:
     """Success of each task, ``num_envs`` environments at a time in a Gymnasium vector env
     (one batched ``predict`` per step, no ``episode_start``; finished episodes reset
-    themselves, as vector envs do)."""
+    themselves, as vector envs do). A policy that plans for one environment only
+    (``plans_batches`` False) gets one copy per environment (``PerEnvPolicy``)."""
+    num_envs = min(num_envs, len(tasks))
     shares = [tasks[i::num_envs] for i in range(num_envs)]
     envs = gym.vector.SyncVectorEnv(
         [lambda share=share: TaskSequence(gym.make(env_id), share) for share in shares])
+    policy = build_agent(name, envs.envs[0])
+    if not getattr(policy, "plans_batches", True):
+        policy = PerEnvPolicy([build_agent(name, e) for e in envs.envs])
     results: list[list[bool]] = [[] for _ in shares]
     obs, _ = envs.reset()
     while any(len(r) < len(share) for r, share in zip(results, shares)):
@@ -119,6 +125,6 @@ if __name__ == "__main__":
             continue
         told = plain_loop(first, env, tasks, tell_starts=True)
         plain = plain_loop(build_agent(name, env), env, tasks, tell_starts=False)
-        vector = vector_loop(build_agent(name, env), args.env, tasks)
+        vector = vector_loop(name, args.env, tasks)
         print(f"{name:<20} {sum(told):>19} {sum(plain):>8} {sum(vector):>14} "
               f"{time.perf_counter() - t0:>8.0f}", flush=True)

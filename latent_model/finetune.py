@@ -123,6 +123,9 @@ class FinetuneReport:
             lines.append("held-out metrics before -> after:")
             for name in ("cov", "mmd", "nna", "spacing_cv", "length_error", "inversion",
                          "foreign_inversion"):
+                if name == "mmd":  # metres, printed in cm as `dlo train` prints it
+                    lines.append(f"  {'mmd (cm)':<18} {100 * b.mmd:.4f} -> {100 * a.mmd:.4f}")
+                    continue
                 lines.append(f"  {name:<18} {getattr(b, name):.4f} -> {getattr(a, name):.4f}")
         return "\n".join(lines)
 

@@ -183,6 +183,9 @@ def report_lines(rows: list[ErrorRow], rank: float) -> list[str]:
     lines = [f"{'moves':>5} {'group':<10} {'count':>6} {'mean':>8} {'95% interval':>15} "
              f"{'median':>8} {'p99':>8} {'<=1cm':>7}"]
     for r in rows:
+        if not r.count:  # no held-out move of this group: nothing measured
+            lines.append(f"{r.moves:>5} {r.group:<10} {r.count:>6} {'-':>8}")
+            continue
         interval = f"{r.mean_low_cm:.3f}-{r.mean_high_cm:.3f}cm"
         lines.append(f"{r.moves:>5} {r.group:<10} {r.count:>6} {r.mean_cm:>6.3f}cm "
                      f"{interval:>15} "

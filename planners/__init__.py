@@ -15,6 +15,7 @@ from planners.interfaces import EpisodeStats, Plan, PlanningPolicy, Policy, Shap
 from planners.interpolation import interpolate
 from planners.latent_mpc import LatentMPCConfig, LatentMPCPolicy
 from planners.latent_tree import LatentTreePlanner, TreeConfig
+from planners.per_env import PerEnvPolicy
 from planners.physics_mpc import PhysicsMPCConfig, PhysicsMPCPolicy
 from planners.policy import PlannerPolicy
 from planners.straight_line import StraightLinePolicy
@@ -28,6 +29,7 @@ __all__ = [
     "LatentMPCConfig",
     "LatentMPCPolicy",
     "LatentTreePlanner",
+    "PerEnvPolicy",
     "PhysicsMPCConfig",
     "PhysicsMPCPolicy",
     "Plan",

@@ -108,6 +108,10 @@ class EpisodicPolicy:
     #: ``observation["observation"]`` (``build_agent`` sets them). An observation of another
     #: size (the other environment, another number of peg slots) is refused in one line.
     built_for: tuple[str, int] | None = None
+    #: Whether ``predict`` takes a batch of several environments (one plan per row); a
+    #: policy tied to one environment says False (``planners.PerEnvPolicy`` then serves a
+    #: vector env).
+    plans_batches: bool = True
 
     def __init_subclass__(cls, **kwargs: Any) -> None:
         """A subclass's ``reset()`` also forgets the goal order chosen for the episode."""

@@ -205,6 +205,9 @@ class TrueCordPhysicsMPCPolicy(PhysicsMPCPolicy):
                          config=config, success_metric=base.success_metric,
                          peg_radius=base.peg_radius)
 
+    #: It plans for the one environment it reads (``planners.PerEnvPolicy`` for a vector env).
+    plans_batches = False
+
     def check_env(self, env: object) -> None:
         """Raise ``ValueError`` unless ``env`` is the environment this policy reads."""
         if getattr(env, "unwrapped", env) is not self._env:
@@ -220,5 +223,7 @@ class TrueCordPhysicsMPCPolicy(PhysicsMPCPolicy):
     def _copies(self, size: int) -> list:
         if size > 1:
             raise ValueError("TrueCordPhysicsMPCPolicy reads the cord of the one environment "
-                             f"it was made for: it takes a batch of 1, got {size} observations")
+                             f"it was made for: it takes a batch of 1, got {size} observations; "
+                             "in a vector env give each environment its own with "
+                             "planners.PerEnvPolicy")
         return super()._copies(size)

@@ -178,8 +178,8 @@ def check_out(out: str | os.PathLike[str], *, resume: bool, workers: object) -> 
     if out.exists():
         raise ValueError(f"out {str(out)!r} already exists; delete it or choose another file")
     if parts_dir(out).exists() and not resume:
-        raise ValueError(f"an interrupted run left {str(parts_dir(out))!r}; pass resume=True "
-                         "(--resume) to continue it, or delete the folder")
+        raise ValueError(f"an interrupted run left {str(parts_dir(out))!r}; continue it with "
+                         "--resume (resume=True in Python), or delete the folder")
     return out
 
 

@@ -65,3 +65,13 @@ def test_every_move_is_counted_once_in_its_band(tmp_path, monkeypatch, capsys):
         assert rows[(end, "all")][:2] == [str(len(idx)), str((e > 0.01).sum())]
         missed += (e > 0.01).sum()
     assert 0 < missed < len(data)  # both kinds of move are counted
+
+
+def test_the_report_prints_a_dash_for_a_group_without_held_out_moves():
+    from latent_model.transition_metrics import ErrorRow, report_lines
+
+    nan = float("nan")
+    lines = report_lines([ErrorRow(1, "head", 0, nan, nan, nan, nan),
+                          ErrorRow(1, "tail", 4, 0.1, 0.1, 0.2, 1.0, 0.05, 0.15)], 0.5)
+    assert "nan" not in lines[1] and lines[1].split()[-1] == "-"
+    assert "0.100cm" in lines[2]

@@ -288,8 +288,28 @@ def test_the_sb3_loop_example_solves_the_same_tasks_in_every_loop():
     tasks = load_suite("linear-1", "test", limit=3)
     told = example.plain_loop(StraightLinePolicy(), env, tasks, tell_starts=True)
     plain = example.plain_loop(StraightLinePolicy(), env, tasks, tell_starts=False)
-    vector = example.vector_loop(StraightLinePolicy(), ENDPOINT, tasks)
+    vector = example.vector_loop("straight-line", ENDPOINT, tasks)
     assert told == plain == vector == [True, True, True]  # one straight move solves linear-1
+    assert example.vector_loop("straight-line", ENDPOINT, tasks[:1]) == [True]  # 1 task, 1 env
+
+
+@pytest.mark.slow
+def test_a_policy_of_one_environment_serves_a_vector_env_through_per_env_policy():
+    from dlo_bench.agents import build_agent
+    from planners import PerEnvPolicy
+
+    envs = gym.vector.SyncVectorEnv([lambda: gym.make(ENDPOINT)] * 2)
+    obs, _ = envs.reset(seed=0, options={"difficulty": 1})
+    single = build_agent("physics-mpc-true-cord", envs.envs[0])
+    assert single.plans_batches is False and StraightLinePolicy.plans_batches is True
+    with pytest.raises(ValueError, match="PerEnvPolicy"):
+        single.predict(obs)
+    policy = PerEnvPolicy([build_agent("physics-mpc-true-cord", e) for e in envs.envs])
+    actions, _ = policy.predict(obs)
+    assert actions.shape == (2, 2) and envs.action_space.contains(actions)
+    with pytest.raises(ValueError, match="one row per policy"):
+        PerEnvPolicy([single]).predict(obs)
+    envs.close()
 
 
 @pytest.mark.parametrize("env_id", [ENDPOINT, DUAL])
