@@ -383,6 +383,9 @@ def build_agent(name: str, env: Any, **options: Any) -> Policy:
         FileNotFoundError: When a model or baseline file is missing.
     """
     if isinstance(env, str):
+        if name == "physics-mpc-true-cord":
+            raise ValueError("physics-mpc-true-cord reads the cord of the environment it acts "
+                             "in: give it that environment, not its id")
         import gymnasium as gym
 
         import dlo_env  # noqa: F401  (registers the environments)
@@ -410,7 +413,6 @@ def build_agent(name: str, env: Any, **options: Any) -> Policy:
     if isinstance(policy, EpisodicPolicy):  # aim as the environment scores, in it alone
         policy.success_metric = getattr(env.unwrapped, "success_metric", "error")
         pegs = getattr(env.unwrapped, "max_pegs", 0)
-        policy.built_for = (f"{env_id or type(env.unwrapped).__name__}"
-                            + (f" with max_pegs={pegs}" if pegs else ""),
+        policy.built_for = (f"{env_id or type(env.unwrapped).__name__} with max_pegs={pegs}",
                             math.prod(env.observation_space["observation"].shape))
     return policy

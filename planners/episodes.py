@@ -165,7 +165,8 @@ class EpisodicPolicy:
                 raise ValueError(
                     f"observation['observation'] has {got} numbers, but this policy was built "
                     f"for {env_id}, which observes {size}: build the agent with the "
-                    "environment it acts in")
+                    "environment it acts in (a suite's: gym.make(id, "
+                    "**dlo_bench.evaluation.task_env_kwargs(suite=...)))")
         n = self.n_points
         if n is None:
             n = np.asarray(observation["achieved_goal"]).reshape(-1).size // 2

@@ -32,13 +32,14 @@ class PerEnvPolicy:
     def __init__(self, policies: Sequence[Policy]) -> None:
         self.policies = list(policies)
         if not self.policies or not all(isinstance(p, Policy) for p in self.policies):
+            kinds = ", ".join(sorted({type(p).__name__ for p in self.policies})) or "none"
             raise ValueError("policies must be a non-empty list of policies with predict(), "
-                             f"got {policies!r}")
+                             f"got {kinds}")
 
     def predict(self, observation: Any, state: Any = None, episode_start: Any = None,
                 deterministic: bool = True) -> tuple[np.ndarray, Any]:
-        """``(actions, state)``: ``(B, action_dim)`` for a batch of B = ``len(policies)``
-        (one observation unbatched: ``policies[0]``'s action)."""
+        """``(actions, state)``: ``(B, action_dim)`` for a batch of B = ``len(policies)`` (an
+        unbatched observation is one environment: for a list of one policy)."""
         rows, batched = split_batch(observation)
         if len(rows) != len(self.policies):
             raise ValueError(f"observation must hold one row per policy ({len(self.policies)}),"

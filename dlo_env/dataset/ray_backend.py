@@ -18,15 +18,20 @@ Every node needs this project installed (the same environment as the driver).
 
 from __future__ import annotations
 
-import os
 import shutil
 import tempfile
+import time
 from collections.abc import Callable, Iterator
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
 from dlo_env.atomic import atomic_path
+
+try:
+    import fcntl
+except ImportError:  # Windows: killed workers' folders stay
+    fcntl = None  # type: ignore[assignment]
 
 
 @dataclass(frozen=True)
@@ -103,46 +108,56 @@ class RayBackend:
                 progress(size, 0)
 
 
-#: Prefix of the folder a task makes its chunk in: ``dlo-chunk-<pid>-<random>``.
+#: Prefix of the folder a task makes its chunk in.
 CHUNK_FOLDER_PREFIX = "dlo-chunk-"
+#: The file in a chunk folder that its task holds locked (``fcntl.flock``) while it works.
+LOCK_FILE = ".lock"
+#: A chunk folder without a lock file is left alone this long (seconds): it may be being made.
+UNLOCKED_GRACE = 3600.0
 
 
 def make_chunk_bytes(job: Any, index: int, size: int) -> bytes:
     """Make chunk ``index`` of ``job`` in a temporary folder; the bytes of its file.
 
-    The folder is named after the worker's process id. A worker that is killed cannot remove
-    its folder, so each task first removes the folders of processes of this node that no
-    longer run (``remove_orphan_chunk_folders``).
+    A worker that is killed cannot remove its folder, so each task first removes the folders
+    whose lock no task holds (``remove_orphan_chunk_folders``); a lock is released by the
+    system when its process ends, in any container sharing the folder.
     """
     root = Path(tempfile.gettempdir())
     remove_orphan_chunk_folders(root)
-    folder = Path(tempfile.mkdtemp(prefix=f"{CHUNK_FOLDER_PREFIX}{os.getpid()}-", dir=root))
-    try:
-        path = folder / f"chunk-{index:06d}.npz"
-        job.write(index, size, path, None)
-        return path.read_bytes()
-    finally:
-        shutil.rmtree(folder, ignore_errors=True)
+    folder = Path(tempfile.mkdtemp(prefix=CHUNK_FOLDER_PREFIX, dir=root))
+    with open(folder / LOCK_FILE, "w") as lock:
+        if fcntl is not None:
+            fcntl.flock(lock, fcntl.LOCK_EX)
+        try:
+            path = folder / f"chunk-{index:06d}.npz"
+            job.write(index, size, path, None)
+            return path.read_bytes()
+        finally:
+            shutil.rmtree(folder, ignore_errors=True)
 
 
 def remove_orphan_chunk_folders(root: Path) -> list[Path]:
-    """Remove the chunk folders under ``root`` whose process no longer runs; those removed."""
+    """Remove the chunk folders under ``root`` whose lock no process holds; those removed.
+
+    A folder without a lock file is removed only when older than ``UNLOCKED_GRACE``. Nothing
+    is removed where ``fcntl`` is missing (Windows).
+    """
+    if fcntl is None:
+        return []
     removed = []
-    for folder in root.glob(f"{CHUNK_FOLDER_PREFIX}*-*"):
-        pid = folder.name[len(CHUNK_FOLDER_PREFIX):].split("-", 1)[0]
-        if folder.is_dir() and pid.isdigit() and not _process_runs(int(pid)):
-            shutil.rmtree(folder, ignore_errors=True)
+    for folder in root.glob(f"{CHUNK_FOLDER_PREFIX}*"):
+        try:
+            lock_path = folder / LOCK_FILE
+            if not lock_path.is_file():
+                if time.time() - folder.stat().st_mtime < UNLOCKED_GRACE:
+                    continue
+            else:
+                with open(lock_path) as lock:
+                    fcntl.flock(lock, fcntl.LOCK_EX | fcntl.LOCK_NB)  # held: a live task
+        except OSError:  # BlockingIOError (held), gone meanwhile, or not ours to read
+            continue
+        shutil.rmtree(folder, ignore_errors=True)
+        if not folder.exists():
             removed.append(folder)
     return removed
-
-
-def _process_runs(pid: int) -> bool:
-    if os.name != "posix":
-        return True  # os.kill(pid, 0) would end the process on Windows: keep the folder
-    try:
-        os.kill(pid, 0)
-    except ProcessLookupError:
-        return False
-    except PermissionError:
-        return True  # another user's process
-    return True

@@ -193,3 +193,14 @@ def test_the_adaptive_planner_fits_the_cord_with_the_pegs_it_observes():
     fits = [pegs for fitting, pegs in seen if fitting]  # the fit's calls: a cord per row
     assert policy.adapt_stats.errors and fits
     assert all(p is not None and np.array_equal(p, task.pegs) for p in fits)
+
+
+def test_a_planner_built_among_pegs_refuses_an_observation_without_peg_slots_naming_them():
+    with gym.make(ENDPOINT, max_pegs=4) as pegged, gym.make(ENDPOINT) as plain:
+        policy = build_agent("straight-line", pegged)
+        obs, _ = plain.reset(seed=0)
+        with pytest.raises(ValueError, match="max_pegs=4, which observes 54") as info:
+            policy.predict(obs)
+        assert "\n" not in str(info.value)
+    with pytest.raises(ValueError, match="give it that environment, not its id"):
+        build_agent("physics-mpc-true-cord", ENDPOINT)

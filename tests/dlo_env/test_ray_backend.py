@@ -4,7 +4,6 @@ a chunk whose worker is killed is made again, once, without loss."""
 from __future__ import annotations
 
 import os
-import subprocess
 import sys
 import tempfile
 from functools import partial
@@ -15,7 +14,12 @@ import pytest
 
 from dlo_env.dataset.chunks import ChunkJob, chunk_plan, run_chunks
 from dlo_env.dataset.collect import CollectConfig, collect
-from dlo_env.dataset.ray_backend import CHUNK_FOLDER_PREFIX, RayBackend, remove_orphan_chunk_folders
+from dlo_env.dataset.ray_backend import (
+    CHUNK_FOLDER_PREFIX,
+    LOCK_FILE,
+    RayBackend,
+    remove_orphan_chunk_folders,
+)
 from dlo_env.dataset.transitions import TransitionCollectConfig, collect_transitions
 
 ray = pytest.importorskip("ray", reason='needs the ray extra: pip install -e ".[ray]"')
@@ -93,17 +97,21 @@ def test_a_killed_worker_chunk_is_made_again_once_and_nothing_is_lost(local_ray,
     assert chunk_folders() <= before
 
 
-def test_only_the_chunk_folders_of_ended_processes_are_removed(tmp_path):
-    ended = subprocess.run([sys.executable, "-c", "import os; print(os.getpid())"],
-                           capture_output=True, text=True, check=True).stdout.strip()
-    orphan = tmp_path / f"{CHUNK_FOLDER_PREFIX}{ended}-abc"
-    running = tmp_path / f"{CHUNK_FOLDER_PREFIX}{os.getpid()}-def"
-    other = tmp_path / f"{CHUNK_FOLDER_PREFIX}notapid-ghi"
-    for folder in (orphan, running, other):
+def test_only_the_chunk_folders_whose_lock_no_process_holds_are_removed(tmp_path):
+    import fcntl
+
+    orphan, live, young = (tmp_path / f"{CHUNK_FOLDER_PREFIX}{name}" for name in
+                           ("orphan", "live", "young"))
+    for folder in (orphan, live, young):
         folder.mkdir()
+    (orphan / LOCK_FILE).touch()
     (orphan / ".chunk-000001.npz.tmp.npz").write_bytes(b"half")
-    assert remove_orphan_chunk_folders(tmp_path) == [orphan]
-    assert sorted(p.name for p in tmp_path.iterdir()) == sorted([running.name, other.name])
+    (live / LOCK_FILE).touch()
+    with open(live / LOCK_FILE) as held:  # a task at work holds its lock
+        fcntl.flock(held, fcntl.LOCK_EX)
+        assert remove_orphan_chunk_folders(tmp_path) == [orphan]
+    # a folder without a lock file (being made) stays until it is old
+    assert sorted(p.name for p in tmp_path.iterdir()) == sorted([live.name, young.name])
 
 
 def test_ray_backend_settings_are_checked_naming_the_argument():
