@@ -244,9 +244,14 @@ def _suite_kinds() -> tuple[tuple[Any, Callable[..., Any]], ...]:
             (ROUTE_SUITES, load_route_suite))
 
 
+def suite_names() -> list[str]:
+    """Every named suite: linear, designed, cord, peg and route suites, in that order."""
+    return [name for names, _ in _suite_kinds() for name in names]
+
+
 def check_suite(suite: str) -> str:
     """``suite`` if it names a suite of any kind, else a one-line ``ValueError`` listing them."""
-    every = [name for names, _ in _suite_kinds() for name in names]
+    every = suite_names()
     if suite not in every:
         raise ValueError(f"suite must be one of {', '.join(every)}, got {suite!r}")
     return suite

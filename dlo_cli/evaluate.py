@@ -25,16 +25,14 @@ from dlo_cli.flags import (
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     """Flags of ``dlo evaluate``."""
-    from dlo_env.cord_suites import CORD_SUITES
-    from dlo_env.designed_suites import DESIGNED_SUITES
-    from dlo_env.peg_suites import PEG_SUITES, ROUTE_SUITES
-    from dlo_env.tasks import SPLIT_SIZES, SUCCESS_THRESHOLD, SUITES
+    from dlo_bench.evaluation import suite_names
+    from dlo_env.tasks import SPLIT_SIZES, SUCCESS_THRESHOLD
 
     add_agent(parser, default=None)
     which = parser.add_mutually_exclusive_group()
     add_difficulty(which, [1], "random tasks (reset seeds SEED, SEED+1, ...); several give "
                                "several rows")
-    suites = [*SUITES, *DESIGNED_SUITES, *CORD_SUITES, *PEG_SUITES, *ROUTE_SUITES]
+    suites = suite_names()
     which.add_argument("--suite", nargs="+", metavar="NAME", choices=suites,
                        help=f"named task suites instead of random tasks: {', '.join(suites)} "
                             "(designed goals are scored direction-free; cords-K tasks each "
