@@ -285,6 +285,21 @@ def _bc(env: Any, options: AgentOptions) -> Policy:
     return load_bc(folder, device=options.device, env_id=env_id)
 
 
+def observation_shape(env: Any) -> tuple[int, ...]:
+    """The shape of ``env``'s ``"observation"`` entry.
+
+    Raises:
+        ValueError: One line when ``env`` does not observe the goal-conditioned Dict (a
+            ``FlattenObservation`` wrapper, say): the agents read its entries.
+    """
+    space = env.observation_space
+    if "observation" not in getattr(space, "spaces", {}):
+        raise ValueError("env must observe the dlo_env Dict (observation, achieved_goal, "
+                         f"desired_goal), got {space}: build the agent on, and give it the "
+                         "observations of, the environment without a flattening wrapper")
+    return space["observation"].shape
+
+
 def _check_observation(name: str, policy: Any, env: Any) -> None:
     """Refuse, in one line, a trained policy whose observation is not the environment's (one
     trained on an empty table, in an environment with pegs, say)."""
@@ -292,7 +307,7 @@ def _check_observation(name: str, policy: Any, env: Any) -> None:
     spaces = getattr(space, "spaces", None)
     if not spaces or "observation" not in spaces:
         return
-    want = env.observation_space["observation"].shape
+    want = observation_shape(env)
     got = spaces["observation"].shape
     if got != want:
         pegs = getattr(env.unwrapped, "max_pegs", 0)
@@ -403,6 +418,7 @@ def build_agent(name: str, env: Any, **options: Any) -> Policy:
     if env_id is not None and env_id not in spec.environments:
         raise ValueError(f"agent {name!r} acts in {', '.join(spec.environments)}, "
                          f"got environment {env_id!r}")
+    size = math.prod(observation_shape(env))
     if spec.no_pegs and observes_pegs(env):
         raise ValueError(f"agent {name!r} does not act where pegs are observed: {spec.no_pegs}")
     given = {k: v for k, v in options.items() if v is not None}  # None: the default
@@ -414,5 +430,5 @@ def build_agent(name: str, env: Any, **options: Any) -> Policy:
         policy.success_metric = getattr(env.unwrapped, "success_metric", "error")
         pegs = getattr(env.unwrapped, "max_pegs", 0)
         policy.built_for = (f"{env_id or type(env.unwrapped).__name__} with max_pegs={pegs}",
-                            math.prod(env.observation_space["observation"].shape))
+                            size)
     return policy

@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import argparse
 
-from dlo_cli.flags import add_env, positive_int
+from dlo_cli.flags import add_env, existing_path, positive_int, writable_folder
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
@@ -32,6 +32,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--no-demonstrations", action="store_true",
                         help="skip the demonstrations (export only --transitions)")
     parser.add_argument("--transitions", default=None, metavar="FILE",
+                        type=existing_path("transitions"),
                         help="also export this `dlo collect --kind transitions` file")
     parser.add_argument("--name", default="transitions",
                         help="dataset name of the transition data: dlo/endpoint/NAME-v0")
@@ -40,10 +41,33 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 def run(args: argparse.Namespace) -> int:
     """Write the datasets, printing one line per dataset."""
     from dlo_bench.progress import progress_bar
-    from dlo_env.dataset.minari_export import export_demonstrations, export_transitions
+    from dlo_env.dataset.minari_export import (
+        check_absent,
+        demonstrations_id,
+        export_demonstrations,
+        export_transitions,
+        transitions_id,
+        transitions_ids,
+    )
 
     if args.no_demonstrations and args.transitions is None:
         raise ValueError("--no-demonstrations leaves nothing to export; give --transitions FILE")
+    # Everything that can be refused is, before the first episode is recorded.
+    args.env, args.suite = list(dict.fromkeys(args.env)), list(dict.fromkeys(args.suite))
+    planned = [] if args.no_demonstrations else [
+        demonstrations_id(env_id, suite) for env_id in args.env for suite in args.suite]
+    if args.transitions is not None:
+        try:
+            transitions_id(args.env[0], args.name)
+        except ValueError as exc:
+            raise ValueError(f"--name: {exc}") from None
+        try:
+            planned += transitions_ids(args.transitions, args.name)
+        except ValueError as exc:
+            raise ValueError(f"--transitions: {exc}") from None
+    if args.root is not None:
+        writable_folder(args.root, "--root")
+    check_absent(planned, args.root)
     written = []
     if not args.no_demonstrations:
         for env_id in args.env:
@@ -65,3 +89,4 @@ def run(args: argparse.Namespace) -> int:
     print(f"wrote {len(written)} datasets into {where}; load one with "
           f"minari.load_dataset({written[0].dataset_id!r})" if written else "nothing written")
     return 0
+

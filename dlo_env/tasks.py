@@ -19,7 +19,6 @@ from __future__ import annotations
 
 import math
 import os
-import zipfile
 from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
@@ -37,6 +36,7 @@ from dlo_env.cord import (
     check_pegs,
     peg_clearance,
 )
+from dlo_env.dataset.npz_file import open_npz
 from dlo_env.shapes import (
     TABLE_HALF,
     error,
@@ -533,12 +533,7 @@ def load_tasks(path: str | os.PathLike) -> list[Task]:
     """Read tasks written by :func:`save_tasks` (data only: no pickle is ever loaded)."""
     keys = ("format_version", "start", "goal", "reference_actions", "action_counts", "moves",
             "difficulty", "seed", "grasp", "max_step")
-    try:
-        data = np.load(path, allow_pickle=False)
-    except (OSError, EOFError, ValueError, zipfile.BadZipFile) as exc:
-        raise ValueError(f"path {str(path)!r} is not a readable .npz task file: {exc}") from exc
-    if not isinstance(data, np.lib.npyio.NpzFile):
-        raise ValueError(f"path {str(path)!r} is not a dlo task file: a single array, not .npz")
+    data = open_npz(path, f"path {str(path)!r}", "dlo task file")
     with data:
         missing = [k for k in keys if k not in data.files]
         if missing:

@@ -48,10 +48,11 @@ if __name__ == "__main__":
     model = load_shape_model(args.model or None)  # loaded once, shared by both planners
     summaries = []
     for name in ("straight-line", "latent-tree", "latent-tree-closed"):
-        policy = build_agent(name, gym.make(env_id), model=model, seed=args.seed,
+        policy = build_agent(name, env_id, model=model, seed=args.seed,
                              replan_every=args.replan_every)
         result = evaluate(policy, env_id, difficulty=args.difficulty,
                           episodes=args.episodes, seed=args.seed, agent=name)
         summaries.append(result.summary)
     print(format_table(summaries))
-    print(format_legend(gym.make(env_id).unwrapped.success_threshold))  # the default, 2 cm
+    with gym.make(env_id) as env:
+        print(format_legend(env.unwrapped.success_threshold))  # the default, 2 cm

@@ -46,21 +46,22 @@ if __name__ == "__main__":
     torch.set_num_threads(1)  # small models: more threads only contend
     env_id = "dlo_env/DLODualEndpoint-v0" if args.dual else "dlo_env/DLOEndpoint-v0"
     agents = ["latent-mpc", "physics-mpc"] + ([] if args.dual else ["latent-tree-kino"])
-    threshold = gym.make(env_id).unwrapped.success_threshold  # the environment's default
+    with gym.make(env_id) as env:
+        threshold = env.unwrapped.success_threshold  # the environment's default
     print(f"{env_id}, difficulty {args.difficulty}, task seed {args.seed}; solved: the cord at "
           f"rest within {100 * threshold:g} cm of the goal")
     for name in agents:
-        env = gym.make(env_id)
-        policy = build_agent(name, env)
-        obs, info = env.reset(seed=args.seed, options={"difficulty": args.difficulty})
-        start_error = info["error"]
-        action, _ = policy.predict(obs, episode_start=np.array([True]))
-        steps, done = 0, False
-        while not done:  # the registered time limit truncates at 100 steps
-            obs, _, terminated, truncated, info = env.step(action)
-            steps, done = steps + 1, terminated or truncated
-            action, _ = policy.predict(obs)
-        stats = policy.episode_stats()
-        print(f"  {name:<17} {'solved' if info['is_success'] else 'not solved':<10} "
-              f"error {100 * start_error:5.1f} -> {100 * info['error']:4.2f} cm in {steps:3d} "
-              f"steps; {stats.plans} plans, {stats.seconds:.3f} s planning")
+        with gym.make(env_id) as env:
+            policy = build_agent(name, env)
+            obs, info = env.reset(seed=args.seed, options={"difficulty": args.difficulty})
+            start_error = info["error"]
+            action, _ = policy.predict(obs, episode_start=np.array([True]))
+            steps, done = 0, False
+            while not done:  # the registered time limit truncates at 100 steps
+                obs, _, terminated, truncated, info = env.step(action)
+                steps, done = steps + 1, terminated or truncated
+                action, _ = policy.predict(obs)
+            stats = policy.episode_stats()
+            print(f"  {name:<17} {'solved' if info['is_success'] else 'not solved':<10} "
+                  f"error {100 * start_error:5.1f} -> {100 * info['error']:4.2f} cm in {steps:3d} "
+                  f"steps; {stats.plans} plans, {stats.seconds:.3f} s planning")

@@ -8,6 +8,8 @@ from pathlib import Path
 
 import numpy as np
 
+from dlo_env.dataset.npz_file import open_npz
+
 
 def load_shapes(path: str | os.PathLike, name: str = "path") -> np.ndarray:
     """The ``shapes`` array ``(N, n, 2)`` float32 of a dataset file.
@@ -23,15 +25,7 @@ def load_shapes(path: str | os.PathLike, name: str = "path") -> np.ndarray:
     path = Path(path)
     if not path.is_file():
         raise FileNotFoundError(f"{name}: no dataset file at {str(path)!r}")
-    try:
-        archive = np.load(path, allow_pickle=False)
-    except ValueError as exc:  # neither a zip nor an .npy: numpy would have to unpickle it
-        raise ValueError(f"{name}: {str(path)!r} is not a readable .npz file (corrupt, or not "
-                         "written by numpy)") from exc
-    except (OSError, EOFError, zipfile.BadZipFile) as exc:
-        raise ValueError(f"{name}: {str(path)!r} is not a readable .npz file ({exc})") from exc
-    if not isinstance(archive, np.lib.npyio.NpzFile):
-        raise ValueError(f"{name}: {str(path)!r} holds a single array, not an .npz archive")
+    archive = open_npz(path, f"{name}: {str(path)!r}")
     try:
         with archive as data:
             files = set(data.files)

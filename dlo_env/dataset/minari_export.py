@@ -28,8 +28,9 @@ from __future__ import annotations
 
 import contextlib
 import os
+import re
 import warnings
-from collections.abc import Callable, Iterator
+from collections.abc import Callable, Iterable, Iterator
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -50,6 +51,8 @@ NAMESPACE = "dlo"
 INFO_KEYS = ("is_success", "error", "max_error")
 #: Largest ``error`` (metres) between a replayed transition and the file's that is accepted.
 REPLAY_TOLERANCE = 1e-3
+#: What a transition dataset's ``name`` may hold (it becomes part of a Minari id).
+NAME_PATTERN = re.compile(r"[A-Za-z0-9_.]+(-[A-Za-z0-9_.]+)*")
 
 
 @dataclass(frozen=True)
@@ -160,6 +163,7 @@ def export_demonstrations(
             overwrites one: delete it with ``minari delete ID``).
     """
     dataset_id = demonstrations_id(env_id, suite)
+    check_absent([dataset_id], root)
     grasp = ENVIRONMENTS[env_id][0]
     tasks = load_suite(suite, "train", grasp=grasp, limit=limit)
     env = gym.make(env_id, max_episode_steps=suite_max_steps(suite))
@@ -186,10 +190,8 @@ def _write(dataset_id: str, buffers: list[Any], spec: gym.envs.registration.EnvS
            algorithm: str, description: str, root: str | os.PathLike[str] | None) -> None:
     import minari
 
+    check_absent([dataset_id], root)
     with minari_root(root):
-        if dataset_id in minari.list_local_datasets():
-            raise ValueError(f"dataset {dataset_id!r} already exists; delete it (`minari delete "
-                             f"{dataset_id}`) or choose another root")
         with warnings.catch_warnings():
             # The project has no contact address or code link to record; Minari asks for them.
             warnings.filterwarnings("ignore", message="`author_email` is set to None")
@@ -200,11 +202,54 @@ def _write(dataset_id: str, buffers: list[Any], spec: gym.envs.registration.EnvS
                 data_format="hdf5")
 
 
+def check_absent(dataset_ids: Iterable[str], root: str | os.PathLike[str] | None) -> None:
+    """Raise ``ValueError`` naming the first of ``dataset_ids`` that ``root`` (None: Minari's
+    own) already holds: Minari never overwrites a dataset, so an export checks before it
+    records."""
+    import minari
+
+    with minari_root(root):
+        existing = set(minari.list_local_datasets())
+    for dataset_id in dataset_ids:
+        if dataset_id in existing:
+            raise ValueError(f"dataset {dataset_id!r} already exists; delete it (`minari delete "
+                             f"{dataset_id}`) or choose another root")
+
+
 def transitions_id(env_id: str, name: str = "transitions", version: int = 0) -> str:
     """Minari id of the transition data of ``env_id`` exported under ``name``."""
     if env_id not in ENVIRONMENTS:
         raise ValueError(f"env_id must be one of {tuple(ENVIRONMENTS)}, got {env_id!r}")
+    if not isinstance(name, str) or not NAME_PATTERN.fullmatch(name) or re.search(
+            r"-v\d+$", name):
+        raise ValueError("name must be letters, digits, '_', '.' and inner '-' (not ending in "
+                         f"-vN: Minari adds the version), got {name!r}")
     return f"{NAMESPACE}/{ENVIRONMENTS[env_id][1]}/{name}-v{version}"
+
+
+def transitions_ids(path: str | os.PathLike[str], name: str = "transitions") -> list[str]:
+    """The ids ``export_transitions(path, name=name)`` writes, one per environment with
+    episodes in the file.
+
+    Raises:
+        ValueError: For a bad file (see ``export_transitions``) or name.
+    """
+    return list(_held_environments(_default_cord_transitions(path), name))
+
+
+def _held_environments(data: Any, name: str) -> dict[str, str]:
+    """``{dataset id: env id}`` of the environments with episodes in the transitions ``data``."""
+    return {transitions_id(env_id, name): env_id for env_id, (grasp, _) in ENVIRONMENTS.items()
+            if (data.grasp == GRASP_NAMES.index(grasp)).any()}
+
+
+def _default_cord_transitions(path: str | os.PathLike[str]) -> Any:
+    """The transition file at ``path``, refused unless collected on the default cord."""
+    data = load_transitions(path)
+    if data.one_cord(f"path {str(path)!r}") != CordParams():
+        raise ValueError(f"path {str(path)!r} was collected on another cord than the "
+                         "environments' default; only default-cord transitions are exported")
+    return data
 
 
 def export_transitions(
@@ -229,16 +274,14 @@ def export_transitions(
         ValueError: For a bad file, an existing dataset, or a replay that does not reproduce
             the file (another cord or simulator version): one line naming the largest error.
     """
-    data = load_transitions(path)
-    if data.one_cord(f"path {str(path)!r}") != CordParams():
-        raise ValueError(f"path {str(path)!r} was collected on another cord than the "
-                         "environments' default; only default-cord transitions are exported")
+    data = _default_cord_transitions(path)
+    held = _held_environments(data, name)
+    check_absent(held, root)
     written = []
-    for env_id, (grasp, _) in ENVIRONMENTS.items():
+    for dataset_id, env_id in held.items():
+        grasp = ENVIRONMENTS[env_id][0]
         mine = data.subset(data.grasp == GRASP_NAMES.index(grasp))
         episodes = np.unique(mine.episode)
-        if not len(episodes):
-            continue
         moves = int(np.bincount(mine.episode).max())
         env = StraightMoves(gym.make(env_id, max_episode_steps=100 * moves))
         buffers, worst = [], 0.0
@@ -261,7 +304,6 @@ def export_transitions(
             raise ValueError(f"path {str(path)!r}: replaying its {grasp} moves gives shapes up "
                              f"to {worst:.4f} m from the recorded ones (tolerance "
                              f"{REPLAY_TOLERANCE} m): collected with another cord or simulator?")
-        dataset_id = transitions_id(env_id, name)
         description = (f"Transition data of {Path(path).name} ({grasp} held): one episode per "
                        "collected episode, one step per straight move (StraightMoves wrapper: "
                        "action = displacement of the held end(s), metres), goal = the shape "

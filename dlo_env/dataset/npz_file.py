@@ -65,6 +65,27 @@ def save_npz(path: str | os.PathLike[str], arrays: dict[str, np.ndarray],
     return path
 
 
+def open_npz(path: str | os.PathLike[str], where: str,
+             what: str = "file") -> np.lib.npyio.NpzFile:
+    """``np.load(path, allow_pickle=False)`` of an ``.npz`` archive (use it as a context).
+
+    Raises:
+        ValueError: One line starting with ``where`` (e.g. the path, or the flag that gave it)
+            and naming ``what`` the file should be: not an archive numpy wrote, unreadable, or
+            a single ``.npy`` array.
+    """
+    try:
+        loaded = np.load(path, allow_pickle=False)
+    except ValueError as exc:  # neither a zip nor an .npy: numpy would have to unpickle it
+        raise ValueError(f"{where} is not a readable .npz {what} (corrupt, or not written by "
+                         "numpy)") from exc
+    except (OSError, EOFError, zipfile.BadZipFile) as exc:
+        raise ValueError(f"{where} is not a readable .npz {what} ({exc})") from exc
+    if not isinstance(loaded, np.lib.npyio.NpzFile):
+        raise ValueError(f"{where} is not a {what}: it holds one array, not an .npz archive")
+    return loaded
+
+
 def load_npz(path: str | os.PathLike[str], *, format_name: str,
              format_version: int | tuple[int, ...],
              names: tuple[str, ...], what: str, missing_hint: str,
@@ -90,10 +111,8 @@ def load_npz(path: str | os.PathLike[str], *, format_name: str,
     if not path.is_file():
         raise FileNotFoundError(f"no {what} at {str(path)!r}; {missing_hint}")
     where = repr(str(path))
+    loaded = open_npz(path, where, what)
     try:
-        loaded = np.load(path, allow_pickle=False)
-        if not isinstance(loaded, np.lib.npyio.NpzFile):
-            raise ValueError(f"{where} is not a {what}: it holds one array, not an .npz archive")
         with loaded as npz:
             present = set(npz.files)
             if "metadata" not in present:

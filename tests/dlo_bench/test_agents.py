@@ -59,6 +59,13 @@ def test_build_agent_takes_an_environment_id_as_evaluate_does():
         build_agent("straight-line", 5)
 
 
+def test_build_agent_refuses_a_flattened_environment_in_one_line():
+    with gym.wrappers.FlattenObservation(gym.make(ENDPOINT)) as env:
+        with pytest.raises(ValueError, match="env must observe the dlo_env Dict") as info:
+            build_agent("straight-line", env)
+        assert "\n" not in str(info.value)
+
+
 def test_planners_report_their_statistics_through_the_planning_protocol(toy_model):
     with gym.make(ENDPOINT) as env:
         for name in ("latent-tree", "latent-tree-closed", "physics-mpc"):

@@ -109,6 +109,31 @@ def test_an_existing_dataset_is_an_error_not_an_overwrite(tmp_path):
         export_demonstrations(ENDPOINT, "linear-1", root=tmp_path, limit=1)
 
 
+def test_the_command_refuses_what_it_cannot_write_before_it_records_an_episode(tmp_path,
+                                                                             capsys):
+    from dlo_cli.main import main
+
+    export_demonstrations(ENDPOINT, "linear-2", root=tmp_path, limit=1)
+    text = tmp_path / "notes.txt"
+    text.write_text("the user's notes")
+    for argv, words in (
+            (["--suite", "linear-1", "linear-2"], "'dlo/endpoint/linear-2-oracle-v0' already "
+                                                  "exists"),
+            (["--suite", "linear-1", "--transitions", str(text)],
+             f"--transitions: '{text}' is not a readable .npz transition dataset (corrupt"),
+            (["--suite", "linear-1", "--transitions", str(text), "--name", "a/b"], "--name: "),
+            (["--root", str(text)], "--root must be a folder, got the file")):
+        argv = ["export-minari", "--root", str(tmp_path), "--env", ENDPOINT, "--limit", "1",
+                *argv]
+        assert main(argv) == 2
+        captured = capsys.readouterr()
+        assert captured.out == "" and len(captured.err.strip().splitlines()) == 1, captured.err
+        assert captured.err.startswith("dlo export-minari: error: ") and words in captured.err
+    with minari_root(tmp_path):  # linear-1 was never written
+        assert list(minari.list_local_datasets()) == [demonstrations_id(ENDPOINT, "linear-2")]
+    assert text.read_text() == "the user's notes"
+
+
 def test_export_minari_command_prints_one_line_per_dataset(tmp_path, capsys):
     from dlo_cli.main import main
 
