@@ -71,6 +71,8 @@ class EpisodeRecord:
         start_inversion_error: ``error`` of the first plan's decoded start inversion (NaN
             without plans).
         goal_inversion_error: ``error`` of the decoded goal inversion (NaN if not reported).
+        rest_max_error: Largest per-point distance of the shape at rest (as ``rest_error``;
+            NaN in records written before it was recorded).
     """
 
     episode: int
@@ -95,6 +97,7 @@ class EpisodeRecord:
     plan_travel: float = math.nan
     start_inversion_error: float = math.nan
     goal_inversion_error: float = math.nan
+    rest_max_error: float = math.nan
 
 
 @dataclass(frozen=True)
@@ -196,6 +199,7 @@ def summarise(records: list[EpisodeRecord], agent: str = "", env_id: str = "") -
         "mean_rest_error": _nanstat([r.rest_error for r in records], np.mean),
         "median_rest_direction_free_error": _nanstat(
             [r.rest_direction_free_error for r in records], np.median),
+        "median_rest_max_error": _nanstat([r.rest_max_error for r in records], np.median),
         "mean_steps": float(np.mean([r.steps for r in records])),
         "median_planning_seconds": _nanstat([r.planning_seconds for r in records], np.median),
         "mean_planning_seconds": _nanstat([r.planning_seconds for r in records], np.mean),
@@ -323,6 +327,7 @@ def _run_episode(
         final_max_error=float(info["max_error"]),
         rest_error=float(rest["error"]),
         rest_direction_free_error=float(rest["direction_free_error"]),
+        rest_max_error=float(rest["max_error"]),
         steps=steps,
         seconds=seconds,
         planning_seconds=stats.seconds,

@@ -28,7 +28,7 @@ import pymunk
 import pymunk.batch
 
 from dlo_env.checks import fractions, non_negative, positive, positive_ints
-from dlo_env.shapes import TABLE_HALF, validate_shape
+from dlo_env.shapes import TABLE_HALF, at_segment_length, validate_shape
 
 Grasp = Literal["head", "tail", "both", "none"]
 _GRASPS = ("head", "tail", "both", "none")
@@ -272,13 +272,14 @@ class Cord:
 
         Args:
             shape: ``(n, 2)`` metres; segments are re-projected to exact rest length along
-                their directions starting from the head.
+                their directions starting from the head, and the cord is shifted back onto
+                the table where that makes it poke over the rim (``at_segment_length``).
         """
         p = self.params
         arr = validate_shape(shape, n_points=p.n_points, length=p.length, name="shape")
         seg_vec = np.diff(arr.astype(np.float64), axis=0)
         headings = np.unwrap(np.arctan2(seg_vec[:, 1], seg_vec[:, 0]))
-        start = arr[0].astype(np.float64)
+        start = at_segment_length(arr, p.segment)[0]
         half = 0.5 * p.segment
         m = p.mass / (p.n_points - 1)
         moment = p.inertia_scale * m * p.segment**2 / 12.0

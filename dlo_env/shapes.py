@@ -252,6 +252,26 @@ def shape_from_headings(headings: np.ndarray, segment: float, origin: np.ndarray
     )
 
 
+def onto_table(shape: np.ndarray, half: float = TABLE_HALF) -> np.ndarray:
+    """``shape`` ``(n, 2)`` shifted by the least amount that puts every point on the table
+    ``[-half, half]^2`` (unchanged, bit for bit, when it lies there; a shape wider than the
+    table stays over its far edge)."""
+    shape = np.asarray(shape, dtype=np.float64)
+    shape = shape - np.clip(shape.max(axis=0) - half, 0.0, None)
+    return shape + np.clip(-half - shape.min(axis=0), 0.0, None)
+
+
+def at_segment_length(shape: np.ndarray, segment: float) -> np.ndarray:
+    """``shape`` ``(n, 2)`` as a cord whose every segment is ``segment`` long: its segment
+    directions laid out from its head, shifted back onto the table where the result would
+    poke over the rim (float64). What ``Cord.reset`` starts from: a shape whose segments are
+    already ``segment`` long, on the table, keeps its head bit for bit."""
+    shape = np.asarray(shape, dtype=np.float64)
+    steps = np.diff(shape, axis=0)
+    return onto_table(shape_from_headings(np.arctan2(steps[:, 1], steps[:, 0]), segment,
+                                          shape[0]))
+
+
 def random_cord_shape(
     rng: np.random.Generator,
     *,

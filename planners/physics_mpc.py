@@ -18,7 +18,7 @@ import numpy as np
 
 from dlo_env.checks import non_negative_ints, positive_ints
 from dlo_env.cord import PEG_RADIUS, Cord, CordParams
-from dlo_env.shapes import TABLE_HALF, cord_length, segment_lengths, shape_from_headings
+from dlo_env.shapes import cord_length, onto_table, segment_lengths, shape_from_headings
 from planners.cem import CEMConfig, CEMPolicy
 from planners.observation import CordObservation
 
@@ -73,10 +73,7 @@ def unstretched(shape: np.ndarray) -> np.ndarray:
     rebuilt = shape_from_headings(np.arctan2(steps[:, 1], steps[:, 0]), float(seg.min()),
                                   shape[0])
     rebuilt += shape.mean(axis=0) - rebuilt.mean(axis=0)
-    # a shift back onto the table where the rebuilt cord pokes over the rim
-    rebuilt -= np.clip(rebuilt.max(axis=0) - TABLE_HALF, 0.0, None)
-    rebuilt += np.clip(-TABLE_HALF - rebuilt.min(axis=0), 0.0, None)
-    return rebuilt
+    return onto_table(rebuilt)  # back onto the table where the rebuilt cord pokes over the rim
 
 
 class PhysicsMPCPolicy(CEMPolicy):

@@ -63,8 +63,8 @@ class DLODualEndpointEnv(CordGoalEnv):
     As in `DLOEndpoint-v0` (`difficulty`, `start`, `goal`, `task`, `params`, `pegs`; pegs as
     there, `max_pegs` and `peg_radius` too); a `start` or `goal` whose
     head-tail distance is not below `max_span * length` raises `ValueError`, and a task must have
-    `grasp="both"`. The reset `info` holds `reference_actions` `(T, 4)` (they solve the task;
-    bitwise replay with `judge_at_rest=False`),
+    `grasp="both"`. The reset `info` holds `reference_actions` `(T, 4)` (they solve the task
+    within `difficulty_max_steps(difficulty)` steps; bitwise replay with `judge_at_rest=False`),
     `moves` `(difficulty, 4)`, `difficulty` and `task_seed`.
 
     ## Episode End

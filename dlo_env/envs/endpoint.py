@@ -47,7 +47,8 @@ class DLOEndpointEnv(CordGoalEnv):
     ## Rewards
 
     `error` is the mean over points of the distance between the cord and the goal (metres).
-    Dense (default): `-error`. Sparse (`reward_type="sparse"`): 0 on success, else -1.
+    Dense (default): `-error`. Sparse (`reward_type="sparse"`): 0 when `error` is within the
+    threshold (moving or not: success also needs the cord at rest), else -1.
     `env.unwrapped.compute_reward(achieved_goal, desired_goal, info)` gives the same numbers for
     any batch of goals (the step reward is computed by it), ready for hindsight relabelling.
 
@@ -89,13 +90,16 @@ class DLOEndpointEnv(CordGoalEnv):
     | `pegs`       | `(k, 2)`, k <= max_pegs | these pegs instead of drawn ones           |
 
     `difficulty` applies to this episode only (the constructor sets the default). A given
-    `start` is used as is, its segments re-projected to rest length.
+    `start` is used as is, its segments re-projected to rest length from the head (shifted back
+    onto the table where that makes it poke over the rim).
 
     Shapes are validated: wrong size, non-finite, off the table or a segment more than 5 % from
     rest length raise `ValueError` naming the option, as do unknown options.
 
     The reset `info` also holds `reference_actions` (`(T, 2)` float32: replayed through `step`
-    from the reset state they solve the task on the cord that made it; with
+    from the reset state they solve the task on the cord that made it, within
+    `dlo_env.tasks.difficulty_max_steps(difficulty)` steps: more than the registered 100
+    above difficulty 5, so pass that as `gym.make(..., max_episode_steps=...)`; with
     `judge_at_rest=False` they reach the goal exactly, bitwise), `moves` (`(difficulty, 2)`
     displacements, metres), `difficulty` and `task_seed` (0 and -1 when the goal was given),
     and `pegs` (the centres of the episode's pegs, a tuple; empty without pegs).

@@ -21,6 +21,7 @@ from dlo_env.randomize import check_params, check_randomize, draw_params
 from dlo_env.shapes import (
     SUCCESS_METRICS,
     TABLE_HALF,
+    at_segment_length,
     bead_share,
     error,
     max_error,
@@ -57,7 +58,8 @@ class CordGoalEnv(gym.Env[dict[str, np.ndarray], np.ndarray]):
         params: Cord parameters (the default cord if None): every episode's cord unless
             ``randomize`` or ``options["params"]`` says otherwise.
         max_step: Gripper displacement of an action of 1.0 on one axis, metres.
-        reward_type: ``"dense"`` (``-error``) or ``"sparse"`` (0 on success, else -1).
+        reward_type: ``"dense"`` (``-error``) or ``"sparse"`` (0 within the threshold, moving
+            or not, else -1).
         success_threshold: Success when ``error(cord, goal)`` is at most this, metres.
         success_metric: ``"error"`` (default) or ``"direction_free_error"`` (a designed goal
             whose ends may swap): what success and the reward measure.
@@ -246,12 +248,12 @@ class CordGoalEnv(gym.Env[dict[str, np.ndarray], np.ndarray]):
         Raises:
             ValueError: If ``action`` has the wrong shape or is not finite.
         """
-        a = np.asarray(action, dtype=np.float32)
+        a = np.asarray(action, dtype=np.float64)  # clipped before float32: 1e39 is finite
         if a.shape != self.action_space.shape:
             raise ValueError(f"action must have shape {self.action_space.shape}, got {a.shape}")
         if not np.isfinite(a).all():
             raise ValueError(f"action must be finite, got {a.tolist()}")
-        apply_action(self.cord, a, self.max_step)
+        apply_action(self.cord, np.clip(a, -1.0, 1.0).astype(np.float32), self.max_step)
         state = self.cord.shape_and_speed()
         settle = self._settle_if_solved(*state) if self.judge_at_rest else 0
         obs, info = self._observe(None if settle else state)
@@ -341,15 +343,20 @@ class CordGoalEnv(gym.Env[dict[str, np.ndarray], np.ndarray]):
         return obs, info
 
     # ----------------------------------------------------------------- options
-    def _shape_option(self, options: dict, name: str, p: CordParams) -> np.ndarray:
+    def _shape_option(self, options: dict, name: str, p: CordParams,
+                      pegs: np.ndarray) -> np.ndarray:
+        """``options[name]`` checked as the cord it gives: the start as ``Cord.reset`` lays it
+        out (``at_segment_length``), the goal as given."""
         shape = validate_shape(options[name], n_points=p.n_points, length=p.length, name=name)
+        cord = at_segment_length(shape, p.segment) if name == "start" else shape
         if self.grasp == "both":
-            span = float(np.linalg.norm(shape[-1] - shape[0]))
+            span = float(np.linalg.norm(cord[-1] - cord[0]))
             if span >= p.max_span * p.length:
                 raise ValueError(
                     f"{name} must have its head and tail closer than max_span * length = "
                     f"{p.max_span * p.length:.3f} m when both ends are held, got {span:.3f} m"
                 )
+        check_not_crossing(cord, pegs, self.peg_radius, f"options['{name}']")
         return shape
 
     def _episode_params(self, options: dict) -> CordParams:
@@ -379,7 +386,8 @@ class CordGoalEnv(gym.Env[dict[str, np.ndarray], np.ndarray]):
     def _pegs_option(self, options: dict) -> np.ndarray | None:
         if "pegs" not in options:
             return None
-        pegs = check_pegs(options["pegs"], "options['pegs']").astype(np.float32)
+        pegs = check_pegs(options["pegs"], "options['pegs']",
+                          radius=self.peg_radius).astype(np.float32)
         if len(pegs) > self.max_pegs:
             raise ValueError(f"options['pegs'] holds {len(pegs)} pegs, more than this "
                              f"environment observes: make it with gym.make(id, max_pegs="
@@ -404,14 +412,11 @@ class CordGoalEnv(gym.Env[dict[str, np.ndarray], np.ndarray]):
                                  f"carries its pegs), got {sorted(options)}")
             task = self._check_task(options["task"], p)
             return task.start, task.goal, task, p, task.pegs
-        start = self._shape_option(options, "start", p) if "start" in options else None
-        goal = self._shape_option(options, "goal", p) if "goal" in options else None
+        given = pegs if pegs is not None else np.zeros((0, 2), dtype=np.float32)
+        start, goal = (self._shape_option(options, name, p, given) if name in options else None
+                       for name in ("start", "goal"))
         if goal is not None and "difficulty" in options:
             raise ValueError("options['difficulty'] has no effect when options['goal'] is given")
-        given = pegs if pegs is not None else np.zeros((0, 2), dtype=np.float32)
-        for name, shape in (("start", start), ("goal", goal)):
-            if shape is not None:
-                check_not_crossing(shape, given, self.peg_radius, f"options['{name}']")
         if goal is not None and start is not None:
             return start, goal, None, p, given
         seed = int(self.np_random.integers(2**31 - 1))

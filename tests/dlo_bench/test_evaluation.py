@@ -76,8 +76,11 @@ def test_long_horizons_get_their_episode_length_and_the_rest_error_is_recorded()
     random = evaluate(ZeroPolicy(), ENV_ID, difficulty=9, episodes=1, fidelity=False)
     assert suite.records[0].steps == 160 and random.records[0].steps == 180
     for record in (*suite.records, *random.records):
-        # The idle cord is at rest where it started: its rest error is its error.
+        # The idle cord is at rest where it started: its rest errors are its errors.
         assert record.rest_error == pytest.approx(record.final_error, abs=1e-6)
+        assert record.rest_max_error == pytest.approx(record.final_max_error, abs=1e-6)
+        assert record.rest_max_error > record.rest_error
+    assert suite.summary["median_rest_max_error"] == suite.records[0].rest_max_error
     # A given environment keeps its own limit.
     given = evaluate(ZeroPolicy(), gym.make(ENV_ID), suite="linear-8", episodes=1,
                      fidelity=False)

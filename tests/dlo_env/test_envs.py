@@ -11,7 +11,14 @@ import pytest
 import dlo_env  # noqa: F401  (registers the environments)
 from dlo_env.cord import CordParams
 from dlo_env.envs import DLODualEndpointEnv, DLOEndpointEnv
-from dlo_env.shapes import TABLE_HALF, bead_share, direction_free_error, error, max_error
+from dlo_env.shapes import (
+    TABLE_HALF,
+    bead_share,
+    direction_free_error,
+    error,
+    max_error,
+    shape_from_headings,
+)
 from dlo_env.tasks import SUCCESS_THRESHOLD, load_suite, make_task
 
 ENDPOINT, DUAL = "dlo_env/DLOEndpoint-v0", "dlo_env/DLODualEndpoint-v0"
@@ -279,6 +286,37 @@ def test_bad_reset_options_raise_naming_the_option(options, match):
         gym.make(ENDPOINT).reset(options=options)
 
 
+def test_a_start_of_short_segments_at_the_rim_starts_on_the_table():
+    # Segments 5 % short are accepted; laid out at rest length from the head, the tail
+    # would poke 4 cm over the rim: the cord is shifted back, and the first observation
+    # lies in the observation space.
+    n, rest = 20, CordParams().segment
+    straight_at_rim = np.stack([0.99 - 0.952 * rest * np.arange(n)[::-1], np.zeros(n)], axis=1)
+    # Both ends held: a U whose bend touches the rim (ends close together).
+    u_turn = shape_from_headings(np.repeat([0.0, np.pi / 2, np.pi], [9, 1, 9]), 0.952 * rest,
+                                 np.array([0.99 - 9 * 0.952 * rest, 0.0]))
+    for env_id, start in ((ENDPOINT, straight_at_rim), (DUAL, u_turn)):
+        env = gym.make(env_id)
+        obs, _ = env.reset(options={"start": start})
+        assert env.observation_space.contains(obs), np.abs(obs["achieved_goal"]).max()
+        seg = np.linalg.norm(np.diff(obs["achieved_goal"].reshape(n, 2), axis=0), axis=1)
+        np.testing.assert_allclose(seg, rest, rtol=1e-4)
+
+
+@pytest.mark.parametrize("options", [
+    {"start": straight(), "goal": straight(0.2), "pegs": [[0.99, 0.0]]},  # peg over the rim
+    {"start": straight(), "goal": straight(0.2), "pegs": [[0.0, 0.01]]},  # start on a peg
+])
+def test_a_refused_reset_leaves_the_episode_as_it_was(options):
+    env = gym.make(ENDPOINT, max_pegs=1)
+    obs, info = env.reset(seed=3)
+    with pytest.raises(ValueError, match="options\\['(pegs|start)'\\]"):
+        env.reset(options=options)
+    assert env.unwrapped.task is info["task"]
+    assert np.array_equal(env.unwrapped.goal.reshape(-1), obs["desired_goal"])
+    assert np.array_equal(env.unwrapped.cord.shape.reshape(-1), obs["achieved_goal"])
+
+
 def test_a_task_cannot_be_combined_or_used_with_the_wrong_env():
     task = make_task(0, 1, "head")
     with pytest.raises(ValueError, match=r"combines only with options\['params'\]"):
@@ -295,6 +333,16 @@ def test_a_task_cannot_be_combined_or_used_with_the_wrong_env():
 def test_dual_start_wider_than_max_span_raises():
     with pytest.raises(ValueError, match="start must have its head and tail closer than"):
         gym.make(DUAL).reset(options={"start": straight()})
+
+
+@pytest.mark.parametrize("env_id", IDS)
+def test_a_huge_finite_action_is_clipped_like_any_other(env_id):
+    moved = []
+    for action in (1.0, 1e39):
+        env = gym.make(env_id)
+        env.reset(seed=0)
+        moved.append(env.step(np.full(DIM[env_id], action))[0]["achieved_goal"])
+    assert np.array_equal(*moved)
 
 
 @pytest.mark.parametrize("env_id", IDS)
