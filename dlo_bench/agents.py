@@ -311,9 +311,13 @@ def _check_observation(name: str, policy: Any, env: Any) -> None:
     got = spaces["observation"].shape
     if got != want:
         pegs = getattr(env.unwrapped, "max_pegs", 0)
+        slots, rest = divmod(got[0] - want[0], 3) if len(got) == len(want) == 1 else (0, 1)
+        where = (f"act where max_pegs={pegs + slots} (a peg suite), or "
+                 if not rest and pegs + slots > 0 else "")
         raise ValueError(f"agent {name!r} was trained on observations of shape {got}, but this "
                          f"environment observes {want} (max_pegs={pegs}: 3 numbers per peg "
-                         "slot): train one there (dlo baseline --max-pegs)")
+                         f"slot): {where}train one there (dlo baseline "
+                         f"{f'--max-pegs {pegs}' if pegs else 'without --max-pegs'})")
 
 
 #: Every agent by name, in the benchmark's table order.
@@ -375,8 +379,19 @@ def agent_spec(name: str) -> AgentSpec:
     if name.startswith(SB3_PREFIX) and len(name) > len(SB3_PREFIX):
         folder = name[len(SB3_PREFIX):]
         return AgentSpec(name, f"the baseline in {folder}", _sb3(""), extra="rl",
-                         defaults={"baseline": folder})
+                         defaults={"baseline": folder}, environments=_trained_in(folder))
     raise ValueError(f"agent name must be one of {', '.join(agent_names())}, got {name!r}")
+
+
+def _trained_in(folder: str) -> tuple[str, ...]:
+    """The environment the baseline in ``folder`` was trained in (its
+    ``hyperparameters.json``); both when the folder cannot be read (loading it says why)."""
+    from dlo_bench.baselines import read_baseline_metadata
+
+    try:
+        return (str(read_baseline_metadata(folder)["config"]["env_id"]),)
+    except (OSError, ValueError, KeyError, TypeError):
+        return (ENDPOINT, DUAL_ENDPOINT)
 
 
 def build_agent(name: str, env: Any, **options: Any) -> Policy:

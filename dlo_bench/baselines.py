@@ -99,7 +99,7 @@ class BaselineConfig:
     max_pegs: int = 0
 
     def __post_init__(self) -> None:
-        from dlo_env.envs.goal_env import MAX_PEGS
+        from dlo_env.cord import MAX_PEGS
 
         if not (isinstance(self.max_pegs, int) and not isinstance(self.max_pegs, bool)
                 and 0 <= self.max_pegs <= MAX_PEGS):

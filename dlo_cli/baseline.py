@@ -18,7 +18,7 @@ from dlo_cli.flags import (
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     """Flags of ``dlo baseline``; defaults are ``dlo_bench.baselines.BaselineConfig``'s."""
     from dlo_bench.baselines import ALGOS, CORDS, BaselineConfig
-    from dlo_env.envs.goal_env import MAX_PEGS
+    from dlo_env.cord import MAX_PEGS
 
     parser.add_argument("--algo", choices=ALGOS, required=True, help="the algorithm")
     parser.add_argument("--timesteps", type=positive_int, default=BaselineConfig.timesteps,

@@ -24,8 +24,10 @@ _share = number_in(float, 0.0, 1.0, expected="a number in [0, 1]")
 _weight = number_in(float, 0.0, None, expected="a number >= 0")
 
 #: Flags of ``--kind transitions`` only: fields of ``TransitionCollectConfig`` of the same name.
-TRANSITION_FLAGS = ("wide_fraction", "wavy_fraction", "rim_fraction", "randomize",
-                    "test_cords", "max_pegs")
+TRANSITION_FLAGS = ("num_transitions", "wide_fraction", "wavy_fraction", "rim_fraction",
+                    "randomize", "test_cords", "max_pegs")
+#: Flags of ``--kind shapes`` only: ``num_shapes`` and fields of ``CollectConfig``.
+SHAPE_FLAGS = ("num_shapes", "cosine_threshold", "record_every")
 #: Flags of both kinds: fields of ``CollectConfig`` and ``TransitionCollectConfig``.
 SHARED_FLAGS = ("grasp_weights", "push_fraction")
 
@@ -49,6 +51,7 @@ def _npz_path(text: str) -> str:
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     """Flags of ``dlo collect`` (defaults from ``CollectConfig``)."""
+    from dlo_env.cord import MAX_PEGS
     from dlo_env.dataset.collect import CollectConfig
     from dlo_env.dataset.transitions import TransitionCollectConfig
 
@@ -63,10 +66,12 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     add_seed(parser, "the collection (root seed)")
     parser.add_argument("--workers", type=positive_int, default=1,
                         help="worker processes; the arrays do not depend on it")
-    parser.add_argument("--cosine-threshold", type=_cosine, default=CollectConfig.cosine_threshold,
-                        help="cord-like filter: least cosine of consecutive segments")
-    parser.add_argument("--record-every", type=positive_int, default=CollectConfig.record_every,
-                        help="record a shape every K physics substeps (10: about 1 cm of motion)")
+    parser.add_argument("--cosine-threshold", type=_cosine, default=None,
+                        help="--kind shapes: cord-like filter, least cosine of consecutive "
+                             f"segments (default {CollectConfig.cosine_threshold:g})")
+    parser.add_argument("--record-every", type=positive_int, default=None,
+                        help="--kind shapes: record a shape every K physics substeps (default "
+                             f"{CollectConfig.record_every}: about 1 cm of motion)")
     parser.add_argument("--wide-fraction", type=_share, default=None,
                         help="--kind transitions: share of episodes starting from a shape of "
                              "wide_cord_shape (several bends, kinks; default "
@@ -104,8 +109,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help="--kind transitions: every episode's cord is one of the held-out "
                              "test cords (dlo_env.randomize.TEST_CORDS), to test a model of "
                              "several cords; not with --randomize")
-    parser.add_argument("--max-pegs", type=number_in(int, 0, 127, expected="an integer from 0 "
-                                                                         "to 127"),
+    parser.add_argument("--max-pegs", type=number_in(int, 0, MAX_PEGS, expected="an integer "
+                                                     f"from 0 to {MAX_PEGS}"),
                         default=None, metavar="N",
                         help="--kind transitions: every episode places 0 to N pegs near its "
                              "start, and its moves run around them (each transition records "
@@ -114,6 +119,14 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help="continue an interrupted run from its finished chunks, in the "
                              "folder named --out plus .parts (data/t.npz.parts/)")
     add_backend(parser)
+
+
+def refuse_other_kind(args: argparse.Namespace, flags: tuple[str, ...], kind: str) -> None:
+    """One line naming the first of ``flags`` given: it applies to ``--kind kind`` only."""
+    for flag in flags:
+        if getattr(args, flag) is not None:
+            raise ValueError(f"--{flag.replace('_', '-')} applies to --kind {kind} only, not to "
+                             f"--kind {args.kind}")
 
 
 class RejectedShare:
@@ -136,20 +149,16 @@ def run(args: argparse.Namespace) -> int:
         return run_transitions(args)
     if args.num_shapes is None:
         raise ValueError("--num-shapes is required with --kind shapes")
-    for flag in TRANSITION_FLAGS:
-        if getattr(args, flag) is not None:
-            raise ValueError(f"--{flag.replace('_', '-')} applies to --kind transitions, "
-                             "not to shapes")
+    refuse_other_kind(args, TRANSITION_FLAGS, "transitions")
 
     from dlo_env.dataset.collect import CollectConfig, collect
     from dlo_env.dataset.diversity import diversity_report
 
-    given = {k: getattr(args, k) for k in SHARED_FLAGS if getattr(args, k) is not None}
+    given = {k: getattr(args, k) for k in (*SHAPE_FLAGS[1:], *SHARED_FLAGS)
+             if getattr(args, k) is not None}
     try:
-        config = CollectConfig(seed=args.seed, cosine_threshold=args.cosine_threshold,
-                               record_every=args.record_every,
-                               **{k: tuple(v) if isinstance(v, list) else v
-                                  for k, v in given.items()})
+        config = CollectConfig(seed=args.seed, **{k: tuple(v) if isinstance(v, list) else v
+                                                  for k, v in given.items()})
     except ValueError as exc:  # "grasp_weights must ..." names the flag
         raise ValueError(f"--{str(exc).replace('_', '-', 1)}") from None
     rejected_share = RejectedShare()

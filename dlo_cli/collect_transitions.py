@@ -16,7 +16,7 @@ def run(args: argparse.Namespace) -> int:
     import numpy as np
 
     from dlo_cli.chunked_run import run_chunked
-    from dlo_cli.collect import SHARED_FLAGS, TRANSITION_FLAGS
+    from dlo_cli.collect import SHAPE_FLAGS, SHARED_FLAGS, TRANSITION_FLAGS, refuse_other_kind
     from dlo_env.dataset.transitions import (
         GRASP_NAMES,
         TransitionCollectConfig,
@@ -25,6 +25,7 @@ def run(args: argparse.Namespace) -> int:
 
     if args.num_transitions is None:
         raise ValueError("--num-transitions is required with --kind transitions")
+    refuse_other_kind(args, SHAPE_FLAGS, "shapes")
     if args.grasp_weights is not None and sum(args.grasp_weights) <= 0:
         raise ValueError(f"--grasp-weights must have a positive sum, got {args.grasp_weights}")
     push = TransitionCollectConfig.push_fraction if args.push_fraction is None \
@@ -41,7 +42,7 @@ def run(args: argparse.Namespace) -> int:
     if args.test_cords and args.randomize:
         raise ValueError("--test-cords and --randomize are two ways to choose the cords; give "
                          "one")
-    given = {k: getattr(args, k) for k in (*TRANSITION_FLAGS, *SHARED_FLAGS)
+    given = {k: getattr(args, k) for k in (*TRANSITION_FLAGS[1:], *SHARED_FLAGS)
              if getattr(args, k) is not None}
     if "randomize" in given:
         names = [name for name, _ in given["randomize"]]

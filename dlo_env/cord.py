@@ -43,6 +43,8 @@ COLLISION_SLOP = 5e-4
 RIM_GUARD = 1e-6
 #: Radius of a peg, metres (the default of ``Cord`` and of the environments' ``peg_radius``).
 PEG_RADIUS = 0.02
+#: The most pegs an environment observes (``max_pegs``) and a collection places.
+MAX_PEGS = 16
 #: Where an empty peg slot lies (a batch of moves with different numbers of pegs): too far
 #: from the table to touch anything.
 PEG_FAR = 1e3

@@ -13,8 +13,10 @@ per environment: the head-held episodes for ``DLOEndpoint-v0``, the two-handed o
 straight move: the recorded spec wraps the environment in
 :class:`dlo_env.straight_moves.StraightMoves`, whose action is the displacement of the held
 end(s) in metres. Each episode is replayed in that environment from its recorded start, with
-the shape after its last move as the goal, so the dataset holds the environment's own
-observations, rewards and infos; the replayed shapes are checked against the file's.
+the shape after its last move as the goal (and its pegs, in an environment observing as many
+peg slots as the file has), so the dataset holds the environment's own observations, rewards
+and infos; the replayed shapes of every environment are checked against the file's before any
+dataset is written.
 
 Datasets are written with Minari's own ``create_dataset_from_buffers`` into Minari's dataset
 root (``$MINARI_DATASETS_PATH`` or ``~/.minari/datasets``) or the ``root`` given. Ids:
@@ -38,7 +40,7 @@ from typing import Any
 import gymnasium as gym
 import numpy as np
 
-from dlo_env.cord import CordParams
+from dlo_env.cord import PEG_RADIUS, CordParams
 from dlo_env.dataset.transitions import GRASP_NAMES, load_transitions
 from dlo_env.envs import ENVIRONMENTS
 from dlo_env.shapes import error
@@ -246,6 +248,9 @@ def _held_environments(data: Any, name: str) -> dict[str, str]:
 def _default_cord_transitions(path: str | os.PathLike[str]) -> Any:
     """The transition file at ``path``, refused unless collected on the default cord."""
     data = load_transitions(path)
+    if len(data) and (data.params != data.params[0]).any():
+        raise ValueError(f"path {str(path)!r} holds transitions of several cords (collected "
+                         "with --randomize); only default-cord transitions are exported")
     if data.one_cord(f"path {str(path)!r}") != CordParams():
         raise ValueError(f"path {str(path)!r} was collected on another cord than the "
                          "environments' default; only default-cord transitions are exported")
@@ -277,24 +282,27 @@ def export_transitions(
     data = _default_cord_transitions(path)
     held = _held_environments(data, name)
     check_absent(held, root)
-    written = []
+    slots = int(data.pegs.shape[1])  # peg slots: the environments observe as many
+    peg_radius = float(data.metadata.get("collect", {}).get("peg_radius", PEG_RADIUS))
+    pegs_kwargs = {"max_pegs": slots, "peg_radius": peg_radius} if slots else {}
+    replayed = []  # every environment's episodes are replayed and checked before any is written
     for dataset_id, env_id in held.items():
         grasp = ENVIRONMENTS[env_id][0]
         mine = data.subset(data.grasp == GRASP_NAMES.index(grasp))
-        episodes = np.unique(mine.episode)
         moves = int(np.bincount(mine.episode).max())
-        env = StraightMoves(gym.make(env_id, max_episode_steps=100 * moves))
+        env = StraightMoves(gym.make(env_id, max_episode_steps=100 * moves, **pegs_kwargs))
         buffers, worst = [], 0.0
-        for episode in episodes:
+        for episode in np.unique(mine.episode):
             rows = np.flatnonzero(mine.episode == episode)
             rows = rows[np.argsort(mine.step[rows])]
             displacement = mine.displacement[rows].reshape(len(rows), 4)
             actions = displacement if grasp == "both" else displacement[:, :2]
-            start, goal = mine.start[rows[0]], mine.next[rows[-1]]
-            buffer = record_episode(env, {"start": start, "goal": goal}, actions,
-                                    stop_on_success=False)
-            replayed = buffer.observations["achieved_goal"][1:].reshape(mine.next[rows].shape)
-            worst = max(worst, float(np.max(error(replayed, mine.next[rows]))))
+            options = {"start": mine.start[rows[0]], "goal": mine.next[rows[-1]]}
+            if slots:  # an episode's pegs stand through all its moves
+                options["pegs"] = mine.peg_list(rows[0])
+            buffer = record_episode(env, options, actions, stop_on_success=False)
+            shapes = buffer.observations["achieved_goal"][1:].reshape(mine.next[rows].shape)
+            worst = max(worst, float(np.max(error(shapes, mine.next[rows]))))
             buffers.append(buffer)
             if progress is not None:
                 progress(len(rows), 0)
@@ -303,11 +311,16 @@ def export_transitions(
         if worst > REPLAY_TOLERANCE:
             raise ValueError(f"path {str(path)!r}: replaying its {grasp} moves gives shapes up "
                              f"to {worst:.4f} m from the recorded ones (tolerance "
-                             f"{REPLAY_TOLERANCE} m): collected with another cord or simulator?")
-        description = (f"Transition data of {Path(path).name} ({grasp} held): one episode per "
-                       "collected episode, one step per straight move (StraightMoves wrapper: "
-                       "action = displacement of the held end(s), metres), goal = the shape "
-                       "after the last move; termination flags as the environment reports.")
+                             f"{REPLAY_TOLERANCE} m): collected with another simulator version?")
+        replayed.append((dataset_id, grasp, buffers, env_spec, worst))
+    written = []
+    for dataset_id, grasp, buffers, env_spec, worst in replayed:
+        among = f", among up to {slots} pegs (each episode's in its reset options)" if slots else ""
+        description = (f"Transition data of {Path(path).name} ({grasp} held{among}): one "
+                       "episode per collected episode, one step per straight move "
+                       "(StraightMoves wrapper: action = displacement of the held end(s), "
+                       "metres), goal = the shape after the last move; termination flags as the "
+                       "environment reports.")
         _write(dataset_id, buffers, env_spec, "dlo collect --kind transitions", description,
                root)
         written.append(_summary(dataset_id, buffers, worst))

@@ -62,7 +62,7 @@ import numpy as np
 
 from dlo_env.atomic import file_digest
 from dlo_env.checks import fractions, positive, positive_ints
-from dlo_env.cord import PEG_FAR, PEG_RADIUS, Cord, CordParams
+from dlo_env.cord import MAX_PEGS, PEG_FAR, PEG_RADIUS, Cord, CordParams
 from dlo_env.dataset.chunks import (
     ChunkJob,
     Progress,
@@ -173,8 +173,9 @@ class TransitionCollectConfig:
 
     def __post_init__(self) -> None:
         if not (isinstance(self.max_pegs, (int, np.integer)) and not isinstance(self.max_pegs, bool)
-                and 0 <= self.max_pegs <= 127):
-            raise ValueError(f"max_pegs must be an int from 0 to 127, got {self.max_pegs!r}")
+                and 0 <= self.max_pegs <= MAX_PEGS):
+            raise ValueError(f"max_pegs must be an int from 0 to {MAX_PEGS}, got "
+                             f"{self.max_pegs!r}")
         positive(self, "peg_radius")
         ranges = check_randomize(self.randomize)
         if self.test_cords and ranges:
@@ -253,8 +254,8 @@ class TransitionDataset:
         several (collected with ``randomize``) or differ from their metadata's cord."""
         if len(self) and (self.params != self.params[0]).any():
             raise ValueError(f"{name} holds transitions of several cords (collected with "
-                             "randomize); this transition model is for one cord: use one "
-                             "cord's data")
+                             "randomize), where one cord's are needed (a model that reads the "
+                             "cord trains on several: --cord-inputs)")
         recorded = self.metadata.get("cord") or self.metadata.get("collect", {}).get("cord")
         cord = CordParams(**recorded) if recorded else CordParams()
         if len(self):

@@ -16,7 +16,15 @@ import gymnasium as gym
 import numpy as np
 from gymnasium import spaces
 
-from dlo_env.cord import PEG_RADIUS, Cord, CordParams, Grasp, check_not_crossing, check_pegs
+from dlo_env.cord import (
+    MAX_PEGS,
+    PEG_RADIUS,
+    Cord,
+    CordParams,
+    Grasp,
+    check_not_crossing,
+    check_pegs,
+)
 from dlo_env.randomize import check_params, check_randomize, draw_params
 from dlo_env.shapes import (
     SUCCESS_METRICS,
@@ -44,8 +52,6 @@ from dlo_env.tasks import (
 
 _OPTIONS = ("difficulty", "start", "goal", "task", "params", "pegs")
 _REWARD_TYPES = ("dense", "sparse")
-#: The most pegs an environment observes (``max_pegs``).
-MAX_PEGS = 16
 
 
 

@@ -59,6 +59,17 @@ def test_build_agent_takes_an_environment_id_as_evaluate_does():
         build_agent("straight-line", 5)
 
 
+def test_an_sb3_folder_acts_in_the_environment_it_was_trained_in():
+    folder = shipped_baseline("ppo", DUAL_ENDPOINT)
+    if not folder.is_dir():
+        pytest.skip(f"no shipped ppo for {DUAL_ENDPOINT}")
+    assert AGENTS.get(f"sb3:{folder}") is None
+    with gym.make(DUAL_ENDPOINT) as env:
+        assert env.action_space.contains(_first_action(build_agent(f"sb3:{folder}", env), env))
+    with pytest.raises(ValueError, match=f"acts in {DUAL_ENDPOINT}, got environment"):
+        build_agent(f"sb3:{folder}", ENDPOINT)
+
+
 def test_build_agent_refuses_a_flattened_environment_in_one_line():
     with gym.wrappers.FlattenObservation(gym.make(ENDPOINT)) as env:
         with pytest.raises(ValueError, match="env must observe the dlo_env Dict") as info:

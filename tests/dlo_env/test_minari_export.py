@@ -103,6 +103,28 @@ def test_transition_data_exports_per_environment_and_replays_move_by_move(tmp_pa
         np.testing.assert_allclose(shapes.reshape(first.next.shape), first.next, atol=1e-5)
 
 
+def test_transition_data_among_pegs_exports_with_its_pegs(tmp_path):
+    data = collect_transitions(tmp_path / "t.npz", 60, TransitionCollectConfig(seed=1,
+                                                                              max_pegs=3))
+    assert data.peg_count.any()
+    exported = export_transitions(tmp_path / "t.npz", root=tmp_path / "minari")
+    assert all(d.replay_error < 1e-6 for d in exported)
+    with minari_root(tmp_path / "minari"):
+        dataset = minari.load_dataset(transitions_id(ENDPOINT))
+        env = dataset.recover_environment()
+    assert env.unwrapped.max_pegs == 3
+    head = data.subset(data.grasp == 0)
+    counts = []
+    for episode, first in zip(dataset.iterate_episodes(), np.unique(head.episode)):
+        rows = np.flatnonzero(head.episode == first)
+        pegs = episode.observations["observation"][0][-9:]  # 3 slots: x, y per peg, then mask
+        count = int(head.peg_count[rows[0]])
+        counts.append(count)
+        np.testing.assert_allclose(pegs[:2 * count], head.peg_list(rows[0]).reshape(-1))
+        assert pegs[6:6 + count].all() and not pegs[6 + count:].any()
+    assert max(counts) > 0  # some head-held episode stood among pegs
+
+
 def test_an_existing_dataset_is_an_error_not_an_overwrite(tmp_path):
     export_demonstrations(ENDPOINT, "linear-1", root=tmp_path, limit=1)
     with pytest.raises(ValueError, match="already exists"):
