@@ -16,6 +16,7 @@ import os
 import time
 from dataclasses import asdict, dataclass, fields, replace
 from functools import partial
+from numbers import Real
 from pathlib import Path
 from typing import Any
 
@@ -23,6 +24,14 @@ import gymnasium as gym
 import numpy as np
 
 from dlo_env.atomic import atomic_path, write_text_atomic
+from dlo_env.checks import (
+    check_fields,
+    fractions,
+    non_negative,
+    non_negative_ints,
+    positive,
+    positive_ints,
+)
 
 ALGOS = ("ppo", "sac", "sac-her")
 #: The cords a baseline trains on (``BaselineConfig.cords``).
@@ -109,10 +118,18 @@ class BaselineConfig:
             raise ValueError(f"algo must be one of {ALGOS}, got {self.algo!r}")
         if self.cords not in CORDS:
             raise ValueError(f"cords must be one of {CORDS}, got {self.cords!r}")
-        if self.timesteps < 1 or self.n_envs < 1:
-            raise ValueError(
-                f"timesteps and n_envs must be >= 1, got {self.timesteps} and {self.n_envs}"
-            )
+        positive_ints(self, "timesteps", "n_envs", "ppo_n_steps", "ppo_batch_size",
+                      "ppo_epochs", "sac_buffer_size", "sac_batch_size", "sac_gradient_steps",
+                      "her_n_sampled_goal")
+        non_negative_ints(self, "seed", "sac_learning_starts", "checkpoint_every")
+        positive(self, "learning_rate")
+        fractions(self, "gamma", "ppo_gae_lambda")
+        non_negative(self, "ppo_ent_coef")
+        check_fields(self, ("ppo_log_std_init",),
+                     lambda v: isinstance(v, Real) and not isinstance(v, bool), "a number")
+        check_fields(self, ("net_arch",), lambda v: isinstance(v, (tuple, list)) and all(
+            isinstance(n, int) and not isinstance(n, bool) and n >= 1 for n in v),
+            "a list of layer sizes >= 1 (e.g. [256, 256]; [] for none)")
         if not self.difficulties or not all(1 <= d <= 5 for d in self.difficulties):
             raise ValueError(f"difficulties must be a non-empty tuple of ints in 1..5, "
                              f"got {self.difficulties!r}")
@@ -301,6 +318,24 @@ def _training_callback(total: int, start: int, checkpoint: Path | None, every: i
     return _Progress()
 
 
+def check_out_folder(out: str | os.PathLike, resume: bool, name: str = "out") -> bool:
+    """Whether training into ``out`` resumes a run (``resume`` and a ``checkpoint.zip``).
+
+    Raises:
+        ValueError: Naming ``name``, when ``out`` holds a finished run (``model.zip``, which
+            training would replace), or an interrupted one and ``resume`` is False.
+    """
+    out = Path(out)
+    interrupted = (out / "checkpoint.zip").is_file()
+    if interrupted and not resume:
+        raise ValueError(f"{name} {str(out)!r} holds an interrupted run (checkpoint.zip): "
+                         "resume it (--resume, resume=True) or choose another folder")
+    if (out / "model.zip").is_file() and not interrupted:
+        raise ValueError(f"{name} {str(out)!r} holds a finished run (model.zip), which "
+                         "training would replace: choose another folder")
+    return resume and interrupted
+
+
 def train_baseline(
     config: BaselineConfig, out_dir: str | os.PathLike, device: str = "cpu",
     progress_bar: bool = True, resume: bool = False, threads: int | None = 1,
@@ -313,7 +348,7 @@ def train_baseline(
         device: Torch device.
         progress_bar: Show a tqdm bar (log lines every checkpoint either way).
         resume: Continue from ``out_dir/checkpoint.zip`` if it exists (same config required,
-            except ``timesteps``).
+            except ``timesteps``); without one, train from the start.
             PPO resumes where it stopped; SAC resumes its networks with an empty replay buffer
             refilled by ``sac_learning_starts`` random steps.
         threads: ``torch.set_num_threads`` (None leaves it alone).
@@ -323,6 +358,8 @@ def train_baseline(
 
     Raises:
         ResumeMismatch: If resuming with another config than the interrupted run's.
+        ValueError: If ``out_dir`` holds a finished run (``model.zip``), or an interrupted
+            one and ``resume`` is False: nothing written is replaced.
     """
     import torch
     from stable_baselines3 import PPO, SAC
@@ -331,10 +368,10 @@ def train_baseline(
     if threads is not None:
         torch.set_num_threads(threads)
     out = Path(out_dir)
+    checkpoint = out / "checkpoint.zip"
+    resuming = check_out_folder(out, resume)
     monitor_dir = out / "monitor"
     monitor_dir.mkdir(parents=True, exist_ok=True)
-    checkpoint = out / "checkpoint.zip"
-    resuming = resume and checkpoint.is_file()
     if resuming:
         saved = BaselineConfig.from_dict(json.loads((out / "run.json").read_text())["config"])
         if replace(saved, timesteps=config.timesteps) != config:  # more steps are fine

@@ -5,6 +5,7 @@ from __future__ import annotations
 import argparse
 
 from dlo_cli.flags import (
+    add_device,
     add_difficulty,
     add_env,
     add_seed,
@@ -44,7 +45,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         default=BaselineConfig.max_pegs, metavar="N",
                         help="train with 0 to N pegs near every start, observed in N slots "
                              "(default 0: the empty table)")
-    parser.add_argument("--set", nargs="+", default=[], metavar="FIELD=VALUE",
+    parser.add_argument("--set", nargs="+", action="extend", default=[], metavar="FIELD=VALUE",
                         help="other BaselineConfig fields, values in JSON "
                              "(e.g. ppo_n_steps=512 net_arch=[64,64])")
     parser.add_argument("--out", default=None,
@@ -54,9 +55,13 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                              "DLODualEndpoint-v0)")
     parser.add_argument("--resume", action="store_true",
                         help="continue an interrupted run from OUT/checkpoint.zip")
-    parser.add_argument("--device", default="cpu", help="torch device: cpu or cuda")
+    add_device(parser, "cpu")
     add_threads(parser)
 
+
+#: Printed after Ctrl-C.
+ON_INTERRUPT = ("the run continues from its last checkpoint (OUT/checkpoint.zip, every "
+                "checkpoint_every steps) when the same command is run again with --resume")
 
 #: ``BaselineConfig`` fields with a flag of their own: ``--set`` leaves them to it, so the flag's
 #: checks always apply.
@@ -98,7 +103,12 @@ def run(args: argparse.Namespace) -> int:
 
     import stable_baselines3  # noqa: F401  (first, so a core install is told to add the rl extra)
 
-    from dlo_bench.baselines import BaselineConfig, read_monitor_logs, train_baseline
+    from dlo_bench.baselines import (
+        BaselineConfig,
+        check_out_folder,
+        read_monitor_logs,
+        train_baseline,
+    )
     from dlo_bench.paths import baseline_folder_name, default_out
 
     settings = dict(
@@ -112,10 +122,19 @@ def run(args: argparse.Namespace) -> int:
         config = BaselineConfig.from_dict(settings)
     except TypeError as exc:  # a --set value of the wrong type
         raise ValueError(f"--set: {exc}") from exc
+    except ValueError as exc:  # "BaselineConfig.FIELD must be ...": the flag that gave FIELD
+        field, _, rest = str(exc).removeprefix("BaselineConfig.").partition(" ")
+        if field not in settings:
+            raise
+        raise ValueError(f"{FLAG_FIELDS.get(field, '--set ' + field)} {rest}") from None
     # the benchmark's folder names (sac-her-pegs-dual-endpoint...)
     name = baseline_folder_name(config.algo + ("-cords" if config.cords == "train" else ""),
                                 config.env_id, pegs=bool(config.max_pegs))
-    out = writable_folder(Path(args.out) if args.out else default_out("baseline") / name)
+    out = Path(args.out) if args.out else default_out("baseline") / name
+    resuming = check_out_folder(out, args.resume, "--out")
+    writable_folder(out)
+    if args.resume and not resuming:
+        print(f"no checkpoint.zip in {out}: training from the start")
     print(f"training {config.algo} on {config.env_id} (difficulties {config.difficulties}, "
           f"{config.cords} cords, "
           f"{f'up to {config.max_pegs} pegs' if config.max_pegs else 'no pegs'}) for "

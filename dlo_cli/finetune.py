@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import argparse
 
-from dlo_cli.flags import add_seed, existing_path, positive_int, writable_folder
+from dlo_cli.flags import add_device, add_seed, existing_path, positive_int, writable_folder
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
@@ -30,8 +30,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     add_seed(parser, "the training")
     parser.add_argument("--report-size", type=positive_int, default=1000,
                         help="held-out reference and inversion shapes per report")
-    parser.add_argument("--device", default="auto",
-                        help="torch device: auto (cuda if available), cpu or cuda")
+    add_device(parser)
     parser.add_argument("--no-progress", action="store_true", help="hide the progress bars")
 
 

@@ -295,6 +295,36 @@ def add_planner_flags(parser: argparse.ArgumentParser) -> None:
                         help="skip the transition fidelity simulation of each first plan")
 
 
+def device_type(text: str) -> str:
+    """An argparse type: a torch device this machine has: ``auto`` (CUDA when available),
+    ``cpu``, ``cuda`` or ``cuda:N``."""
+    if text in ("auto", "cpu"):
+        return text  # no torch import for the defaults
+    import torch
+
+    expected = f"expected auto, cpu, cuda or cuda:N, got {text!r}"
+    try:
+        device = torch.device(text)
+    except (RuntimeError, TypeError):
+        raise argparse.ArgumentTypeError(expected) from None
+    if device.type != "cuda":
+        raise argparse.ArgumentTypeError(expected)
+    if not torch.cuda.is_available():
+        raise argparse.ArgumentTypeError(f"{text!r}: this PyTorch sees no CUDA device "
+                                         "(torch.cuda.is_available() is False); use cpu or auto")
+    if device.index is not None and device.index >= torch.cuda.device_count():
+        raise argparse.ArgumentTypeError(f"{text!r}: this machine has "
+                                         f"{torch.cuda.device_count()} CUDA device(s)")
+    return text
+
+
+def add_device(parser: argparse.ArgumentParser, default: str = "auto") -> None:
+    """``--device``: the torch device of training or inference."""
+    parser.add_argument("--device", type=device_type, default=default,
+                        help=f"torch device: auto (CUDA when available), cpu, cuda or cuda:N "
+                             f"(default {default})")
+
+
 def add_threads(parser: argparse.ArgumentParser, default: int | None = 1) -> None:
     """``--threads``: torch CPU threads."""
     parser.add_argument("--threads", type=positive_int, default=default,

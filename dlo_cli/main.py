@@ -1,7 +1,8 @@
 """Entry point of the ``dlo`` command.
 
 Each subcommand lives in its own module of this package, which provides
-``add_arguments(parser)`` and ``run(args) -> int``; a module imports what its job needs inside
+``add_arguments(parser)`` and ``run(args) -> int`` (and may say what to do after Ctrl-C in
+``ON_INTERRUPT``); a module imports what its job needs inside
 ``run``, so ``dlo collect`` works on the core install. Errors a user can act on are turned into
 one line by :func:`main` (see :mod:`dlo_cli.errors`): a bad flag value while the command line
 is parsed (the flag types of :mod:`dlo_cli.flags`), anything else before the command's work
@@ -73,7 +74,7 @@ def build_parser() -> argparse.ArgumentParser:
         p.add_argument("--debug", action="store_true", default=argparse.SUPPRESS,
                        help="show the full traceback of an error instead of one line")
         module.add_arguments(p)
-        p.set_defaults(_run=module.run)
+        p.set_defaults(_run=module.run, _on_interrupt=getattr(module, "ON_INTERRUPT", ""))
     return parser
 
 
@@ -104,7 +105,8 @@ def main(argv: list[str] | None = None) -> int:
     except KeyboardInterrupt:
         if args.debug:
             raise
-        print(f"dlo {args.command}: interrupted", file=sys.stderr)
+        hint = getattr(args, "_on_interrupt", "")
+        print(f"dlo {args.command}: interrupted{'; ' + hint if hint else ''}", file=sys.stderr)
         return EXIT_INTERRUPTED
     except Exception as exc:
         message = user_error_message(exc)

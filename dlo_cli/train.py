@@ -5,6 +5,7 @@ from __future__ import annotations
 import argparse
 
 from dlo_cli.flags import (
+    add_device,
     add_seed,
     number_in,
     positive_float,
@@ -28,6 +29,9 @@ STAGE_FLAGS = {
 #: Defaults of the shape stages' flags that are None on the command line (so that giving one
 #: with --stage transition can be told apart from leaving it).
 SHAPE_DEFAULTS = {"minutes": 30.0, "report_size": 2000}
+#: Printed after Ctrl-C.
+ON_INTERRUPT = ("the same command, run again, continues from the last checkpoint in --out "
+                "(OUT/checkpoint.pt, written at every evaluation)")
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
@@ -111,7 +115,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help="train the GAN for this many generator steps instead of minutes")
     parser.add_argument("--encoder-steps", type=positive_int, default=None,
                         help="train the Encoder for this many steps instead of minutes")
-    parser.add_argument("--device", default="auto", help="auto (cuda if available), cpu, cuda")
+    add_device(parser)
     add_seed(parser, "the training")
     parser.add_argument("--representation", choices=("canonical", "world"), default=None,
                         help="canonical (default) or world (the paper's)")

@@ -83,6 +83,11 @@ CASES = [
     ("baseline --algo ppo --set seed=-5 --out OUT", "--set seed", ("--seed",)),
     ("baseline --algo ppo --set learning_rte=0.1 --out OUT", "--set learning_rte",
      ("unknown key",)),
+    ("baseline --algo ppo --set ppo_n_steps=abc --out OUT", "--set ppo_n_steps",
+     ("an int >= 1", "'abc'")),
+    ("baseline --algo ppo --set ppo_n_steps=-4 --out OUT", "--set ppo_n_steps", ("-4",)),
+    ("baseline --algo ppo --set gamma=2 --out OUT", "--set gamma", ("(0, 1]",)),
+    ("baseline --algo ppo --set net_arch=[0] --out OUT", "--set net_arch", ("layer sizes",)),
     ("export-minari --suite linear-9 --root OUT", "--suite", ("'linear-9'",)),
     ("export-minari --limit 0 --root OUT", "--limit", ("'0'",)),
     ("export-minari --no-demonstrations --root OUT", "--no-demonstrations", ("--transitions",)),
@@ -135,6 +140,17 @@ BAD_OUTS = [
     ("collect --kind transitions --num-transitions 5 --out FILE/d.npz",
      "a file in a folder this user can write"),
 ]
+
+
+def test_a_baseline_never_replaces_a_finished_run(tmp_path, capsys):
+    (tmp_path / "model.zip").write_text("the user's model")
+    for resume in ([], ["--resume"]):
+        code = main(["baseline", "--algo", "ppo", "--timesteps", "8", "--out", str(tmp_path),
+                     *resume])
+        captured = capsys.readouterr()
+        assert code == 2 and captured.out == ""
+        assert "--out" in captured.err and "holds a finished run (model.zip)" in captured.err
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["model.zip"]
 
 
 @pytest.mark.parametrize("line, words", BAD_OUTS, ids=[c[0] for c in BAD_OUTS])

@@ -79,3 +79,21 @@ def test_the_top_level_help_says_train_also_trains_the_transition_model(capsys):
     text = re.sub(r"\s+", " ", capsys.readouterr().out)
     assert "train the shape model (GAN + encoder)" in text
     assert "--stage transition, the transition model" in text
+
+
+def test_repeated_set_flags_add_up():
+    args = _parse("baseline", "--algo", "ppo", "--set", "ppo_n_steps=32", "gamma=0.9",
+                  "--set", "ppo_batch_size=32")
+    assert args.set == ["ppo_n_steps=32", "gamma=0.9", "ppo_batch_size=32"]
+
+
+def test_device_takes_what_this_machine_has(capsys):
+    import torch
+
+    assert _parse("baseline", "--algo", "ppo", "--device", "cpu").device == "cpu"
+    for command in (["train", "--data", "d.npz"], ["finetune"], ["baseline", "--algo", "ppo"]):
+        assert main([*command, "--device", "tpu"]) == 2
+        assert "--device: expected auto, cpu, cuda or cuda:N, got 'tpu'" in capsys.readouterr().err
+        if not torch.cuda.is_available():
+            assert main([*command, "--device", "cuda"]) == 2
+            assert "this PyTorch sees no CUDA device" in capsys.readouterr().err
