@@ -302,9 +302,9 @@ def _training_callback(total: int, start: int, checkpoint: Path | None, every: i
                 rate = (self.num_timesteps - self._n0) / (time.perf_counter() - self._t0)
                 logs = read_monitor_logs(monitor_dir)
                 recent = logs["is_success"][-100:]
-                success = float(recent.mean()) if recent.size else float("nan")
-                message = (f"step {self.num_timesteps}: {rate:.0f} steps/s, success of the "
-                           f"last {recent.size} episodes {success:.2f}")
+                success = (f"success of the last {recent.size} episodes "
+                           f"{float(recent.mean()):.2f}" if recent.size else "no episode ended yet")
+                message = f"step {self.num_timesteps}: {rate:.0f} steps/s, {success}"
                 if self._bar is not None:
                     self._bar.write(message)
                 else:

@@ -63,7 +63,8 @@ def format_table(summaries: list[dict[str, Any]]) -> str:
         row = []
         for key, _, fmt in TABLE_COLUMNS:
             value = s.get(key, "")
-            if isinstance(value, float) and math.isnan(value):
+            if (isinstance(value, float) and math.isnan(value)) or (
+                    key == "difficulty" and value == 0):  # a designed goal: made by no moves
                 row.append("-")
                 continue
             if key in _CENTIMETRES and isinstance(value, float):

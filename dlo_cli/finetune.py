@@ -47,7 +47,7 @@ def run(args: argparse.Namespace) -> int:
     from latent_model.dataset import load_labelled_shapes, load_shapes
     from latent_model.shape_model import MODEL_FILE
 
-    model = ShapeModel.load(args.model, device=args.device)
+    model = ShapeModel.load(args.model, device=args.device, name="--model")
     shapes = load_shapes(args.shapes, name="--shapes")
     def recorded(key: str) -> list[str]:
         # The files a model records: a list, or one path as text (models before several
@@ -59,6 +59,11 @@ def run(args: argparse.Namespace) -> int:
     data_path = args.data or recorded("data")
     if not data_path:
         raise ValueError("--data is required: the model does not record its training data file")
+    missing = [p for p in data_path if not os.path.exists(p)]
+    if missing and not args.data:
+        raise ValueError(f"--data is required: the training data the model records "
+                         f"({', '.join(data_path)}) is not here; give those shapes, or the "
+                         "shapes it should keep representing")
     train_shapes, _ = load_labelled_shapes(data_path, name="--data")
     heldout_path = args.heldout or recorded("heldout")
     heldout = None
@@ -68,7 +73,11 @@ def run(args: argparse.Namespace) -> int:
     steps = {k: v for k, v in {"gan_steps": args.gan_steps,
                                "encoder_steps": args.encoder_steps}.items() if v is not None}
     config = replace(config, **steps)
-    out = writable_folder(Path(args.out) if args.out else default_out("finetune"))
+    out = Path(args.out) if args.out else default_out("finetune")
+    if (out / MODEL_FILE).exists():
+        raise ValueError(f"--out {str(out)!r} holds a model ({MODEL_FILE}), which fine-tuning "
+                         "would replace: choose another folder")
+    writable_folder(out)
     print(f"fine-tuning {args.model} on {len(shapes)} shapes from {args.shapes}; "
           f"training data {data_path}; held-out {heldout_path if heldout is not None else None}")
     new_model, report = finetune(model, shapes, train_shapes, heldout, config, seed=args.seed,

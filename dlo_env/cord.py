@@ -117,13 +117,17 @@ def check_pegs(pegs: object, name: str = "pegs", radius: float = 0.0) -> np.ndar
     arr = np.zeros((0, 2)) if pegs is None else np.asarray(pegs, dtype=np.float64)
     if arr.size == 0:
         return np.zeros((0, 2))
-    if arr.ndim != 2 or arr.shape[1] != 2 or not np.isfinite(arr).all():
-        raise ValueError(f"{name} must be a finite array of peg centres, shape (k, 2) metres, "
+    if arr.ndim != 2 or arr.shape[1] != 2:
+        raise ValueError(f"{name} must be an array of peg centres, shape (k, 2) metres, "
                          f"got shape {arr.shape}")
+    if not np.isfinite(arr).all():
+        bad = arr[~np.isfinite(arr).all(axis=1)][0]
+        raise ValueError(f"{name} must be finite, got {bad.tolist()}")
     off = (np.abs(arr) + radius >= TABLE_HALF).any(axis=1)
     if off.any():
-        raise ValueError(f"{name} must lie on the table (|x|, |y| < {TABLE_HALF} m less the "
-                         f"radius {radius} m), got {arr[off][0].tolist()}")
+        less = f" less the radius {radius} m" if radius else ""
+        raise ValueError(f"{name} must lie on the table (|x|, |y| < {TABLE_HALF} m{less}), "
+                         f"got {arr[off][0].tolist()}")
     return arr
 
 

@@ -48,9 +48,12 @@ def load_checkpoint(path: str | os.PathLike, name: str = "path", *, kind: str = 
     try:
         data = torch.load(path, map_location="cpu", weights_only=True)
     except Exception as exc:  # torch raises many types for corrupt or foreign files
+        text = str(exc).splitlines()[0] if str(exc) else ""
+        if "weights_only" in str(exc):  # torch's advice to unpickle the file: never taken here
+            text = "not a file of tensors and plain data (torch.load with weights_only=True)"
         raise ValueError(
             f"{name}: {str(path)!r} is not a readable torch checkpoint "
-            f"({type(exc).__name__}: {str(exc).splitlines()[0] if str(exc) else ''})"
+            f"({type(exc).__name__}: {text})"
         ) from exc
     if not isinstance(data, dict) or data.get("format") != kind:
         raise ValueError(f"{name}: {str(path)!r} is not a {kind} checkpoint")

@@ -332,17 +332,19 @@ class ShapeModel:
         return cls(config, norm, generator, encoder, discriminator, device, data.get("info"))
 
     @classmethod
-    def load(cls, path: str | os.PathLike, device: str | torch.device = "auto") -> ShapeModel:
+    def load(cls, path: str | os.PathLike, device: str | torch.device = "auto",
+             name: str = "path") -> ShapeModel:
         """Load a model written by ``save`` (a file, or a folder holding ``model.pt``).
 
         Raises:
             FileNotFoundError: If there is no such file.
-            ValueError: If the file is corrupt, not a shape model, or of another format version.
+            ValueError: Naming ``name`` (the argument or flag that gave ``path``) if the file
+                is corrupt, not a shape model, or of another format version.
         """
         path = Path(path)
         if path.is_dir():
             path = path / MODEL_FILE
-        return cls.from_state(load_checkpoint(path), device, name=str(path))
+        return cls.from_state(load_checkpoint(path, name), device, name=str(path))
 
     @classmethod
     def load_pretrained(cls, device: str | torch.device = "auto") -> ShapeModel:

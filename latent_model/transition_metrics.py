@@ -186,7 +186,8 @@ def report_lines(rows: list[ErrorRow], rank: float) -> list[str]:
         if not r.count:  # no held-out move of this group: nothing measured
             lines.append(f"{r.moves:>5} {r.group:<10} {r.count:>6} {'-':>8}")
             continue
-        interval = f"{r.mean_low_cm:.3f}-{r.mean_high_cm:.3f}cm"
+        interval = (f"{r.mean_low_cm:.3f}-{r.mean_high_cm:.3f}cm"
+                    if np.isfinite(r.mean_low_cm) else "-")  # too few moves for an interval
         lines.append(f"{r.moves:>5} {r.group:<10} {r.count:>6} {r.mean_cm:>6.3f}cm "
                      f"{interval:>15} "
                      f"{r.median_cm:>6.3f}cm {r.p99_cm:>6.2f}cm {100 * r.within_1cm:>6.2f}%")

@@ -82,8 +82,10 @@ def test_pegs_change_in_a_running_simulation_and_bad_pegs_are_refused():
     assert _inside(cord.shape, cord.pegs, PEG_RADIUS) <= 0
     cord.set_pegs(None)
     assert cord.pegs.shape == (0, 2)
-    with pytest.raises(ValueError, match="pegs must be a finite array"):
+    with pytest.raises(ValueError, match=r"pegs must be an array of peg centres, shape \(k, 2\)"):
         Cord(pegs=[1.0, 2.0, 3.0])
+    with pytest.raises(ValueError, match=r"pegs must be finite, got \[nan, 0.0\]"):
+        Cord(pegs=[[0.1, 0.1], [np.nan, 0.0]])
     with pytest.raises(ValueError, match="pegs must lie on the table"):
         Cord(pegs=[[0.0, TABLE_HALF + 0.1]])
     with pytest.raises(ValueError, match="peg_radius must be a number"):

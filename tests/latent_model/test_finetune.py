@@ -81,6 +81,29 @@ def test_dlo_finetune_writes_the_new_model_and_its_report(tmp_path, trained, cor
     assert "inversion success on the shapes" in capsys.readouterr().out
     assert ShapeModel.load(out / "model.pt", device="cpu").n_points == 20
     assert (out / "finetune_report.json").exists()
+    before = (out / "model.pt").read_bytes()
+    assert main(["finetune", "--model", str(tmp_path / "model"), "--shapes", str(targets),
+                 "--data", str(data), "--out", str(out)]) == 2  # never replaced
+    assert "holds a model (model.pt)" in capsys.readouterr().err
+    assert (out / "model.pt").read_bytes() == before
+
+
+def test_dlo_finetune_names_the_model_flag_and_the_recorded_files_it_lacks(tmp_path, trained,
+                                                                           capsys):
+    targets = tmp_path / "targets.npz"
+    np.savez(targets, shapes=foreign_shapes(2, seed=2)[0])
+    assert main(["finetune", "--model", str(targets), "--shapes", str(targets)]) == 2
+    assert capsys.readouterr().err.startswith("dlo finetune: error: --model: ")
+    info = dict(trained.info)
+    trained.info = {**info, "data": ["data/gone.npz", "data/gone-too.npz"]}
+    try:
+        trained.save(tmp_path / "model.pt")
+    finally:
+        trained.info = info
+    assert main(["finetune", "--model", str(tmp_path / "model.pt"), "--shapes",
+                 str(targets)]) == 2
+    assert ("the training data the model records (data/gone.npz, data/gone-too.npz) is not "
+            "here") in capsys.readouterr().err
 
 
 @pytest.mark.parametrize("recorded", ["one path", "a list"])
