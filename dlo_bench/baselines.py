@@ -12,6 +12,7 @@ harness drives like any planner policy. The shipped baselines are in ``dlo_bench
 from __future__ import annotations
 
 import json
+import math
 import os
 import time
 from dataclasses import asdict, dataclass, fields, replace
@@ -123,10 +124,12 @@ class BaselineConfig:
                       "her_n_sampled_goal")
         non_negative_ints(self, "seed", "sac_learning_starts", "checkpoint_every")
         positive(self, "learning_rate")
-        fractions(self, "gamma", "ppo_gae_lambda")
+        fractions(self, "gamma")
+        fractions(self, "ppo_gae_lambda", closed_low=True)
         non_negative(self, "ppo_ent_coef")
-        check_fields(self, ("ppo_log_std_init",),
-                     lambda v: isinstance(v, Real) and not isinstance(v, bool), "a number")
+        check_fields(self, ("learning_rate", "ppo_ent_coef", "ppo_log_std_init"),
+                     lambda v: isinstance(v, Real) and not isinstance(v, bool)
+                     and math.isfinite(v), "a finite number")
         check_fields(self, ("net_arch",), lambda v: isinstance(v, (tuple, list)) and all(
             isinstance(n, int) and not isinstance(n, bool) and n >= 1 for n in v),
             "a list of layer sizes >= 1 (e.g. [256, 256]; [] for none)")

@@ -106,7 +106,8 @@ def format_divergence(summaries: list[dict[str, Any]]) -> str:
                   + [d["by_move"].get(k, math.nan) for k in move_keys]
                   + [d["at_end"], s.get("mean_plan_final_error", math.nan)])
         cells = ["-" if not math.isfinite(v) else f"{100 * v:.2f}" for v in values]
-        table.append([str(s.get("agent", "")), str(s.get("difficulty", "")),
+        difficulty = s.get("difficulty", "")
+        table.append([str(s.get("agent", "")), "-" if difficulty == 0 else str(difficulty),
                       str(d["plans"])] + cells)
     return aligned(table)
 

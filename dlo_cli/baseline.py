@@ -60,8 +60,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 
 #: Printed after Ctrl-C.
-ON_INTERRUPT = ("the run continues from its last checkpoint (OUT/checkpoint.zip, every "
-                "checkpoint_every steps) when the same command is run again with --resume")
+ON_INTERRUPT = ("the run continues from its last checkpoint (OUT/checkpoint.zip, written every "
+                "checkpoint_every steps, if one was) when the same command is run again with "
+                "--resume")
 
 #: ``BaselineConfig`` fields with a flag of their own: ``--set`` leaves them to it, so the flag's
 #: checks always apply.

@@ -69,6 +69,8 @@ def run(args: argparse.Namespace) -> int:
         writable_folder(args.root, "--root")
     check_absent(planned, args.root)
     written = []
+    if args.transitions is not None:  # first: its replay check is the one step that can fail
+        written.extend(export_transitions(args.transitions, name=args.name, root=args.root))
     if not args.no_demonstrations:
         for env_id in args.env:
             for suite in args.suite:
@@ -79,8 +81,6 @@ def run(args: argparse.Namespace) -> int:
                         progress=lambda done, _, bar=bar: bar.update(done)))
                 finally:
                     bar.close()
-    if args.transitions is not None:
-        written.extend(export_transitions(args.transitions, name=args.name, root=args.root))
     for d in written:
         replay = f", replayed within {d.replay_error:.1e} m" if d.replay_error else ""
         print(f"{d.dataset_id}: {d.episodes} episodes, {d.steps} steps, {d.solved} end "

@@ -61,8 +61,8 @@ def run(args: argparse.Namespace) -> int:
         raise ValueError("--data is required: the model does not record its training data file")
     missing = [p for p in data_path if not os.path.exists(p)]
     if missing and not args.data:
-        raise ValueError(f"--data is required: the training data the model records "
-                         f"({', '.join(data_path)}) is not here; give those shapes, or the "
+        raise ValueError(f"--data is required: training data the model records "
+                         f"({', '.join(missing)}) is not here; give those shapes, or the "
                          "shapes it should keep representing")
     train_shapes, _ = load_labelled_shapes(data_path, name="--data")
     heldout_path = args.heldout or recorded("heldout")

@@ -297,18 +297,21 @@ def add_planner_flags(parser: argparse.ArgumentParser) -> None:
 
 def device_type(text: str) -> str:
     """An argparse type: a torch device this machine has: ``auto`` (CUDA when available),
-    ``cpu``, ``cuda`` or ``cuda:N``."""
+    ``cpu``, ``cuda``, ``cuda:N`` or ``mps``."""
     if text in ("auto", "cpu"):
         return text  # no torch import for the defaults
     import torch
 
-    expected = f"expected auto, cpu, cuda or cuda:N, got {text!r}"
+    expected = f"expected auto, cpu, cuda, cuda:N or mps, got {text!r}"
     try:
         device = torch.device(text)
     except (RuntimeError, TypeError):
         raise argparse.ArgumentTypeError(expected) from None
+    if device.type == "mps" and torch.backends.mps.is_available():
+        return text
     if device.type != "cuda":
-        raise argparse.ArgumentTypeError(expected)
+        raise argparse.ArgumentTypeError(
+            expected if device.type != "mps" else f"{text!r}: this PyTorch sees no MPS device")
     if not torch.cuda.is_available():
         raise argparse.ArgumentTypeError(f"{text!r}: this PyTorch sees no CUDA device "
                                          "(torch.cuda.is_available() is False); use cpu or auto")
@@ -321,8 +324,8 @@ def device_type(text: str) -> str:
 def add_device(parser: argparse.ArgumentParser, default: str = "auto") -> None:
     """``--device``: the torch device of training or inference."""
     parser.add_argument("--device", type=device_type, default=default,
-                        help=f"torch device: auto (CUDA when available), cpu, cuda or cuda:N "
-                             f"(default {default})")
+                        help=f"torch device: auto (CUDA when available), cpu, cuda, cuda:N "
+                             f"or mps (default {default})")
 
 
 def add_threads(parser: argparse.ArgumentParser, default: int | None = 1) -> None:

@@ -31,7 +31,7 @@ STAGE_FLAGS = {
 SHAPE_DEFAULTS = {"minutes": 30.0, "report_size": 2000}
 #: Printed after Ctrl-C.
 ON_INTERRUPT = ("the same command, run again, continues from the last checkpoint in --out "
-                "(OUT/checkpoint.pt, written at every evaluation)")
+                "(written at every evaluation)")
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:

@@ -265,7 +265,7 @@ def at_segment_length(shape: np.ndarray, segment: float) -> np.ndarray:
     """``shape`` ``(n, 2)`` as a cord whose every segment is ``segment`` long: its segment
     directions laid out from its head, shifted back onto the table where the result would
     poke over the rim (float64). What ``Cord.reset`` starts from: a shape whose segments are
-    already ``segment`` long, on the table, keeps its head bit for bit."""
+    already ``segment`` long, laid out within the table, keeps its head bit for bit."""
     shape = np.asarray(shape, dtype=np.float64)
     steps = np.diff(shape, axis=0)
     return onto_table(shape_from_headings(np.arctan2(steps[:, 1], steps[:, 0]), segment,

@@ -40,7 +40,7 @@ from typing import Any
 import gymnasium as gym
 import numpy as np
 
-from dlo_env.cord import PEG_RADIUS, CordParams
+from dlo_env.cord import MAX_PEGS, PEG_RADIUS, CordParams
 from dlo_env.dataset.transitions import GRASP_NAMES, load_transitions
 from dlo_env.envs import ENVIRONMENTS
 from dlo_env.shapes import error
@@ -54,7 +54,7 @@ INFO_KEYS = ("is_success", "error", "max_error")
 #: Largest ``error`` (metres) between a replayed transition and the file's that is accepted.
 REPLAY_TOLERANCE = 1e-3
 #: What a transition dataset's ``name`` may hold (it becomes part of a Minari id).
-NAME_PATTERN = re.compile(r"[A-Za-z0-9_.]+(-[A-Za-z0-9_.]+)*")
+NAME_PATTERN = re.compile(r"[A-Za-z0-9_]+(-[A-Za-z0-9_]+)*")
 
 
 @dataclass(frozen=True)
@@ -224,7 +224,7 @@ def transitions_id(env_id: str, name: str = "transitions", version: int = 0) -> 
         raise ValueError(f"env_id must be one of {tuple(ENVIRONMENTS)}, got {env_id!r}")
     if not isinstance(name, str) or not NAME_PATTERN.fullmatch(name) or re.search(
             r"-v\d+$", name):
-        raise ValueError("name must be letters, digits, '_', '.' and inner '-' (not ending in "
+        raise ValueError("name must be letters, digits, '_' and inner '-' (not ending in "
                          f"-vN: Minari adds the version), got {name!r}")
     return f"{NAMESPACE}/{ENVIRONMENTS[env_id][1]}/{name}-v{version}"
 
@@ -254,6 +254,9 @@ def _default_cord_transitions(path: str | os.PathLike[str]) -> Any:
     if data.one_cord(f"path {str(path)!r}") != CordParams():
         raise ValueError(f"path {str(path)!r} was collected on another cord than the "
                          "environments' default; only default-cord transitions are exported")
+    if data.pegs.shape[1] > MAX_PEGS:
+        raise ValueError(f"path {str(path)!r} has {data.pegs.shape[1]} peg slots, more than an "
+                         f"environment observes ({MAX_PEGS})")
     return data
 
 

@@ -453,6 +453,7 @@ class CordGoalEnv(gym.Env[dict[str, np.ndarray], np.ndarray]):
         if len(task.pegs) and task.peg_radius != self.peg_radius:
             raise ValueError(f"options['task'] was made with peg_radius {task.peg_radius}, "
                              f"this environment uses {self.peg_radius}")
+        check_pegs(task.pegs, "options['task'].pegs", radius=self.peg_radius)
         for name in ("start", "goal"):
             validate_shape(getattr(task, name), n_points=p.n_points, length=p.length,
                            name=f"options['task'].{name}")

@@ -93,7 +93,8 @@ def test_device_takes_what_this_machine_has(capsys):
     assert _parse("baseline", "--algo", "ppo", "--device", "cpu").device == "cpu"
     for command in (["train", "--data", "d.npz"], ["finetune"], ["baseline", "--algo", "ppo"]):
         assert main([*command, "--device", "tpu"]) == 2
-        assert "--device: expected auto, cpu, cuda or cuda:N, got 'tpu'" in capsys.readouterr().err
+        err = capsys.readouterr().err
+        assert "--device: expected auto, cpu, cuda, cuda:N or mps, got 'tpu'" in err
         if not torch.cuda.is_available():
             assert main([*command, "--device", "cuda"]) == 2
             assert "this PyTorch sees no CUDA device" in capsys.readouterr().err

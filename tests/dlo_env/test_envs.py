@@ -306,11 +306,16 @@ def test_a_start_of_short_segments_at_the_rim_starts_on_the_table():
 @pytest.mark.parametrize("options", [
     {"start": straight(), "goal": straight(0.2), "pegs": [[0.99, 0.0]]},  # peg over the rim
     {"start": straight(), "goal": straight(0.2), "pegs": [[0.0, 0.01]]},  # start on a peg
+    "task with a peg over the rim",
 ])
 def test_a_refused_reset_leaves_the_episode_as_it_was(options):
+    from dataclasses import replace
+
+    if options == "task with a peg over the rim":
+        options = {"task": replace(make_task(5, 1), pegs=np.array([[0.99, 0.0]], np.float32))}
     env = gym.make(ENDPOINT, max_pegs=1)
     obs, info = env.reset(seed=3)
-    with pytest.raises(ValueError, match="options\\['(pegs|start)'\\]"):
+    with pytest.raises(ValueError, match="options\\['(pegs|start|task)'\\]"):
         env.reset(options=options)
     assert env.unwrapped.task is info["task"]
     assert np.array_equal(env.unwrapped.goal.reshape(-1), obs["desired_goal"])

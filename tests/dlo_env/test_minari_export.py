@@ -144,6 +144,8 @@ def test_the_command_refuses_what_it_cannot_write_before_it_records_an_episode(t
             (["--suite", "linear-1", "--transitions", str(text)],
              f"--transitions: '{text}' is not a readable .npz transition dataset (corrupt"),
             (["--suite", "linear-1", "--transitions", str(text), "--name", "a/b"], "--name: "),
+            (["--suite", "linear-1", "--transitions", str(text), "--name", "my.data"],
+             "--name: "),
             (["--root", str(text)], "--root must be a folder, got the file")):
         argv = ["export-minari", "--root", str(tmp_path), "--env", ENDPOINT, "--limit", "1",
                 *argv]

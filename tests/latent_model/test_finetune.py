@@ -102,7 +102,7 @@ def test_dlo_finetune_names_the_model_flag_and_the_recorded_files_it_lacks(tmp_p
         trained.info = info
     assert main(["finetune", "--model", str(tmp_path / "model.pt"), "--shapes",
                  str(targets)]) == 2
-    assert ("the training data the model records (data/gone.npz, data/gone-too.npz) is not "
+    assert ("training data the model records (data/gone.npz, data/gone-too.npz) is not "
             "here") in capsys.readouterr().err
 
 
