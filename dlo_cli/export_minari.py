@@ -43,10 +43,10 @@ def run(args: argparse.Namespace) -> int:
     from dlo_bench.progress import progress_bar
     from dlo_env.dataset.minari_export import (
         check_absent,
+        check_name,
         demonstrations_id,
         export_demonstrations,
         export_transitions,
-        transitions_id,
         transitions_ids,
     )
 
@@ -58,7 +58,7 @@ def run(args: argparse.Namespace) -> int:
         demonstrations_id(env_id, suite) for env_id in args.env for suite in args.suite]
     if args.transitions is not None:
         try:
-            transitions_id(args.env[0], args.name)
+            check_name(args.name)
         except ValueError as exc:
             raise ValueError(f"--name: {exc}") from None
         try:

@@ -218,15 +218,20 @@ def check_absent(dataset_ids: Iterable[str], root: str | os.PathLike[str] | None
                              f"{dataset_id}`) or choose another root")
 
 
-def transitions_id(env_id: str, name: str = "transitions", version: int = 0) -> str:
-    """Minari id of the transition data of ``env_id`` exported under ``name``."""
-    if env_id not in ENVIRONMENTS:
-        raise ValueError(f"env_id must be one of {tuple(ENVIRONMENTS)}, got {env_id!r}")
+def check_name(name: object) -> str:
+    """``name`` if it can be a dataset name inside a Minari id, else a one-line ``ValueError``."""
     if not isinstance(name, str) or not NAME_PATTERN.fullmatch(name) or re.search(
             r"-v\d+$", name):
         raise ValueError("name must be letters, digits, '_' and inner '-' (not ending in "
                          f"-vN: Minari adds the version), got {name!r}")
-    return f"{NAMESPACE}/{ENVIRONMENTS[env_id][1]}/{name}-v{version}"
+    return name
+
+
+def transitions_id(env_id: str, name: str = "transitions", version: int = 0) -> str:
+    """Minari id of the transition data of ``env_id`` exported under ``name``."""
+    if env_id not in ENVIRONMENTS:
+        raise ValueError(f"env_id must be one of {tuple(ENVIRONMENTS)}, got {env_id!r}")
+    return f"{NAMESPACE}/{ENVIRONMENTS[env_id][1]}/{check_name(name)}-v{version}"
 
 
 def transitions_ids(path: str | os.PathLike[str], name: str = "transitions") -> list[str]:
