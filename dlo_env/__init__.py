@@ -1,7 +1,10 @@
 """dlo_env: a pymunk cord on a table, as goal-conditioned Gymnasium environments.
 
-Importing the package registers ``dlo_env/DLOEndpoint-v0`` and ``dlo_env/DLODualEndpoint-v0``
-(Gymnasium 1.x ignores entry-point plugins, so registration happens here).
+Importing the package registers ``dlo_env/DLOEndpoint-v0`` and ``dlo_env/DLODualEndpoint-v0``,
+and their learned twins ``dlo_env/DLOEndpointSurrogate-v0`` and
+``dlo_env/DLODualEndpointSurrogate-v0`` (which need torch; ``gym.make_vec(...,
+vectorization_mode="vector_entry_point")`` steps a whole batch in one call). Gymnasium 1.x
+ignores entry-point plugins, so registration happens here.
 """
 
 from __future__ import annotations
@@ -49,3 +52,12 @@ _ENVS = {
 for _id, _entry in _ENVS.items():
     if _id not in registry:
         register(id=_id, entry_point=_entry, max_episode_steps=100)
+_SURROGATES = {
+    "dlo_env/DLOEndpointSurrogate-v0": "DLOEndpointSurrogate",
+    "dlo_env/DLODualEndpointSurrogate-v0": "DLODualEndpointSurrogate",
+}
+for _id, _name in _SURROGATES.items():
+    if _id not in registry:
+        register(id=_id, entry_point=f"dlo_env.envs.surrogate:{_name}Env",
+                 vector_entry_point=f"dlo_env.envs.surrogate:{_name}VectorEnv",
+                 max_episode_steps=100)

@@ -313,6 +313,53 @@ def random_cord_shape(
     return _first_placed(rng, turns, segment, margin, threshold, "a cord shape")
 
 
+def random_cord_shapes(
+    rng: np.random.Generator,
+    count: int,
+    *,
+    n_points: int = 20,
+    length: float = 1.0,
+    margin: float = 0.1,
+    max_curvature: float = 9.0,
+) -> np.ndarray:
+    """``count`` shapes from :func:`random_cord_shape`'s distribution, drawn as one batch.
+
+    The same curvature series, rotation and placement, from whole-batch draws (so not the
+    same shapes as ``count`` calls of ``random_cord_shape`` with that generator). With the
+    default curvature bound every joint turns less than the cord-like filter allows, so no
+    shape is redrawn for it; a shape that does not fit on the table with ``margin`` is.
+
+    Returns:
+        float32 ``(count, n_points, 2)``.
+    """
+    segment = length / (n_points - 1)
+    s = (np.arange(n_points - 2) + 0.5) / (n_points - 2)
+    modes = np.arange(4)
+    half = TABLE_HALF - margin
+    out = np.empty((count, n_points, 2), dtype=np.float32)
+    todo = np.arange(count)
+    for _ in range(1000):
+        if not len(todo):
+            return out
+        k = len(todo)
+        scale = rng.choice([0.5, 2.0, 5.0], size=(k, 1))
+        coef = rng.normal(0.0, 1.0, size=(k, 4)) * scale / (1.0 + modes)
+        phase = rng.uniform(0.0, 2.0 * np.pi, size=(k, 4))
+        kappa = (coef[:, None] * np.cos(np.pi * modes * s[:, None] + phase[:, None])).sum(-1)
+        turns = np.clip(kappa, -max_curvature, max_curvature) * segment
+        headings = rng.uniform(-np.pi, np.pi, size=(k, 1)) + np.concatenate(
+            [np.zeros((k, 1)), np.cumsum(turns, axis=1)], axis=1)
+        shape = shape_from_headings(headings, segment, np.zeros((k, 2)))
+        shape -= shape.mean(axis=1, keepdims=True)
+        room_lo, room_hi = -half - shape.min(axis=1), half - shape.max(axis=1)
+        ok = (room_lo <= room_hi).all(axis=1) & is_cord_like(shape)
+        place = rng.uniform(size=(k, 2))
+        shape += (room_lo + place * (room_hi - room_lo))[:, None]
+        out[todo[ok]] = shape[ok]
+        todo = todo[~ok]
+    raise RuntimeError(f"could not draw cord shapes that fit on the table with margin {margin}")
+
+
 def _check_threshold(threshold: float) -> None:
     """The cord-like filter's least cosine must be in ``[-1, 1)``."""
     if not -1.0 <= threshold < 1.0:

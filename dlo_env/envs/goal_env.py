@@ -14,10 +14,8 @@ from typing import Any, ClassVar
 
 import gymnasium as gym
 import numpy as np
-from gymnasium import spaces
 
 from dlo_env.cord import (
-    MAX_PEGS,
     PEG_RADIUS,
     Cord,
     CordParams,
@@ -25,14 +23,11 @@ from dlo_env.cord import (
     check_not_crossing,
     check_pegs,
 )
+from dlo_env.envs.goal_api import GoalReward, check_goal_args, goal_metrics, goal_spaces
 from dlo_env.randomize import check_params, check_randomize, draw_params
 from dlo_env.shapes import (
     SUCCESS_METRICS,
-    TABLE_HALF,
     at_segment_length,
-    bead_share,
-    error,
-    max_error,
     validate_shape,
 )
 from dlo_env.tasks import (
@@ -51,11 +46,10 @@ from dlo_env.tasks import (
 )
 
 _OPTIONS = ("difficulty", "start", "goal", "task", "params", "pegs")
-_REWARD_TYPES = ("dense", "sparse")
 
 
 
-class CordGoalEnv(gym.Env[dict[str, np.ndarray], np.ndarray]):
+class CordGoalEnv(GoalReward, gym.Env[dict[str, np.ndarray], np.ndarray]):
     """Move the grasped end(s) of a cord on a table until its shape matches a goal shape.
 
     See :class:`dlo_env.envs.endpoint.DLOEndpointEnv` for the full documentation.
@@ -104,25 +98,10 @@ class CordGoalEnv(gym.Env[dict[str, np.ndarray], np.ndarray]):
     ) -> None:
         if params is not None and not isinstance(params, CordParams):
             raise ValueError(f"params must be a CordParams or None, got {type(params).__name__}")
-        if not (isinstance(max_step, (int, float)) and np.isfinite(max_step) and max_step > 0):
-            raise ValueError(f"max_step must be a finite number > 0 (metres), got {max_step!r}")
-        if reward_type not in _REWARD_TYPES:
-            raise ValueError(f"reward_type must be one of {_REWARD_TYPES}, got {reward_type!r}")
-        if not (isinstance(success_threshold, (int, float)) and success_threshold > 0):
-            raise ValueError(f"success_threshold must be a number > 0, got {success_threshold!r}")
-        if success_metric not in SUCCESS_METRICS:
-            raise ValueError(f"success_metric must be one of {tuple(SUCCESS_METRICS)}, got "
-                             f"{success_metric!r}")
-        if not isinstance(judge_at_rest, (bool, np.bool_)):
-            raise ValueError(f"judge_at_rest must be True or False, got {judge_at_rest!r}")
-        if not (isinstance(max_pegs, (int, np.integer)) and not isinstance(max_pegs, bool)
-                and 0 <= max_pegs <= MAX_PEGS):
-            raise ValueError(f"max_pegs must be an int from 0 to {MAX_PEGS}, got {max_pegs!r}")
-        if render_mode is not None and render_mode not in self.metadata["render_modes"]:
-            raise ValueError(
-                f"render_mode must be None or one of {self.metadata['render_modes']}, "
-                f"got {render_mode!r}"
-            )
+        check_goal_args(max_step=max_step, reward_type=reward_type,
+                        success_threshold=success_threshold, success_metric=success_metric,
+                        judge_at_rest=judge_at_rest, max_pegs=max_pegs, render_mode=render_mode,
+                        render_modes=self.metadata["render_modes"])
         self.params = params if params is not None else CordParams()
         self.max_step = float(max_step)
         self.reward_type = reward_type
@@ -139,75 +118,14 @@ class CordGoalEnv(gym.Env[dict[str, np.ndarray], np.ndarray]):
         self.cord = Cord(self.params, grasp=self.grasp, peg_radius=peg_radius)
         self.peg_radius = self.cord.peg_radius
         self._ends = GRASP_ENDS[self.grasp]
-        n = self.params.n_points
-        h = np.float32(TABLE_HALF)
-        self.action_space = spaces.Box(-1.0, 1.0, shape=(2 * len(self._ends),), dtype=np.float32)
-        # The cord and grippers, then (with pegs) max_pegs centres and their mask.
-        size = 2 * n + 2 * len(self._ends)
-        low = np.full(size + 3 * self.max_pegs, -h, dtype=np.float32)
-        high = np.full(size + 3 * self.max_pegs, h, dtype=np.float32)
-        low[size + 2 * self.max_pegs:], high[size + 2 * self.max_pegs:] = 0.0, 1.0
         self._pegs_obs = np.zeros(3 * self.max_pegs, dtype=np.float32)
-        self.observation_space = spaces.Dict(
-            {
-                "observation": spaces.Box(low, high, dtype=np.float32),
-                "achieved_goal": spaces.Box(-h, h, shape=(2 * n,), dtype=np.float32),
-                "desired_goal": spaces.Box(-h, h, shape=(2 * n,), dtype=np.float32),
-            }
-        )
+        self.action_space, self.observation_space = goal_spaces(
+            self.params.n_points, len(self._ends), self.max_pegs)
         #: The current task (``None`` when the goal was given without reference moves).
         self.task: Task | None = None
         self.goal: np.ndarray | None = None
         self._goal_flat: np.ndarray | None = None
         self._renderer = None
-
-    # ----------------------------------------------------------------- goal API
-    def _pairs(self, achieved_goal: np.ndarray, desired_goal: np.ndarray) -> tuple:
-        n2 = 2 * self.params.n_points
-        a, d = np.asarray(achieved_goal), np.asarray(desired_goal)
-        for name, x in (("achieved_goal", a), ("desired_goal", d)):
-            if x.ndim < 1 or x.shape[-1] != n2:
-                raise ValueError(f"{name} must have shape (..., {n2}), got {x.shape}")
-        return a.reshape(*a.shape[:-1], n2 // 2, 2), d.reshape(*d.shape[:-1], n2 // 2, 2)
-
-    def compute_reward(
-        self, achieved_goal: np.ndarray, desired_goal: np.ndarray, info: Any
-    ) -> np.ndarray | float:
-        """Reward of reaching ``achieved_goal`` when the goal is ``desired_goal``.
-
-        Works on batches (any leading dimensions), so hindsight relabelling gives exactly the
-        rewards ``step`` would have given; ``info`` is not used.
-
-        Args:
-            achieved_goal: ``(..., 2n)`` flat shapes, metres.
-            desired_goal: ``(..., 2n)`` flat goal shapes.
-            info: Ignored (a dict, or a batch of them).
-
-        Returns:
-            ``-error`` (dense) or ``-1.0``/``0.0`` (sparse), a float for one pair and an array
-            of the leading shape for a batch.
-        """
-        dist = np.asarray(self._distance(*self._pairs(achieved_goal, desired_goal)))
-        if self.reward_type == "dense":
-            reward = -dist
-        else:
-            reward = -(dist > self.success_threshold).astype(np.float64)
-        return float(reward) if reward.ndim == 0 else reward
-
-    def compute_terminated(
-        self, achieved_goal: np.ndarray, desired_goal: np.ndarray, info: Any
-    ) -> np.ndarray | bool:
-        """Whether ``achieved_goal`` solves ``desired_goal`` (batched like ``compute_reward``)."""
-        pairs = self._pairs(achieved_goal, desired_goal)
-        ok = np.asarray(self._distance(*pairs)) <= self.success_threshold
-        return bool(ok) if ok.ndim == 0 else ok
-
-    def compute_truncated(
-        self, achieved_goal: np.ndarray, desired_goal: np.ndarray, info: Any
-    ) -> np.ndarray | bool:
-        """Always False: episodes are truncated by the registered time limit only."""
-        shape = np.shape(achieved_goal)[:-1]
-        return False if shape == () else np.zeros(shape, dtype=bool)
 
     # ----------------------------------------------------------------- gym API
     def reset(
@@ -307,20 +225,10 @@ class CordGoalEnv(gym.Env[dict[str, np.ndarray], np.ndarray]):
         if cord is not self.cord:
             wait_for_rest(cord, self.max_step)
         shape = cord.shape
-        metrics = self._metrics(shape, self._goal_flat.reshape(-1, 2))
+        metrics = goal_metrics(shape, self._goal_flat.reshape(-1, 2))
         metrics["shape"] = np.asarray(shape, dtype=np.float32).copy()
         metrics["at_rest"] = at_rest(cord)
         return metrics
-
-    @staticmethod
-    def _metrics(shape: np.ndarray, goal: np.ndarray) -> dict[str, Any]:
-        err = error(shape, goal)
-        return {
-            "error": err,
-            "max_error": max_error(shape, goal),
-            "direction_free_error": min(err, error(shape, goal[::-1])),
-            "bead_share": bead_share(shape, goal),
-        }
 
     def _observe(self, state: tuple[np.ndarray, float] | None = None
                  ) -> tuple[dict[str, np.ndarray], dict[str, Any]]:
@@ -337,7 +245,7 @@ class CordGoalEnv(gym.Env[dict[str, np.ndarray], np.ndarray]):
         observation[size:] = self._pegs_obs
         goal = self._goal_flat
         goal_points = goal.reshape(-1, 2)
-        metrics = self._metrics(shape, goal_points)
+        metrics = goal_metrics(shape, goal_points)
         resting = speed < REST_SPEED
         solved = metrics[self.success_metric] <= self.success_threshold
         info = {

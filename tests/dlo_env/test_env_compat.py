@@ -12,6 +12,8 @@ from gymnasium.utils.env_checker import check_env as gymnasium_check_env
 import dlo_env  # noqa: F401  (registers the environments)
 
 IDS = ["dlo_env/DLOEndpoint-v0", "dlo_env/DLODualEndpoint-v0"]
+#: The learned twins, checked by the same checkers (they need torch).
+SURROGATE_IDS = ["dlo_env/DLOEndpointSurrogate-v0", "dlo_env/DLODualEndpointSurrogate-v0"]
 
 
 def warnings_of(check, *args, **kwargs) -> list[str]:
@@ -22,7 +24,7 @@ def warnings_of(check, *args, **kwargs) -> list[str]:
     return [f"{w.category.__name__}: {w.message}" for w in caught]
 
 
-@pytest.mark.parametrize("env_id", IDS)
+@pytest.mark.parametrize("env_id", IDS + SURROGATE_IDS)
 @pytest.mark.parametrize("render_mode", [None, "rgb_array"])
 def test_gymnasium_check_env_passes_without_warnings(env_id, render_mode):
     # Gymnasium's checker wants the bare environment (it warns about wrappers otherwise).
@@ -30,7 +32,7 @@ def test_gymnasium_check_env_passes_without_warnings(env_id, render_mode):
     assert warnings_of(gymnasium_check_env, env, skip_render_check=render_mode is None) == []
 
 
-@pytest.mark.parametrize("env_id", IDS)
+@pytest.mark.parametrize("env_id", IDS + SURROGATE_IDS)
 def test_stable_baselines3_check_env_passes_without_warnings(env_id):
     sb3_checker = pytest.importorskip("stable_baselines3.common.env_checker")
     # SB3 2.x looks up ``compute_reward`` directly on the object it is given, which Gymnasium
