@@ -125,11 +125,12 @@ class SurrogateCords:
         device: Torch device (``"auto"``: CUDA when available).
         params: The cord (None: the model's); a model of one cord takes only its own.
         max_step: Gripper displacement of an action of 1.0, metres.
+        merge_runs: Equal consecutive actions are one straight move (see ``step``).
     """
 
     def __init__(self, count: int, grasp: str, model: TransitionModel | str | None,
-                 device: str | torch.device, params: CordParams | None, max_step: float
-                 ) -> None:
+                 device: str | torch.device, params: CordParams | None, max_step: float,
+                 merge_runs: bool = True) -> None:
         self.model = load_model(model, device)
         self.params = params if params is not None else self.model.cord_params
         self.dynamics = CordDynamics(self.model, grasp, self.params)
@@ -142,19 +143,57 @@ class SurrogateCords:
         self.goals = np.zeros((count, n, 2), dtype=np.float32)
         #: ``goals`` on the device.
         self.goals_torch = torch.zeros((count, n, 2), device=self.device)
+        #: Whether an action equal to the previous one continues its straight move.
+        self.merge_runs = bool(merge_runs)
+        width = 2 * len(self.ends)
+        self._running = np.zeros(count, dtype=bool)  # a straight move is under way
+        self._last = np.zeros((count, width), dtype=np.float32)  # its action
+        self._travel = np.zeros((count, width), dtype=np.float32)  # its displacement so far
+        self._anchor = torch.zeros_like(self.shapes)  # the shape it began in
 
     # ------------------------------------------------------------- stepping
+    def start(self, index: np.ndarray, starts: np.ndarray) -> None:
+        """Put the cords ``index`` at rest in ``starts`` ``(k, n, 2)``; no move is under way."""
+        shapes = torch.from_numpy(np.ascontiguousarray(starts, dtype=np.float32)).to(
+            self.device)
+        if len(index) == len(self.shapes):
+            self.shapes = shapes.clone()
+        else:
+            self.shapes[torch.from_numpy(index).to(self.device)] = shapes
+        self._running[index] = False
+
     def step(self, actions: np.ndarray, spread: bool = False) -> np.ndarray | None:
         """Move every cord's held end(s) by ``clip(actions, -1, 1) * max_step``; with
-        ``spread``, return the ensemble's spread of each prediction (metres)."""
-        d = torch.from_numpy(np.clip(actions, -1.0, 1.0).astype(np.float32) * self.max_step)
+        ``spread``, return the ensemble's spread of each prediction (metres).
+
+        With ``merge_runs``, an action equal to the cord's previous one continues that
+        straight move: the prediction is the model's for the whole move so far, from the shape
+        it began in (the move the model was trained on: equal actions, then rest). A zero
+        action leaves a cord where it is and ends its move.
+        """
+        a = np.clip(actions, -1.0, 1.0).astype(np.float32)
+        d = a * np.float32(self.max_step)
+        if self.merge_runs:
+            same = self._running & (a == self._last).all(axis=1)
+            if not same.all():
+                fresh = torch.from_numpy(~same).to(self.device)
+                self._anchor = torch.where(fresh[:, None, None], self.shapes, self._anchor)
+                self._travel[~same] = 0.0
+            self._travel += d
+            self._last = a
+            self._running = a.any(axis=1)
+            start, d = self._anchor, self._travel
+        else:
+            start = self.shapes
+        moves = torch.from_numpy(np.ascontiguousarray(d)).to(self.device)
         with torch.no_grad():
-            out = self.dynamics.step(self.shapes, d.to(self.device), return_std=spread)
-        if spread:
-            self.shapes, std = out
-            return std.cpu().numpy()
-        self.shapes = out
-        return None
+            out = self.dynamics.step(start, moves, return_std=spread)
+        shapes, std = out if spread else (out, None)
+        if self.merge_runs:  # a zero action: the cord stays (the model would too, from the
+            still = torch.from_numpy(~self._running).to(self.device)  # move's start)
+            shapes = torch.where(still[:, None, None], self.shapes, shapes)
+        self.shapes = shapes
+        return None if std is None else std.cpu().numpy()
 
     def set_goals(self, index: np.ndarray, goals: np.ndarray) -> None:
         """Give the cords ``index`` these goals ``(k, n, 2)``."""
@@ -370,7 +409,7 @@ class _SurrogateArgs:
     def _setup(self, count: int, *, model: Any, device: str, params: CordParams | None,
                max_step: float, reward_type: str, success_threshold: float,
                success_metric: str, judge_at_rest: bool, difficulty: int, max_pegs: int,
-               uncertainty_penalty: float, render_mode: str | None) -> None:
+               uncertainty_penalty: float, merge_runs: bool, render_mode: str | None) -> None:
         if params is not None and not isinstance(params, CordParams):
             raise ValueError(f"params must be a CordParams or None, got {type(params).__name__}")
         check_goal_args(max_step=max_step, reward_type=reward_type,
@@ -384,7 +423,10 @@ class _SurrogateArgs:
                 uncertainty_penalty, bool) and 0 <= uncertainty_penalty < float("inf")):
             raise ValueError(f"uncertainty_penalty must be a finite number >= 0, got "
                              f"{uncertainty_penalty!r}")
-        self.cords = SurrogateCords(count, self.grasp, model, device, params, max_step)
+        if not isinstance(merge_runs, (bool, np.bool_)):
+            raise ValueError(f"merge_runs must be True or False, got {merge_runs!r}")
+        self.cords = SurrogateCords(count, self.grasp, model, device, params, max_step,
+                                    merge_runs)
         self.params = self.cords.params
         self.max_step = float(max_step)
         self.reward_type = reward_type
@@ -503,6 +545,10 @@ class SurrogateCordVectorEnv(_SurrogateArgs, GoalReward, VectorEnv):
             observation in ``info["final_obs"]``, as SB3's VecEnv expects).
         uncertainty_penalty: Reward penalty per metre of ensemble spread (0: none, and the
             ensemble is not run).
+        merge_runs: An action equal to the previous one continues its straight move, and the
+            cord is predicted after the whole move from where it began, as the model was
+            trained (default). False: every step is a move of its own from the last shape
+            (errors compose over a long move's many small steps).
         params, max_step, reward_type, success_threshold, success_metric, judge_at_rest,
         difficulty, max_pegs, render_mode: As the pymunk environment's.
     """
@@ -516,7 +562,8 @@ class SurrogateCordVectorEnv(_SurrogateArgs, GoalReward, VectorEnv):
                  success_threshold: float = SUCCESS_THRESHOLD, success_metric: str = "error",
                  judge_at_rest: bool = True, difficulty: int = 1, max_pegs: int = 0,
                  max_episode_steps: int = 100, autoreset_mode: str = "next_step",
-                 uncertainty_penalty: float = 0.0, render_mode: str | None = None) -> None:
+                 uncertainty_penalty: float = 0.0, merge_runs: bool = True,
+                 render_mode: str | None = None) -> None:
         if not (isinstance(num_envs, (int, np.integer)) and not isinstance(num_envs, bool)
                 and num_envs >= 1):
             raise ValueError(f"num_envs must be an int >= 1, got {num_envs!r}")
@@ -531,7 +578,8 @@ class SurrogateCordVectorEnv(_SurrogateArgs, GoalReward, VectorEnv):
                     max_step=max_step, reward_type=reward_type,
                     success_threshold=success_threshold, success_metric=success_metric,
                     judge_at_rest=judge_at_rest, difficulty=difficulty, max_pegs=max_pegs,
-                    uncertainty_penalty=uncertainty_penalty, render_mode=render_mode)
+                    uncertainty_penalty=uncertainty_penalty, merge_runs=merge_runs,
+                    render_mode=render_mode)
         self.num_envs = int(num_envs)
         self.max_episode_steps = int(max_episode_steps)
         self.autoreset_mode = _AUTORESET[mode]
@@ -562,11 +610,7 @@ class SurrogateCordVectorEnv(_SurrogateArgs, GoalReward, VectorEnv):
         return taken
 
     def _begin(self, index: np.ndarray, tasks: TaskBatch) -> None:
-        shapes = torch.from_numpy(np.ascontiguousarray(tasks.starts)).to(self.cords.device)
-        if len(index) == self.num_envs:
-            self.cords.shapes = shapes.clone()
-        else:
-            self.cords.shapes[torch.from_numpy(index).to(self.cords.device)] = shapes
+        self.cords.start(index, tasks.starts)
         self.cords.set_goals(index, tasks.goals)
         self.steps[index] = 0
 
@@ -697,12 +741,13 @@ class SurrogateCordEnv(_SurrogateArgs, GoalReward, gym.Env[dict[str, np.ndarray]
                  reward_type: str = "dense", success_threshold: float = SUCCESS_THRESHOLD,
                  success_metric: str = "error", judge_at_rest: bool = True,
                  difficulty: int = 1, max_pegs: int = 0, uncertainty_penalty: float = 0.0,
-                 render_mode: str | None = None) -> None:
+                 merge_runs: bool = True, render_mode: str | None = None) -> None:
         self._setup(1, model=model, device=device, params=params, max_step=max_step,
                     reward_type=reward_type, success_threshold=success_threshold,
                     success_metric=success_metric, judge_at_rest=judge_at_rest,
                     difficulty=difficulty, max_pegs=max_pegs,
-                    uncertainty_penalty=uncertainty_penalty, render_mode=render_mode)
+                    uncertainty_penalty=uncertainty_penalty, merge_runs=merge_runs,
+                    render_mode=render_mode)
         self.action_space, self.observation_space = goal_spaces(self.params.n_points,
                                                                 len(self.cords.ends))
         self.task: Task | None = None
@@ -715,8 +760,7 @@ class SurrogateCordEnv(_SurrogateArgs, GoalReward, gym.Env[dict[str, np.ndarray]
         super().reset(seed=seed)
         tasks = self.cords.tasks_from_options(dict(options or {}), 1, self.np_random,
                                               self.difficulty, self.success_threshold)
-        self.cords.shapes = torch.from_numpy(np.ascontiguousarray(tasks.starts)).to(
-            self.cords.device)
+        self.cords.start(np.arange(1), tasks.starts)
         self.cords.set_goals(np.arange(1), tasks.goals)
         self.goal = tasks.goals[0].copy()
         self._started = True

@@ -153,6 +153,28 @@ def test_drawn_tasks_replay_their_moves_through_the_model(model):
     assert np.abs(shape - obs["desired_goal"].reshape(20, 2)).max() < 1e-4
 
 
+def test_equal_actions_are_one_straight_move_and_a_zero_action_ends_it(model):
+    env = gym.make(IDS["head"], device="cpu", success_threshold=1e-6).unwrapped
+    obs, _ = env.reset(seed=1)
+    start = obs["achieved_goal"].reshape(20, 2)
+    action = np.array([0.6, -0.8], np.float32)
+    for _ in range(4):
+        obs = env.step(action)[0]
+    whole = model.predict(start, "head", 4 * 0.02 * action)
+    assert np.abs(obs["achieved_goal"].reshape(20, 2) - whole).max() < 1e-4
+    rest = env.step(np.zeros(2, np.float32))[0]["achieved_goal"]
+    assert np.array_equal(rest, obs["achieved_goal"])
+    after = env.step(action)[0]["achieved_goal"].reshape(20, 2)  # a new move from here
+    assert np.abs(after - model.predict(rest.reshape(20, 2), "head", 0.02 * action)).max() < 1e-4
+    separate = gym.make(IDS["head"], device="cpu", merge_runs=False).unwrapped
+    separate.reset(options={"start": start, "goal": start[::-1].copy()})
+    shape = start
+    for _ in range(2):
+        got = separate.step(action)[0]["achieved_goal"]
+        shape = model.predict(shape, "head", 0.02 * action)
+    assert np.abs(got.reshape(20, 2) - shape).max() < 1e-4
+
+
 def test_vector_env_steps_the_batch_like_the_single_env():
     venv = make_vec("head", 4, success_threshold=1e-6)  # no episode ends
     env = gym.make(IDS["head"], device="cpu", success_threshold=1e-6).unwrapped
