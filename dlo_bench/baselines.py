@@ -80,6 +80,12 @@ class BaselineConfig:
             held-out test cords (``draw_train_cord``), which the policy is not told.
         max_pegs: The environment's ``max_pegs``: every episode places 0 to ``max_pegs``
             pegs near its start, observed in ``max_pegs`` slots (0: the empty table).
+        success_threshold: The training environment's success threshold, metres: episodes
+            end, and the sparse reward is 0, within it (the benchmark then scores the agent
+            at 2, 1 and 0.5 cm).
+        surrogate: Train in ``env_id``'s learned twin (``dlo_env.SURROGATE_OF``): ``n_envs``
+            cords stepped in one batched call of the transition model; every training step
+            is then a surrogate step, none a pymunk one. The agent acts in ``env_id``.
     """
 
     algo: str = "ppo"
@@ -107,6 +113,8 @@ class BaselineConfig:
     checkpoint_every: int = 20_000
     cords: str = "fixed"
     max_pegs: int = 0
+    success_threshold: float = 0.02
+    surrogate: bool = False
 
     def __post_init__(self) -> None:
         from dlo_env.cord import MAX_PEGS
@@ -123,7 +131,13 @@ class BaselineConfig:
                       "ppo_epochs", "sac_buffer_size", "sac_batch_size", "sac_gradient_steps",
                       "her_n_sampled_goal")
         non_negative_ints(self, "seed", "sac_learning_starts", "checkpoint_every")
-        positive(self, "learning_rate")
+        positive(self, "learning_rate", "success_threshold")
+        check_fields(self, ("surrogate", "subprocess"), lambda v: isinstance(v, bool),
+                     "True or False")
+        if self.surrogate and (self.cords != "fixed" or self.max_pegs or self.subprocess):
+            raise ValueError("surrogate needs cords='fixed', max_pegs=0 and subprocess=False: "
+                             "the surrogate steps the empty table's default cord in one "
+                             "process")
         fractions(self, "gamma")
         fractions(self, "ppo_gae_lambda", closed_low=True)
         non_negative(self, "ppo_ent_coef")
@@ -211,7 +225,8 @@ def _make_env(config: BaselineConfig, rank: int, monitor_dir: str | None,
 
     import dlo_env  # noqa: F401  (registers the environments in the worker process)
 
-    env = gym.make(config.env_id, reward_type=config.reward_type, max_pegs=config.max_pegs)
+    env = gym.make(config.env_id, reward_type=config.reward_type, max_pegs=config.max_pegs,
+                   success_threshold=config.success_threshold)
     if config.cords == "train":
         env = RandomCords(env, seed=config.seed + 1000 * rank)
     env = RandomDifficulty(env, config.difficulties, seed=config.seed + 1000 * rank)
@@ -230,9 +245,35 @@ def make_vec_env(config: BaselineConfig, monitor_dir: str | None = None,
     """
     from stable_baselines3.common.vec_env import DummyVecEnv, SubprocVecEnv
 
+    if config.surrogate:
+        return _surrogate_vec_env(config, monitor_dir, append)
     factories = [partial(_make_env, config, i, monitor_dir, append)
                  for i in range(config.n_envs)]
     vec = SubprocVecEnv(factories) if config.subprocess else DummyVecEnv(factories)
+    vec.seed(config.seed)
+    return vec
+
+
+def _surrogate_vec_env(config: BaselineConfig, monitor_dir: str | None, append: bool) -> Any:
+    """``config.n_envs`` learned cords as one SB3 ``VecEnv`` (``SB3VecEnv``), monitored."""
+    from stable_baselines3.common.vec_env import VecMonitor
+
+    from dlo_bench.sb3_vec_env import SB3VecEnv
+    from dlo_env import SURROGATE_OF
+
+    if config.env_id not in SURROGATE_OF:
+        raise ValueError(f"surrogate: {config.env_id!r} has no learned twin; one of "
+                         f"{tuple(SURROGATE_OF)}")
+    venv = gym.make_vec(SURROGATE_OF[config.env_id], num_envs=config.n_envs,
+                        vectorization_mode="vector_entry_point", autoreset_mode="same_step",
+                        reward_type=config.reward_type, difficulty=tuple(config.difficulties),
+                        success_threshold=config.success_threshold, device="cpu")
+    path = None if monitor_dir is None else os.path.join(monitor_dir, "0")
+    if path is not None and append:  # VecMonitor has no append: keep the earlier episodes
+        old = Path(path + ".monitor.csv")
+        if old.is_file():
+            old.replace(old.with_name(f"{time.time_ns()}.monitor.csv"))
+    vec = VecMonitor(SB3VecEnv(venv), path, info_keywords=("is_success",))
     vec.seed(config.seed)
     return vec
 
@@ -286,18 +327,14 @@ def _training_callback(total: int, start: int, checkpoint: Path | None, every: i
 
     class _Progress(BaseCallback):
         def _on_training_start(self) -> None:
-            self._bar = None
-            if progress_bar:
-                from tqdm import tqdm
+            from dlo_env.progress import progress_bar as bar
 
-                self._bar = tqdm(total=total, initial=start, unit="step", mininterval=5.0,
-                                 desc="training")
+            self._bar = bar(total, "training", "step", initial=start, enabled=progress_bar)
             self._next = (start // every + 1) * every if every else None
             self._t0, self._n0 = time.perf_counter(), start
 
         def _on_step(self) -> bool:
-            if self._bar is not None:
-                self._bar.update(self.training_env.num_envs)
+            self._bar.update(self.training_env.num_envs)
             if self._next is not None and self.num_timesteps >= self._next:
                 self._next += every
                 if checkpoint is not None:
@@ -307,16 +344,11 @@ def _training_callback(total: int, start: int, checkpoint: Path | None, every: i
                 recent = logs["is_success"][-100:]
                 success = (f"success of the last {recent.size} episodes "
                            f"{float(recent.mean()):.2f}" if recent.size else "no episode ended yet")
-                message = f"step {self.num_timesteps}: {rate:.0f} steps/s, {success}"
-                if self._bar is not None:
-                    self._bar.write(message)
-                else:
-                    print(message, flush=True)
+                self._bar.write(f"step {self.num_timesteps}: {rate:.0f} steps/s, {success}")
             return True
 
         def _on_training_end(self) -> None:
-            if self._bar is not None:
-                self._bar.close()
+            self._bar.close()
 
     return _Progress()
 
@@ -412,6 +444,9 @@ def train_baseline(
         meta_path,
         {"format_version": FORMAT_VERSION, "config": asdict(config),
          "trained_timesteps": int(model.num_timesteps), "train_seconds": previous + seconds,
+         # The sample cost by kind: pymunk steps, and learned-cord (surrogate) steps.
+         "real_env_steps": 0 if config.surrogate else int(model.num_timesteps),
+         "surrogate_steps": int(model.num_timesteps) if config.surrogate else 0,
          "resumed_at": start if resuming else None, "torch_threads": torch.get_num_threads()},
     )
     checkpoint.unlink(missing_ok=True)
@@ -503,5 +538,6 @@ def load_baseline(path: str | os.PathLike, device: str = "cpu", algo: str = "",
     if config.algo == "ppo":
         return PPO.load(model_path, device=device)
     # HER needs an env to rebuild its (empty) buffer; one in-process env is enough to act.
-    env = make_vec_env(replace(config, n_envs=1, subprocess=False, sac_learning_starts=10**9))
+    env = make_vec_env(replace(config, n_envs=1, subprocess=False, surrogate=False,
+                               sac_learning_starts=10**9))
     return SAC.load(model_path, env=env, device=device, buffer_size=1)

@@ -48,7 +48,6 @@ def run(args: argparse.Namespace) -> int:
     t0 = time.perf_counter()
     import gymnasium as gym
     import torch
-    from tqdm import tqdm
 
     import dlo_env  # noqa: F401  (registers the environments)
     from dlo_bench.agents import build_agent, load_shape_model, load_transition_model
@@ -58,6 +57,7 @@ def run(args: argparse.Namespace) -> int:
     from dlo_bench.fidelity import transition_fidelity
     from dlo_bench.figures import save_episode_gif
     from dlo_bench.report import format_legend, format_table, write_evaluation, write_summaries
+    from dlo_env.progress import progress_bar
     from planners.interpolation import interpolate
     from planners.latent_tree import LatentTreePlanner
 
@@ -72,7 +72,9 @@ def run(args: argparse.Namespace) -> int:
 
     summaries = []
     rows = [(d, a) for d in args.difficulty for a in AGENTS]
-    for difficulty, agent in tqdm(rows, desc="demo", unit="run"):
+    bar = progress_bar(len(rows), "demo", "run")
+    for difficulty, agent in rows:
+        bar.update(1)
         with gym.make(env_id, **env_kwargs) as env:
             policy = build_agent(agent, env, model=model, transition_model=transition_model,
                                  seed=args.seed)

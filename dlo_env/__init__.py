@@ -29,6 +29,7 @@ from dlo_env.shapes import (
 
 __all__ = [
     "COSINE_THRESHOLD",
+    "SURROGATE_OF",
     "TABLE_HALF",
     "Cord",
     "CordParams",
@@ -52,11 +53,13 @@ _ENVS = {
 for _id, _entry in _ENVS.items():
     if _id not in registry:
         register(id=_id, entry_point=_entry, max_episode_steps=100)
-_SURROGATES = {
-    "dlo_env/DLOEndpointSurrogate-v0": "DLOEndpointSurrogate",
-    "dlo_env/DLODualEndpointSurrogate-v0": "DLODualEndpointSurrogate",
+#: Each pymunk environment's learned twin (same spaces, reward and options).
+SURROGATE_OF = {
+    "dlo_env/DLOEndpoint-v0": "dlo_env/DLOEndpointSurrogate-v0",
+    "dlo_env/DLODualEndpoint-v0": "dlo_env/DLODualEndpointSurrogate-v0",
 }
-for _id, _name in _SURROGATES.items():
+for _id in SURROGATE_OF.values():
+    _name = _id.split("/")[1].split("-")[0]
     if _id not in registry:
         register(id=_id, entry_point=f"dlo_env.envs.surrogate:{_name}Env",
                  vector_entry_point=f"dlo_env.envs.surrogate:{_name}VectorEnv",

@@ -162,7 +162,7 @@ def finetune(
     Returns:
         The new model (the given one is left unchanged) and the report.
     """
-    from tqdm.auto import tqdm
+    from dlo_env.progress import progress_bar as bar_of
 
     config = config or FinetuneConfig()
     if model.discriminator is None:
@@ -194,9 +194,12 @@ def finetune(
             getattr(trainer, name).load_state_dict(state[name])
         for name, steps, step_fn in (("gan", config.gan_steps, trainer.gan_step),
                                      ("encoder", config.encoder_steps, trainer.encoder_step)):
-            for i in tqdm(range(steps), desc=f"finetune {name}", disable=not progress_bar):
+            bar = bar_of(steps, f"finetune {name}", "step", enabled=progress_bar)
+            for i in range(steps):
                 trainer.set_lr_fraction(i / steps)  # FinetuneConfig.train's schedule
                 step_fn()
+                bar.update(1)
+            bar.close()
         info = dict(model.info, finetuned_on=len(hard), finetune_variants=len(variants),
                     finetune_config=repr(replace(config)))
         new_model = trainer.model(info)

@@ -70,6 +70,15 @@ class TaskBatch:
     moves: np.ndarray
     difficulty: np.ndarray
 
+    @staticmethod
+    def concat(batches: list[TaskBatch]) -> TaskBatch:
+        """The tasks of ``batches`` in order (moves zero-padded to the most any has)."""
+        k = max(b.moves.shape[1] for b in batches)
+        moves = [np.pad(b.moves, ((0, 0), (0, k - b.moves.shape[1]), (0, 0))) for b in batches]
+        return TaskBatch(np.concatenate([b.starts for b in batches]),
+                         np.concatenate([b.goals for b in batches]), np.concatenate(moves),
+                         np.concatenate([b.difficulty for b in batches]))
+
     def take(self, index: np.ndarray) -> TaskBatch:
         """The tasks at ``index``."""
         return TaskBatch(self.starts[index], self.goals[index], self.moves[index],
@@ -216,12 +225,22 @@ class SurrogateCords:
                 "desired_goal": self.goals.reshape(b, -1).copy()}
 
     # ------------------------------------------------------------- tasks
-    def draw_tasks(self, rng: np.random.Generator, count: int, difficulty: int,
-                   min_error: float, starts: np.ndarray | None = None) -> TaskBatch:
+    def draw_tasks(self, rng: np.random.Generator, count: int,
+                   difficulty: int | tuple[int, ...], min_error: float,
+                   starts: np.ndarray | None = None) -> TaskBatch:
         """``count`` tasks made in the surrogate: starts from the shape sampler
         (``random_cord_shapes``, or ``starts``), goals ``difficulty`` random straight moves
         away through the model (each move U(5, 30) cm, targets ``TARGET_MARGIN`` inside the
-        table, both ends within the span), redrawn until farther than ``min_error``."""
+        table, both ends within the span), redrawn until farther than ``min_error``. A tuple
+        of difficulties: each task draws one of them uniformly."""
+        if isinstance(difficulty, tuple):
+            drawn = rng.choice(np.asarray(difficulty), size=count)
+            order = np.argsort(drawn, kind="stable")
+            parts = [self.draw_tasks(rng, int((drawn == k).sum()), int(k), min_error,
+                                     None if starts is None else starts[drawn == k])
+                     for k in np.unique(drawn)]
+            batch = TaskBatch.concat(parts)
+            return batch.take(np.argsort(order, kind="stable"))
         p = self.params
         n = p.n_points
         out_starts = np.empty((count, n, 2), dtype=np.float32)
@@ -408,7 +427,8 @@ class _SurrogateArgs:
 
     def _setup(self, count: int, *, model: Any, device: str, params: CordParams | None,
                max_step: float, reward_type: str, success_threshold: float,
-               success_metric: str, judge_at_rest: bool, difficulty: int, max_pegs: int,
+               success_metric: str, judge_at_rest: bool, difficulty: int | tuple[int, ...],
+               max_pegs: int,
                uncertainty_penalty: float, merge_runs: bool, render_mode: str | None) -> None:
         if params is not None and not isinstance(params, CordParams):
             raise ValueError(f"params must be a CordParams or None, got {type(params).__name__}")
@@ -434,7 +454,13 @@ class _SurrogateArgs:
         self.success_metric = success_metric
         self._distance = SUCCESS_METRICS[success_metric]
         self.judge_at_rest = bool(judge_at_rest)
-        self.difficulty = check_difficulty(difficulty)
+        if isinstance(difficulty, (tuple, list)):
+            if not difficulty:
+                raise ValueError("difficulty must be an int from 1 to 10 or a non-empty tuple "
+                                 "of them, got ()")
+            self.difficulty = tuple(check_difficulty(k) for k in difficulty)
+        else:
+            self.difficulty = check_difficulty(difficulty)
         self.max_pegs = 0
         self.uncertainty_penalty = float(uncertainty_penalty)
         self.render_mode = render_mode
@@ -550,7 +576,9 @@ class SurrogateCordVectorEnv(_SurrogateArgs, GoalReward, VectorEnv):
             trained (default). False: every step is a move of its own from the last shape
             (errors compose over a long move's many small steps).
         params, max_step, reward_type, success_threshold, success_metric, judge_at_rest,
-        difficulty, max_pegs, render_mode: As the pymunk environment's.
+        max_pegs, render_mode: As the pymunk environment's.
+        difficulty: Straight moves of a drawn task (1-10), or a tuple of them: each drawn
+            task draws one uniformly (a curriculum of several difficulties).
     """
 
     metadata: ClassVar[dict[str, Any]] = {"render_modes": ["rgb_array"], "render_fps": 10,
@@ -560,8 +588,8 @@ class SurrogateCordVectorEnv(_SurrogateArgs, GoalReward, VectorEnv):
                  device: str = "auto", params: CordParams | None = None,
                  max_step: float = DEFAULT_MAX_STEP, reward_type: str = "dense",
                  success_threshold: float = SUCCESS_THRESHOLD, success_metric: str = "error",
-                 judge_at_rest: bool = True, difficulty: int = 1, max_pegs: int = 0,
-                 max_episode_steps: int = 100, autoreset_mode: str = "next_step",
+                 judge_at_rest: bool = True, difficulty: int | tuple[int, ...] = 1,
+                 max_pegs: int = 0, max_episode_steps: int = 100, autoreset_mode: str = "next_step",
                  uncertainty_penalty: float = 0.0, merge_runs: bool = True,
                  render_mode: str | None = None) -> None:
         if not (isinstance(num_envs, (int, np.integer)) and not isinstance(num_envs, bool)
@@ -600,10 +628,7 @@ class SurrogateCordVectorEnv(_SurrogateArgs, GoalReward, VectorEnv):
             fresh = self.cords.draw_tasks(self.np_random, max(TASK_BATCH, self.num_envs, count),
                                           self.difficulty, self.success_threshold)
             if self._stock is not None and len(self._stock):
-                fresh = TaskBatch(*(np.concatenate([a, b]) for a, b in zip(
-                    (self._stock.starts, self._stock.goals, self._stock.moves,
-                     self._stock.difficulty),
-                    (fresh.starts, fresh.goals, fresh.moves, fresh.difficulty))))
+                fresh = TaskBatch.concat([self._stock, fresh])
             self._stock = fresh
         taken = self._stock.take(np.arange(count))
         self._stock = self._stock.take(np.arange(count, len(self._stock)))
@@ -740,7 +765,8 @@ class SurrogateCordEnv(_SurrogateArgs, GoalReward, gym.Env[dict[str, np.ndarray]
                  params: CordParams | None = None, max_step: float = DEFAULT_MAX_STEP,
                  reward_type: str = "dense", success_threshold: float = SUCCESS_THRESHOLD,
                  success_metric: str = "error", judge_at_rest: bool = True,
-                 difficulty: int = 1, max_pegs: int = 0, uncertainty_penalty: float = 0.0,
+                 difficulty: int | tuple[int, ...] = 1, max_pegs: int = 0,
+                 uncertainty_penalty: float = 0.0,
                  merge_runs: bool = True, render_mode: str | None = None) -> None:
         self._setup(1, model=model, device=device, params=params, max_step=max_step,
                     reward_type=reward_type, success_threshold=success_threshold,

@@ -358,7 +358,7 @@ def train(
     Returns:
         The trained model (also saved to ``out_dir/model.pt``).
     """
-    from tqdm.auto import tqdm
+    from dlo_env.progress import progress_bar as bar_of
 
     if stage not in STAGES:
         raise ValueError(f"stage must be one of {STAGES}, got {stage!r}")
@@ -416,8 +416,8 @@ def train(
             return getattr(prog, seconds_attr) >= budgets[name]
 
         total = limit_steps if limit_steps is not None else round(budgets[name])
-        bar = tqdm(total=total, desc=name, unit="step" if limit_steps is not None else "s",
-                   disable=not progress_bar, dynamic_ncols=True)
+        bar = bar_of(total, name, "step" if limit_steps is not None else "s",
+                     enabled=progress_bar)
         bar.update(getattr(prog, step_attr) if limit_steps is not None
                    else round(getattr(prog, seconds_attr)))
         last_save = time.perf_counter()
