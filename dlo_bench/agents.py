@@ -239,6 +239,13 @@ def _latent_mpc(env: Any, options: AgentOptions) -> Policy:
                                                                pegs=observes_pegs(env)))
 
 
+def _grad_mpc(env: Any, options: AgentOptions) -> Policy:
+    from planners.grad_mpc import GradMPCConfig, GradMPCPolicy
+
+    return GradMPCPolicy.for_env(env, GradMPCConfig(seed=options.seed),
+                                 model=load_transition_model(options.transition_model))
+
+
 def _latent_mpc_adaptive(env: Any, options: AgentOptions) -> Policy:
     from planners.adaptive_mpc import AdaptiveLatentMPCPolicy
     from planners.latent_mpc import LatentMPCConfig
@@ -339,6 +346,10 @@ AGENTS: dict[str, AgentSpec] = {spec.name: spec for spec in (
     AgentSpec("latent-mpc", "CEM over straight moves scored by the learned transition model",
               _latent_mpc, environments=(ENDPOINT, DUAL_ENDPOINT), extra="model",
               transition_model=True),
+    AgentSpec("grad-mpc", "straight-move plans descended by gradient steps through the "
+              "differentiable transition model", _grad_mpc,
+              environments=(ENDPOINT, DUAL_ENDPOINT), extra="model", transition_model=True,
+              no_pegs="its differentiable step (CordDynamics) models the empty table"),
     AgentSpec("ppo", "the shipped PPO baseline (Stable-Baselines3)", _sb3("ppo"),
               environments=(ENDPOINT, DUAL_ENDPOINT), extra="rl",
               train="dlo baseline --algo ppo --env {env}"),

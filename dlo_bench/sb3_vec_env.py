@@ -30,8 +30,8 @@ class SB3VecEnv(VecEnv):
     ``get_attr``, ``env_method`` and ``set_attr`` reach the vector environment itself (one
     object for all environments), so ``env_method("compute_reward", ...)``, which HER calls,
     computes a whole batch at once. Every ``info`` dict holds the vector environment's
-    per-environment values, ``TimeLimit.truncated``, and at an episode's end
-    ``terminal_observation``.
+    per-environment values and ``TimeLimit.truncated``; at an episode's end, those of its last
+    step (``final_info``: ``is_success`` there is the episode's) and ``terminal_observation``.
 
     Args:
         venv: The vector environment, made with ``autoreset_mode="same_step"``.
@@ -66,9 +66,11 @@ class SB3VecEnv(VecEnv):
         obs, reward, terminated, truncated, info = self.venv.step(self._actions)
         done = terminated | truncated
         infos = self._split(info, truncated & ~terminated)
-        final = info.get("final_obs")
-        for i in np.flatnonzero(done):
-            infos[i]["terminal_observation"] = final[i]
+        if done.any():  # SB3 wants the ending step's info there, not the new episode's
+            ended = self._split(info["final_info"], truncated & ~terminated)
+            final = info["final_obs"]
+            for i in np.flatnonzero(done):
+                infos[i] = {**ended[i], "terminal_observation": final[i]}
         return obs, reward.astype(np.float32), done, infos
 
     def _split(self, info: dict[str, Any], timeout: np.ndarray) -> list[dict[str, Any]]:

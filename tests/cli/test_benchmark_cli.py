@@ -13,7 +13,7 @@ from dlo_bench.report import threshold_label
 from dlo_cli.main import main
 
 AGENTS = ["straight-line", "latent-tree", "latent-tree-closed", "latent-tree-kino", "physics-mpc",
-          "latent-mpc", "ppo",
+          "latent-mpc", "grad-mpc", "ppo",
           "sac-her", "bc"]
 ROW_KEYS = {"agent", "difficulty", "success_rate", "median_error", "seconds_per_episode",
             "training_env_steps", "status"}

@@ -1,0 +1,164 @@
+"""grad-mpc: straight-move plans optimised by gradient steps through the learned cord.
+
+latent-mpc samples plans and keeps the best (the cross-entropy method). grad-mpc descends: a
+batch of candidate plans (the straight move to the goal's end positions and random ones around
+it) is rolled out through ``latent_model.cord_dynamics.CordDynamics``, the torch step of the
+transition model, and Adam moves every candidate's displacements down the gradient of its
+final error to the goal. The best candidate is executed like latent-mpc's (its first move, then
+zero actions while the cord comes to rest), and the policy plans again from the observed cord.
+With ``cem_iterations`` the gradient's best plan also seeds a short CEM search (both together).
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from dlo_env.checks import non_negative_ints, positive, positive_ints
+from planners.latent_mpc import LatentMPCConfig, LatentMPCPolicy
+
+
+@dataclass(frozen=True)
+class GradMPCConfig(LatentMPCConfig):
+    """The gradient search of grad-mpc (the rest as ``LatentMPCConfig``).
+
+    Attributes:
+        samples: Candidate plans descended together (the first is the straight move, or the
+            rest of the previous plan).
+        grad_steps: Adam steps per planning call (at most: it stops once a candidate is
+            predicted within ``stop_fraction`` of the success threshold).
+        learning_rate: Adam's step size, metres.
+        elites: Best candidates a CEM iteration after the gradient steps is fitted to.
+        cem_iterations: CEM iterations after the gradient steps, from its best plan (0: none).
+        projection_iterations: Steps of the projection onto rest-length segments in every
+            predicted move (``CordDynamics``' ``inextensible_iterations``; 0: none, faster).
+    """
+
+    samples: int = 16
+    elites: int = 8
+    grad_steps: int = 40
+    learning_rate: float = 0.01
+    cem_iterations: int = 0
+    projection_iterations: int = 0
+
+    def __post_init__(self) -> None:
+        super().__post_init__()
+        positive_ints(self, "grad_steps")
+        non_negative_ints(self, "cem_iterations", "projection_iterations")
+        positive(self, "learning_rate")
+
+
+class GradMPCPolicy(LatentMPCPolicy):
+    """Model-predictive control by gradient descent on straight-move plans through the
+    differentiable transition model; built and checked like :class:`LatentMPCPolicy`.
+
+    Args:
+        model: A ``latent_model.TransitionModel`` of the environment's cord.
+        grasp: The held end(s).
+        success_threshold: The environment's success threshold, metres.
+        config: The search budget.
+    """
+
+    def __init__(self, model: Any, grasp: str = "head", success_threshold: float = 0.02,
+                 config: GradMPCConfig | None = None, *,
+                 success_metric: str = "error") -> None:
+        from latent_model.cord_dynamics import CordDynamics
+
+        super().__init__(model, grasp, success_threshold,
+                         config if config is not None else GradMPCConfig(),
+                         success_metric=success_metric)
+        self.dynamics = CordDynamics(model, grasp,
+                                     inextensible_iterations=self.config.projection_iterations)
+
+    def plan(self, shape: np.ndarray, goal: np.ndarray) -> tuple[np.ndarray, float]:
+        """Gradient descent on ``config.samples`` plans from ``shape`` towards ``goal``.
+
+        Returns:
+            The best plan ``(moves, ends, 2)`` (metres) and its predicted error.
+        """
+        import torch
+
+        cfg = self.config
+        t0 = time.perf_counter()
+        moves = self.horizon(shape, goal)
+        dims = (moves, len(self.ends), 2)
+        if self._mean is None:  # the straight move to the goal's end positions, in equal parts
+            straight = (self._end_points(goal) - self._end_points(shape)) / moves
+            mean = np.broadcast_to(straight, dims).astype(np.float64)
+        else:
+            mean = np.zeros(dims)
+            kept = min(moves, len(self._mean))
+            mean[:kept] = self._mean[:kept]
+        std = cfg.init_std
+        if cfg.focus > 0:
+            std = min(cfg.init_std, max(cfg.min_std, cfg.focus * float(self._distance(shape,
+                                                                                     goal))))
+        start = mean + std * self._rng.standard_normal((cfg.samples,) + dims)
+        start[0] = mean
+        plans = torch.tensor(self._clip(start), dtype=torch.float32, requires_grad=True)
+        origin = torch.from_numpy(shape.astype(np.float32)).expand(cfg.samples, -1, -1)
+        target = torch.from_numpy(goal.astype(np.float32))
+        optimizer = torch.optim.Adam([plans], lr=cfg.learning_rate)
+        best_plan, best_err = mean, math.inf
+        for step in range(cfg.grad_steps + 1):
+            errors = self._rollout_errors(origin, plans, target)
+            err = errors.detach().numpy()
+            i = int(np.argmin(err))
+            if err[i] < best_err:
+                best_err, best_plan = float(err[i]), plans.detach()[i].numpy().astype(np.float64)
+            self.stats.rollouts += cfg.samples
+            if best_err <= cfg.stop_fraction * self.success_threshold or step == cfg.grad_steps:
+                break
+            optimizer.zero_grad()
+            errors.sum().backward()
+            optimizer.step()
+            with torch.no_grad():
+                plans.copy_(torch.from_numpy(self._clip(plans.detach().numpy())))
+        if cfg.cem_iterations and best_err > cfg.stop_fraction * self.success_threshold:
+            best_plan, best_err = self._cem_from(shape, goal, best_plan, best_err)
+        self._mean = np.concatenate([best_plan[1:], np.zeros((1,) + dims[1:])])
+        self.stats.plans += 1
+        self.stats.seconds += time.perf_counter() - t0
+        self.stats.predicted_errors.append(best_err)
+        return best_plan, best_err
+
+    def _clip(self, plans: np.ndarray) -> np.ndarray:
+        """Every move of every end at most ``config.max_move`` long."""
+        norms = np.linalg.norm(plans, axis=-1, keepdims=True)
+        return (plans * np.minimum(1.0, self.config.max_move / np.maximum(norms, 1e-12))
+                ).astype(np.float32)
+
+    def _rollout_errors(self, origin: Any, plans: Any, target: Any) -> Any:
+        """``(S,)`` errors to ``target`` of the plans' final shapes (differentiable)."""
+        import torch
+
+        shapes = origin
+        for k in range(plans.shape[1]):
+            shapes = self.dynamics.step(shapes, plans[:, k].reshape(len(plans), -1))
+        errors = (shapes - target).norm(dim=-1).mean(dim=-1)
+        if self.success_metric == "direction_free_error":
+            reverse = (shapes - target.flip(0)).norm(dim=-1).mean(dim=-1)
+            errors = torch.minimum(errors, reverse)
+        return errors
+
+    def _cem_from(self, shape: np.ndarray, goal: np.ndarray, plan: np.ndarray, err: float
+                  ) -> tuple[np.ndarray, float]:
+        """A few CEM iterations around ``plan`` (scored by ``_score``, latent-mpc's)."""
+        cfg = self.config
+        mean, std = plan, np.full(plan.shape, cfg.min_std * 2)
+        for _ in range(cfg.cem_iterations):
+            candidates = mean + std * self._rng.standard_normal((cfg.samples * 8,) + plan.shape)
+            candidates[0] = mean
+            candidates = self._clip(candidates).astype(np.float64)
+            errors = self._score(shape, goal, candidates)
+            self.stats.rollouts += len(candidates)
+            order = np.argsort(errors)
+            if errors[order[0]] < err:
+                err, plan = float(errors[order[0]]), candidates[order[0]].copy()
+            elite = candidates[order[: cfg.elites]]
+            mean, std = elite.mean(axis=0), elite.std(axis=0) + 1e-3
+        return plan, err
