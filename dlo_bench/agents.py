@@ -269,6 +269,10 @@ def _sb3(algo: str, shipped: str = "", cords: str = "") -> Callable[[Any, AgentO
         from dlo_bench.baselines import load_baseline
 
         folder = options.baseline
+        if not algo and folder is not None:  # sb3:PATH: any SB3 model
+            from dlo_bench.sb3_models import find_sb3, load_sb3
+
+            return load_sb3(find_sb3(folder), env, device=options.device)
         if folder is None:
             env_id, pegs = env.unwrapped.spec.id, observes_pegs(env)
             folder = shipped_baseline(shipped or algo, env_id, pegs=pegs)
@@ -395,14 +399,16 @@ def agent_spec(name: str) -> AgentSpec:
 
 
 def _trained_in(folder: str) -> tuple[str, ...]:
-    """The environment the baseline in ``folder`` was trained in (its
-    ``hyperparameters.json``); both when the folder cannot be read (loading it says why)."""
-    from dlo_bench.baselines import read_baseline_metadata
+    """The environment the SB3 model in ``folder`` was trained in, when its folder says
+    (``dlo_bench.sb3_models.find_sb3``); both when unknown or unreadable (loading it says
+    why, and a model of the other environment's spaces is refused then)."""
+    from dlo_bench.sb3_models import find_sb3
 
     try:
-        return (str(read_baseline_metadata(folder)["config"]["env_id"]),)
-    except (OSError, ValueError, KeyError, TypeError):
-        return (ENDPOINT, DUAL_ENDPOINT)
+        env_id = find_sb3(folder).env_id
+    except (OSError, ValueError, KeyError, TypeError, ImportError):
+        env_id = None
+    return (env_id,) if env_id in (ENDPOINT, DUAL_ENDPOINT) else (ENDPOINT, DUAL_ENDPOINT)
 
 
 def build_agent(name: str, env: Any, **options: Any) -> Policy:

@@ -25,8 +25,9 @@ from dlo_cli.flags import (
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     """Flags of ``dlo evaluate``."""
+    from dlo_bench.benchmark import HEADLINE_THRESHOLD
     from dlo_bench.evaluation import suite_names
-    from dlo_env.tasks import SPLIT_SIZES, SUCCESS_THRESHOLD
+    from dlo_env.tasks import SPLIT_SIZES
 
     add_agent(parser, default=None)
     which = parser.add_mutually_exclusive_group()
@@ -48,9 +49,10 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     add_env(parser, "dlo_env/DLOEndpoint-v0", "the environment", dest="env_id", alias=True)
     parser.add_argument("--threshold", type=number_in(float, 1e-4, 1.0, expected="a number of "
                                                      "metres in [0.0001, 1]"),
-                        default=SUCCESS_THRESHOLD, metavar="METRES",
+                        default=HEADLINE_THRESHOLD, metavar="METRES",
                         help="the environment's success_threshold, judged on the cord at rest "
-                             "(the planners take their stopping rules from it)")
+                             "(the planners take their stopping rules from it); the default, "
+                             "0.01, is the README table's, the environments' own is 0.02")
     add_model(parser)
     add_transition_model(parser)
     add_planner_flags(parser)
@@ -108,7 +110,7 @@ def run(args: argparse.Namespace) -> int:
     import platform
     from pathlib import Path
 
-    from dlo_bench.agents import agent_spec, load_shape_model
+    from dlo_bench.agents import SB3_PREFIX, agent_spec, load_shape_model
     from dlo_bench.report import (
         format_divergence,
         format_legend,
@@ -141,6 +143,13 @@ def run(args: argparse.Namespace) -> int:
              for difficulty, suite, _ in rows]
     labels = [(agent, label) for agent in args.agent for _, _, label in rows]
     out = Path(writable_folder(args.out))
+    print(f"success: the cord at rest within {100 * args.threshold:g} cm of the goal "
+          f"(--threshold {args.threshold:g})")
+    for agent in args.agent:
+        if agent.startswith(SB3_PREFIX):
+            from dlo_bench.sb3_models import find_sb3
+
+            print(f"{agent}: {find_sb3(agent[len(SB3_PREFIX):]).describe()}")
     extra = {"arguments": settings, "machine": platform.platform()}
     results: dict[int, Any] = {}
 

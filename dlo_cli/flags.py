@@ -217,9 +217,9 @@ def agent_type(sb3: bool = True) -> Callable[[str], str]:
             spec = agent_spec(text)
             folder = spec.defaults.get("baseline")
             if folder is not None:  # sb3:PATH: the folder is read before any work starts
-                from dlo_bench.baselines import read_baseline_metadata
+                from dlo_bench.sb3_models import find_sb3
 
-                read_baseline_metadata(folder)
+                find_sb3(folder)
         except (ValueError, FileNotFoundError) as exc:
             raise argparse.ArgumentTypeError(str(exc)) from None
         return text
@@ -233,7 +233,8 @@ def add_agent(parser: argparse.ArgumentParser, default: list[str] | None,
     from dlo_bench.agents import AGENTS, SB3_PREFIX
 
     names = "; ".join(f"{name}: {spec.summary}" for name, spec in AGENTS.items())
-    folder = f"; {SB3_PREFIX}PATH: a folder written by `dlo baseline`" if sb3 else ""
+    folder = (f"; {SB3_PREFIX}PATH: any Stable-Baselines3 model.zip, a folder written by "
+              "`dlo baseline`, or an rl-zoo3 run folder" if sb3 else "")
     parser.add_argument("--agent", type=agent_type(sb3), nargs="+", default=default,
                         required=default is None, metavar="AGENT",
                         help=f"one or several agents. {names}{folder}")

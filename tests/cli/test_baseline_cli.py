@@ -62,4 +62,4 @@ def test_baseline_rejects_an_unknown_setting(tmp_path, capsys):
 def test_evaluate_reports_a_folder_without_a_baseline(tmp_path, capsys):
     code = main(["evaluate", "--agent", f"sb3:{tmp_path}", "--out", str(tmp_path / "eval")])
     assert code == 2
-    assert "baseline folder" in capsys.readouterr().err
+    assert "holds no model.zip" in capsys.readouterr().err
