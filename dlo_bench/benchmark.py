@@ -362,9 +362,12 @@ def load_agent(name: str, config: BenchmarkConfig, env: Any,
         except ValueError as exc:
             return LoadedAgent(name, None, missing=f"no usable model for {env_id}: "
                                                    f"{exc}".splitlines()[0])
-        steps = int(meta["trained_timesteps"])
+        steps = int(meta.get("real_env_steps", meta["trained_timesteps"]))
+        surrogate = int(meta.get("surrogate_steps", 0))
         # bc trains offline on the oracle's demonstrations
         cost = f"{_steps(steps)} {'demonstration' if name == 'bc' else 'env'} steps"
+        if surrogate:  # trained in the learned cord: both kinds of step, apart
+            cost += f" + {_steps(surrogate)} surrogate steps"
         return LoadedAgent(name, policy, training_env_steps=steps, sample_cost=cost,
                            models=(str(folder / "model.zip"),))
     options: dict[str, Any] = {"seed": config.seed}
