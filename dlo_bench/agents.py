@@ -180,7 +180,7 @@ def _goal_for(config: Any, env: Any) -> Any:
 
     scale = float(env.unwrapped.success_threshold) / SUCCESS_THRESHOLD
     return with_fields(config, goal_threshold=config.goal_threshold * scale,
-                       grasp=env.unwrapped.cord.grasp)
+                       grasp=env.unwrapped.grasp)
 
 
 def _latent_tree(closed: bool) -> Callable[[Any, AgentOptions], Policy]:
@@ -222,7 +222,7 @@ def _latent_tree_kino(env: Any, options: AgentOptions) -> Policy:
 def _straight_line(env: Any, options: AgentOptions) -> Policy:
     from planners.straight_line import StraightLinePolicy
 
-    return StraightLinePolicy(max_step=_max_step(env), grasp=env.unwrapped.cord.grasp)
+    return StraightLinePolicy(max_step=_max_step(env), grasp=env.unwrapped.grasp)
 
 
 def _physics_mpc(env: Any, options: AgentOptions) -> Policy:
@@ -417,7 +417,9 @@ def build_agent(name: str, env: Any, **options: Any) -> Policy:
     Args:
         name: A key of ``AGENTS``, or ``sb3:PATH`` with a folder written by ``dlo baseline``.
         env: The environment the agent will act in (wrapped or not), or its id (an
-            environment made with ``gym.make(env)``, its defaults, and closed again).
+            environment made with ``gym.make(env)``, its defaults, and closed again). An
+            agent of a pymunk environment acts in its surrogate twin too
+            (``dlo_env.SURROGATE_OF``: the same spaces and options).
         **options: ``AgentOptions`` fields (``model``, ``transition_model``, ``baseline``,
             ``seed``, ``replan_every``, ``max_seconds``, ``device``); None keeps the default.
 
@@ -447,7 +449,10 @@ def build_agent(name: str, env: Any, **options: Any) -> Policy:
     if unknown:
         raise ValueError(f"build_agent options must be some of {sorted(known)}, got {unknown}")
     env_id = getattr(env.unwrapped.spec, "id", None)
-    if env_id is not None and env_id not in spec.environments:
+    from dlo_env import SURROGATE_OF
+
+    twin = {v: k for k, v in SURROGATE_OF.items()}.get(env_id, env_id)  # same spaces, options
+    if env_id is not None and twin not in spec.environments:
         raise ValueError(f"agent {name!r} acts in {', '.join(spec.environments)}, "
                          f"got environment {env_id!r}")
     size = math.prod(observation_shape(env))

@@ -453,7 +453,7 @@ def evaluate(
         if isinstance(policy, PlanningPolicy):
             policy.check_env(env)
         options = _episode_options(difficulty, suite, split, first + episodes,
-                                   env.unwrapped.cord.grasp)[first:]
+                                   env.unwrapped.grasp)[first:]
         bar = progress_bar(episodes, agent or "evaluate", "episode") if progress else None
         records, profiles, goals, rest_shapes = [], [], [], []
         for i, opts in enumerate(options, first):

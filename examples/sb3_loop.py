@@ -108,7 +108,7 @@ if __name__ == "__main__":
     names = [a for a in args.agents.split(",") if a] or [
         name for name, spec in AGENTS.items() if args.env in spec.environments]
     env = gym.make(args.env)
-    tasks = load_suite(args.suite, "test", grasp=env.unwrapped.cord.grasp, limit=args.episodes)
+    tasks = load_suite(args.suite, "test", grasp=env.unwrapped.grasp, limit=args.episodes)
     print(f"{args.suite} test tasks 1-{len(tasks)}, {args.env}: tasks solved")
     print(f"{'agent':<20} {'with episode_start':>19} {'without':>8} {'vector env x2':>14} "
           f"{'seconds':>8}")

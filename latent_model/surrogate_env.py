@@ -22,7 +22,7 @@ import torch
 from gymnasium.vector import AutoresetMode, VectorEnv
 from gymnasium.vector.utils import batch_space
 
-from dlo_env.cord import CordParams
+from dlo_env.cord import PEG_RADIUS, CordParams
 from dlo_env.envs.goal_api import GoalReward, check_goal_args, goal_metrics, goal_spaces
 from dlo_env.shapes import (
     BEAD_TOLERANCE,
@@ -462,6 +462,7 @@ class _SurrogateArgs:
         else:
             self.difficulty = check_difficulty(difficulty)
         self.max_pegs = 0
+        self.peg_radius = PEG_RADIUS  # as the pymunk environment's (no peg is ever placed)
         self.uncertainty_penalty = float(uncertainty_penalty)
         self.render_mode = render_mode
         self._renderer = None

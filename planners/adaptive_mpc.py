@@ -129,7 +129,7 @@ class AdaptiveLatentMPCPolicy(LatentMPCPolicy):
             raise ValueError("model is required: a transition model of several cords "
                              "(TransitionModel.load_pretrained(cords=True) is the shipped one)")
         base = getattr(env, "unwrapped", env)
-        policy = cls(model, grasp=base.cord.grasp, success_threshold=base.success_threshold,
+        policy = cls(model, grasp=base.grasp, success_threshold=base.success_threshold,
                      config=config, success_metric=base.success_metric, adapt=adapt)
         policy.check_env(env)
         policy.peg_radius = base.peg_radius  # of the pegs it will observe

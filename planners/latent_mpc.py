@@ -113,7 +113,7 @@ class LatentMPCPolicy(CEMPolicy):
 
             model = TransitionModel.load_or_pretrained(device="cpu")
         base = getattr(env, "unwrapped", env)
-        policy = cls(model, grasp=base.cord.grasp, success_threshold=base.success_threshold,
+        policy = cls(model, grasp=base.grasp, success_threshold=base.success_threshold,
                      config=config, success_metric=base.success_metric)
         policy.check_env(env)
         policy.peg_radius = base.peg_radius  # of the pegs it will observe
@@ -132,9 +132,9 @@ class LatentMPCPolicy(CEMPolicy):
             raise ValueError(
                 f"the transition model was trained with max_step={self.max_step} m, but the "
                 f"environment has max_step={base.max_step} m")
-        if base.cord.grasp != self.grasp:
+        if base.grasp != self.grasp:
             raise ValueError(f"the policy moves grasp {self.grasp!r} but the environment holds "
-                             f"{base.cord.grasp!r}")
+                             f"{base.grasp!r}")
         self._check_threshold(base)
 
     def reset(self) -> None:

@@ -275,3 +275,17 @@ def test_bad_options_and_actions_are_named():
         venv.reset(options={"difficult": 2})
     with pytest.raises(ValueError, match="one per environment"):
         venv.reset(options={"start": _starts(3, "head")})
+
+
+@pytest.mark.parametrize("grasp", ["head", "both"])
+def test_latent_mpc_acts_in_the_surrogate_as_in_pymunk(grasp):
+    from dlo_bench import build_agent
+
+    env = gym.make(IDS[grasp], device="cpu", success_threshold=0.01)
+    policy = build_agent("latent-mpc", env)
+    obs, info = env.reset(options={"task": load_suite("linear-1", "test", grasp=grasp)[0]})
+    for _ in range(60):
+        obs, _, terminated, _, info = env.step(policy.predict(obs, deterministic=True)[0])
+        if terminated:
+            break
+    assert info["is_success"]
