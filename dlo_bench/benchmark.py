@@ -44,6 +44,8 @@ from dlo_bench.agents import (
     AGENTS,
     DUAL_ENDPOINT,
     ENDPOINT,
+    SB3_PREFIX,
+    agent_spec,
     build_agent,
     load_transition_model,
     model_files,
@@ -170,18 +172,18 @@ class BenchmarkConfig:
     fidelity: bool = True
 
     def __post_init__(self) -> None:
-        unknown = [a for a in self.agents if a not in AGENTS]
+        unknown = [a for a in self.agents if not registered(a)]
         if unknown or not (self.agents or self.cord_agents or self.peg_agents):
-            raise ValueError(f"agents must be a tuple of {tuple(AGENTS)} (with cord_agents "
-                             f"and peg_agents, not all empty), got {self.agents!r}")
-        cords_only = [a for a in self.agents if AGENTS[a].cords]
+            raise ValueError(f"agents must be a tuple of {tuple(AGENTS)} or sb3:PATH (with "
+                             f"cord_agents and peg_agents, not all empty), got {self.agents!r}")
+        cords_only = [a for a in self.agents if agent_spec(a).cords]
         if cords_only:
             raise ValueError(f"agents must not name agents of the cords section only "
                              f"({', '.join(cords_only)}): give them as cord_agents")
-        if any(a not in AGENTS for a in self.cord_agents):
+        if any(not registered(a) for a in self.cord_agents):
             raise ValueError(f"cord_agents must be some of {tuple(AGENTS)}, "
                              f"got {self.cord_agents!r}")
-        if any(a not in AGENTS or AGENTS[a].cords for a in self.peg_agents):
+        if any(not registered(a) or agent_spec(a).cords for a in self.peg_agents):
             raise ValueError(f"peg_agents must be some of {PEG_AGENTS}, "
                              f"got {self.peg_agents!r}")
         bad_envs = [e for e in (*self.envs, *self.cord_envs, *self.peg_envs)
@@ -266,10 +268,22 @@ def suite_label(suite: str) -> str:
     return f"d{SUITES[suite]}" if suite in SUITES else suite
 
 
+def registered(name: str) -> bool:
+    """Whether the benchmark can run agent ``name``: a key of ``AGENTS``, or ``sb3:PATH``."""
+    return name in AGENTS or (name.startswith(SB3_PREFIX) and len(name) > len(SB3_PREFIX))
+
+
+def agent_label(name: str) -> str:
+    """An agent's name in file names: itself, or ``sb3:PATH`` with every character but
+    letters, digits, ``.`` and ``_`` as ``-`` (``sb3-runs-baseline-ppo``)."""
+    return "".join(c if c.isalnum() or c in "._-" else "-" for c in name)
+
+
 def cell_name(agent: str, env_id: str, suite: str, threshold: float) -> str:
     """A cell's file name: ``latent-mpc-endpoint-d3-1cm``, ``physics-mpc-dual-endpoint-
     shapes-curves-1cm``."""
-    return f"{agent}-{env_label(env_id)}-{suite_label(suite)}-{threshold_label(threshold, '')}"
+    return (f"{agent_label(agent)}-{env_label(env_id)}-{suite_label(suite)}-"
+            f"{threshold_label(threshold, '')}")
 
 
 @dataclass(frozen=True)
@@ -339,7 +353,7 @@ def load_agent(name: str, config: BenchmarkConfig, env: Any,
         env: The environment (for its id, the cord and ``max_step``).
         shape_model: The loaded shape model for the latent-tree agents (None: missing).
     """
-    spec = AGENTS[name]
+    spec = agent_spec(name)
     env_id = env.unwrapped.spec.id
     if env_id not in spec.environments:
         return LoadedAgent(name, None, missing=f"acts only in {', '.join(spec.environments)}")
@@ -347,6 +361,8 @@ def load_agent(name: str, config: BenchmarkConfig, env: Any,
     if pegs and spec.no_pegs:
         return LoadedAgent(name, None, missing=f"does not act among pegs: {spec.no_pegs}",
                            applicable=False)
+    if name.startswith(SB3_PREFIX):
+        return _load_sb3_agent(name, env)
     if spec.extra == "rl":
         from dlo_bench.baselines import read_baseline_metadata
 
@@ -400,6 +416,30 @@ def load_agent(name: str, config: BenchmarkConfig, env: Any,
                        sample_cost=" + ".join(costs) or "none (no learned model)",
                        models=tuple(model_files(name, env, config.model, path)),
                        settings=policy_settings(policy))
+
+
+def _load_sb3_agent(name: str, env: Any) -> LoadedAgent:
+    """An ``sb3:PATH`` agent for ``env``, its sample cost from its folder (else unknown), or
+    why it cannot act there (a model of other spaces)."""
+    from dlo_bench.sb3_models import find_sb3
+
+    source = find_sb3(name[len(SB3_PREFIX):])
+    try:
+        policy = build_agent(name, env)
+    except ValueError as exc:
+        return LoadedAgent(name, None, missing=str(exc).splitlines()[0], applicable=False)
+    meta = {}
+    if source.kind == "dlo baseline":
+        from dlo_bench.baselines import read_baseline_metadata
+
+        meta = read_baseline_metadata(source.model_file)
+    steps = meta.get("real_env_steps", meta.get("trained_timesteps"))
+    surrogate = int(meta.get("surrogate_steps", 0))
+    cost = "unknown (the folder does not record it)" if steps is None else (
+        f"{_steps(int(steps))} env steps" + (f" + {_steps(surrogate)} surrogate steps"
+                                             if surrogate else ""))
+    return LoadedAgent(name, policy, training_env_steps=None if steps is None else int(steps),
+                       sample_cost=cost, models=(str(source.model_file),))
 
 
 def training_data(info: dict[str, Any]) -> tuple[int | None, int | None]:
@@ -796,7 +836,7 @@ def run_cell(name: str, env_id: str, suite: str | int, config: BenchmarkConfig, 
         import torch
 
         torch.set_num_threads(threads)
-    if shape_model is None and AGENTS[name].shape_model:
+    if shape_model is None and agent_spec(name).shape_model:
         shape_model, why = load_shape_model(config.model)
         if shape_model is None:
             raise FileNotFoundError(f"no shape model: {why}")
@@ -860,7 +900,7 @@ def run_benchmark(config: BenchmarkConfig, out_dir: str | os.PathLike, *,
     version = code_version()
     machine = machine_label()
     shape_model, why = (None, "")
-    if any(AGENTS[a].shape_model for a in config.all_agents):
+    if any(agent_spec(a).shape_model for a in config.all_agents):
         shape_model, why = load_shape_model(config.model)
     rows: list[dict[str, Any]] = []
     todo: list[tuple[int, str, str, str, float, LoadedAgent, dict[str, Any]]] = []

@@ -47,7 +47,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                              "every cell compares with the published table's 50 tasks per "
                              f"cell, unlike the quick looks of dlo evaluate; {QUICK_EPISODES} "
                              "with --quick)")
-    add_agent(parser, default=list(BenchmarkConfig(cords=DEFAULT_CORDS).all_agents), sb3=False)
+    add_agent(parser, default=list(BenchmarkConfig(cords=DEFAULT_CORDS).all_agents))
     add_env(parser, list(BenchmarkConfig.envs), "environments, one or several", several=True)
     defaults = "; ".join(f"{e.split('/')[-1]}: {' '.join(map(str, d))}"
                          for e, d in DEFAULT_DIFFICULTIES.items())
@@ -183,12 +183,12 @@ def split_agents(names: list[str], cords: bool) -> tuple[tuple[str, ...], tuple[
     """``--agent`` as the config's ``agents`` (every name but the agents of the cords section
     only) and ``cord_agents`` (the names of ``CORD_AGENTS`` and of those, when cord suites
     run)."""
-    from dlo_bench.agents import AGENTS
+    from dlo_bench.agents import agent_spec
     from dlo_bench.benchmark import CORD_AGENTS
 
     names = list(dict.fromkeys(names))
-    agents = tuple(a for a in names if not AGENTS[a].cords)
-    cord_agents = tuple(a for a in names if AGENTS[a].cords or a in CORD_AGENTS) if cords \
+    agents = tuple(a for a in names if not agent_spec(a).cords)
+    cord_agents = tuple(a for a in names if agent_spec(a).cords or a in CORD_AGENTS) if cords \
         else ()
     if not agents and not cord_agents:
         raise ValueError(f"--agent names only agents of the cords section ({' '.join(names)}), "

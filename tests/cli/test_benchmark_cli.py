@@ -334,3 +334,25 @@ def test_committed_cells_keep_their_keys():
         assert json.loads(path.read_text())["benchmark_key"] == json_ready(key), path.name
         checked += 1
     assert checked
+
+
+def test_an_sb3_agent_runs_where_its_spaces_fit_and_is_n_a_elsewhere(tmp_path):
+    pytest.importorskip("stable_baselines3")
+    import gymnasium as gym
+    from stable_baselines3 import PPO
+
+    model = tmp_path / "mine.zip"
+    PPO("MultiInputPolicy", gym.make("dlo_env/DLOEndpoint-v0"), n_steps=32,
+        batch_size=32).save(model)
+    out = tmp_path / "bench"
+    code = main(["benchmark", "--quick", "--agent", f"sb3:{model}",
+                 f"sb3:{shipped_baseline('ppo')}", "--difficulty", "1", "--episodes", "1",
+                 "--allow-dirty", "--out", str(out)])
+    assert code == 0
+    rows = {(r["agent"], r["env"]): r for r in json.loads((out / "results.json").read_text())}
+    mine = rows[(f"sb3:{model}", "endpoint")]
+    assert mine["status"] == "ok" and mine["training_env_steps"] is None
+    assert rows[(f"sb3:{model}", "dual-endpoint")]["status"] == "n/a"
+    shipped = rows[(f"sb3:{shipped_baseline('ppo')}", "endpoint")]
+    assert shipped["status"] == "ok" and shipped["training_env_steps"] > 0
+    assert "sb3--" in " ".join(p.name for p in (out / "results_episodes").iterdir())
