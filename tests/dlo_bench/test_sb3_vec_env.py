@@ -69,3 +69,17 @@ def test_sb3_trains_on_the_batch(algo):
                     learning_starts=100, batch_size=32)
     model.learn(256)
     assert model.num_timesteps >= 256
+
+
+def test_the_train_in_surrogate_example_trains_and_scores_in_pymunk(tmp_path, monkeypatch,
+                                                                     capsys):
+    from scripts import load_script
+
+    example = load_script("examples/train_in_surrogate.py")
+    monkeypatch.setattr("sys.argv", ["train_in_surrogate.py", "--timesteps", "512",
+                                     "--num-envs", "64", "--episodes", "1",
+                                     "--out", str(tmp_path)])
+    example.main()
+    out = capsys.readouterr().out
+    assert (tmp_path / "model.zip").is_file()
+    assert "surrogate steps (0 pymunk steps)" in out and "in pymunk, linear-1" in out
