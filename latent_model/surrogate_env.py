@@ -23,7 +23,13 @@ from gymnasium.vector import AutoresetMode, VectorEnv
 from gymnasium.vector.utils import batch_space
 
 from dlo_env.cord import PEG_RADIUS, CordParams
-from dlo_env.envs.goal_api import GoalReward, check_goal_args, goal_metrics, goal_spaces
+from dlo_env.envs.goal_api import (
+    GoalReward,
+    check_goal_args,
+    goal_metrics,
+    goal_spaces,
+    option_difficulty,
+)
 from dlo_env.shapes import (
     BEAD_TOLERANCE,
     SUCCESS_METRICS,
@@ -341,9 +347,7 @@ class SurrogateCords:
                            rng: np.random.Generator, difficulty: int, min_error: float
                            ) -> TaskBatch:
         """The ``count`` tasks of a reset's ``options`` (see the environments' Reset Options)."""
-        unknown = sorted(set(options) - set(OPTIONS))
-        if unknown:
-            raise ValueError(f"options has unknown keys {unknown}; expected some of {OPTIONS}")
+        difficulty = option_difficulty(options, OPTIONS, difficulty)
         if "pegs" in options and len(np.asarray(options["pegs"]).reshape(-1)):
             raise ValueError("options['pegs']: the surrogate environments model the empty "
                              "table (no pegs); use the pymunk environment for pegs")
@@ -351,17 +355,10 @@ class SurrogateCords:
             raise ValueError(f"options['params']: this surrogate's model predicts one cord "
                              f"({self.params}); make the environment with params=... and a "
                              f"model of that cord")
-        if "difficulty" in options:
-            difficulty = check_difficulty(options["difficulty"], name="options['difficulty']")
         if "task" in options:
-            if len(set(options) - {"params"}) > 1:
-                raise ValueError("options['task'] combines only with options['params'], got "
-                                 f"{sorted(options)}")
             return self._given_tasks(options["task"], count)
         starts = self._shape_option(options, "start", count)
         goals = self._shape_option(options, "goal", count)
-        if goals is not None and "difficulty" in options:
-            raise ValueError("options['difficulty'] has no effect when options['goal'] is given")
         if goals is None:
             return self.draw_tasks(rng, count, difficulty, min_error, starts)
         if starts is None:

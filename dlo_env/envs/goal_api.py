@@ -79,6 +79,29 @@ def goal_metrics(shapes: np.ndarray, goals: np.ndarray) -> dict[str, Any]:
     }
 
 
+def option_difficulty(options: dict[str, Any], known: tuple[str, ...], difficulty: Any) -> Any:
+    """The reset ``options``' rules every cord environment shares: only ``known`` keys,
+    ``task`` with ``params`` alone, no ``difficulty`` with a given ``goal``. Returns the
+    episode's difficulty: ``options["difficulty"]`` checked, else ``difficulty``.
+
+    Raises:
+        ValueError: Naming the option that breaks a rule.
+    """
+    from dlo_env.tasks import check_difficulty
+
+    unknown = sorted(set(options) - set(known))
+    if unknown:
+        raise ValueError(f"options has unknown keys {unknown}; expected some of {known}")
+    if "task" in options and len(set(options) - {"params"}) > 1:
+        raise ValueError("options['task'] combines only with options['params'] (a task "
+                         f"carries its pegs), got {sorted(options)}")
+    if "goal" in options and "difficulty" in options:
+        raise ValueError("options['difficulty'] has no effect when options['goal'] is given")
+    if "difficulty" in options:
+        return check_difficulty(options["difficulty"], name="options['difficulty']")
+    return difficulty
+
+
 class GoalReward:
     """Gymnasium-Robotics' goal API over batches: the reward, termination and truncation of
     any achieved and desired goals, as ``step`` computes them (hindsight relabelling is

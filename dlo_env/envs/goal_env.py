@@ -23,7 +23,13 @@ from dlo_env.cord import (
     check_not_crossing,
     check_pegs,
 )
-from dlo_env.envs.goal_api import GoalReward, check_goal_args, goal_metrics, goal_spaces
+from dlo_env.envs.goal_api import (
+    GoalReward,
+    check_goal_args,
+    goal_metrics,
+    goal_spaces,
+    option_difficulty,
+)
 from dlo_env.randomize import check_params, check_randomize, draw_params
 from dlo_env.shapes import (
     SUCCESS_METRICS,
@@ -310,27 +316,17 @@ class CordGoalEnv(GoalReward, gym.Env[dict[str, np.ndarray], np.ndarray]):
 
     def _episode(self, options: dict
                  ) -> tuple[np.ndarray, np.ndarray, Task | None, CordParams, np.ndarray]:
-        unknown = sorted(set(options) - set(_OPTIONS))
-        if unknown:
-            raise ValueError(f"options has unknown keys {unknown}; expected some of {_OPTIONS}")
+        difficulty = option_difficulty(options, _OPTIONS, self.difficulty)
         # The episode's cord first, then its task; the env's cord changes only once every
         # option has passed (a refused reset leaves the environment as it was).
         p = self._episode_params(options)
         pegs = self._pegs_option(options)
-        difficulty = self.difficulty
-        if "difficulty" in options:
-            difficulty = check_difficulty(options["difficulty"], name="options['difficulty']")
         if "task" in options:
-            if len(set(options) - {"params"}) > 1:
-                raise ValueError("options['task'] combines only with options['params'] (a task "
-                                 f"carries its pegs), got {sorted(options)}")
             task = self._check_task(options["task"], p)
             return task.start, task.goal, task, p, task.pegs
         given = pegs if pegs is not None else np.zeros((0, 2), dtype=np.float32)
         start, goal = (self._shape_option(options, name, p, given) if name in options else None
                        for name in ("start", "goal"))
-        if goal is not None and "difficulty" in options:
-            raise ValueError("options['difficulty'] has no effect when options['goal'] is given")
         if goal is not None and start is not None:
             return start, goal, None, p, given
         seed = int(self.np_random.integers(2**31 - 1))
