@@ -86,6 +86,8 @@ class BaselineConfig:
         surrogate: Train in ``env_id``'s learned twin (``dlo_env.SURROGATE_OF``): ``n_envs``
             cords stepped in one batched call of the transition model; every training step
             is then a surrogate step, none a pymunk one. The agent acts in ``env_id``.
+        uncertainty_penalty: With ``surrogate``, the reward is lowered by this times the
+            ensemble's spread of each prediction (metres; MOPO's penalty; 0: none).
     """
 
     algo: str = "ppo"
@@ -115,6 +117,7 @@ class BaselineConfig:
     max_pegs: int = 0
     success_threshold: float = 0.02
     surrogate: bool = False
+    uncertainty_penalty: float = 0.0
 
     def __post_init__(self) -> None:
         from dlo_env.cord import MAX_PEGS
@@ -134,6 +137,10 @@ class BaselineConfig:
         positive(self, "learning_rate", "success_threshold")
         check_fields(self, ("surrogate", "subprocess"), lambda v: isinstance(v, bool),
                      "True or False")
+        non_negative(self, "uncertainty_penalty")
+        if self.uncertainty_penalty and not self.surrogate:
+            raise ValueError("uncertainty_penalty needs surrogate=True (the pymunk environment "
+                             "has no ensemble)")
         if self.surrogate and (self.cords != "fixed" or self.max_pegs or self.subprocess):
             raise ValueError("surrogate needs cords='fixed', max_pegs=0 and subprocess=False: "
                              "the surrogate steps the empty table's default cord in one "
@@ -267,7 +274,8 @@ def _surrogate_vec_env(config: BaselineConfig, monitor_dir: str | None, append: 
     venv = gym.make_vec(SURROGATE_OF[config.env_id], num_envs=config.n_envs,
                         vectorization_mode="vector_entry_point", autoreset_mode="same_step",
                         reward_type=config.reward_type, difficulty=tuple(config.difficulties),
-                        success_threshold=config.success_threshold, device="cpu")
+                        success_threshold=config.success_threshold,
+                        uncertainty_penalty=config.uncertainty_penalty, device="cpu")
     path = None if monitor_dir is None else os.path.join(monitor_dir, "0")
     if path is not None and append:  # VecMonitor has no append: keep the earlier episodes
         old = Path(path + ".monitor.csv")
