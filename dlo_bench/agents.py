@@ -360,6 +360,13 @@ AGENTS: dict[str, AgentSpec] = {spec.name: spec for spec in (
     AgentSpec("sac-her", "the shipped SAC + HER baseline (Stable-Baselines3)", _sb3("sac-her"),
               environments=(ENDPOINT, DUAL_ENDPOINT), extra="rl",
               train="dlo baseline --algo sac-her --env {env}"),
+    AgentSpec("ppo-surrogate", "PPO trained in the surrogate environment (the learned cord), no "
+              "pymunk step", _sb3("ppo", "ppo-surrogate"), environments=(ENDPOINT,),
+              extra="rl",
+              train="dlo baseline --algo ppo --surrogate --n-envs 256 --difficulty 1 2 3 4 5 "
+                    "--success-threshold 0.01 --timesteps 5000000 --set ppo_n_steps=64 "
+                    "ppo_batch_size=2048 ppo_epochs=5 --env {env}",
+              no_pegs="it trained in the surrogate, which models the empty table"),
     AgentSpec("bc", "behaviour cloning of the oracle demonstrations (Minari datasets)", _bc,
               environments=(ENDPOINT, DUAL_ENDPOINT), extra="rl",
               train="dlo_bench.behaviour_cloning.train_bc for {env}",

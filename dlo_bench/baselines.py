@@ -514,6 +514,27 @@ def read_baseline_metadata(path: str | os.PathLike) -> dict[str, Any]:
     return meta
 
 
+def slim_model(source: str | os.PathLike, target: str | os.PathLike) -> Path:
+    """Write ``source``'s SB3 model to ``target`` with a fresh optimizer: the policy the
+    agents load (the same actions), without the optimizer's running moments, about a third of
+    the file. Training continues from the run's own ``model.zip`` or ``checkpoint.zip``.
+    """
+    from stable_baselines3 import PPO, SAC
+
+    from dlo_bench.sb3_models import find_sb3
+
+    cls = {"PPO": PPO, "SAC": SAC}[find_sb3(source).algo]
+    model = cls.load(source, device="cpu")
+    for policy in (model.policy, getattr(model.policy, "actor", None),
+                   getattr(model.policy, "critic", None)):
+        optimizer = getattr(policy, "optimizer", None)
+        if optimizer is not None:
+            policy.optimizer = type(optimizer)(policy.parameters(), **optimizer.defaults)
+    target = Path(target)
+    _save_atomic(model, target)
+    return target
+
+
 def load_baseline(path: str | os.PathLike, device: str = "cpu", algo: str = "",
                   cords: str = "") -> Any:
     """Load a folder written by ``train_baseline`` (or its ``model.zip``).

@@ -821,6 +821,15 @@ class SurrogateCordEnv(_SurrogateArgs, GoalReward, gym.Env[dict[str, np.ndarray]
         obs, info = self._one(spread)
         return obs, self._reward, bool(info["is_success"]), False, info
 
+    def settled_metrics(self) -> dict[str, Any]:
+        """The errors of the shape at rest, as the pymunk environment's: the cord is always at
+        rest here, so those of the current shape, with ``shape`` and ``at_rest`` (True)."""
+        if not self._started:
+            raise RuntimeError("settled_metrics() needs an episode: call reset() first")
+        shape = self.cords.shapes_numpy()[0]
+        metrics = goal_metrics(shape, self.cords.goals[0])
+        return {**metrics, "shape": shape.copy(), "at_rest": True}
+
     def render(self) -> np.ndarray | None:
         """An ``(H, W, 3)`` frame of the cord and its goal (``render_mode="rgb_array"``)."""
         if self.render_mode is None or not self._started:
