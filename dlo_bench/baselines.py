@@ -515,23 +515,27 @@ def read_baseline_metadata(path: str | os.PathLike) -> dict[str, Any]:
 
 
 def slim_model(source: str | os.PathLike, target: str | os.PathLike) -> Path:
-    """Write ``source``'s SB3 model to ``target`` with a fresh optimizer: the policy the
-    agents load (the same actions), without the optimizer's running moments, about a third of
-    the file. Training continues from the run's own ``model.zip`` or ``checkpoint.zip``.
-    """
-    from stable_baselines3 import PPO, SAC
+    """Write ``source``'s SB3 model zip to ``target`` with its optimizers' running moments
+    emptied (``state`` of every ``*optimizer.pth``; their settings kept): the policy the agents
+    load, acting the same, in about a third of the file. Training continues from the run's own
+    ``model.zip`` or ``checkpoint.zip``."""
+    import io
+    import zipfile
 
-    from dlo_bench.sb3_models import find_sb3
+    import torch
 
-    cls = {"PPO": PPO, "SAC": SAC}[find_sb3(source).algo]
-    model = cls.load(source, device="cpu")
-    for policy in (model.policy, getattr(model.policy, "actor", None),
-                   getattr(model.policy, "critic", None)):
-        optimizer = getattr(policy, "optimizer", None)
-        if optimizer is not None:
-            policy.optimizer = type(optimizer)(policy.parameters(), **optimizer.defaults)
     target = Path(target)
-    _save_atomic(model, target)
+    with atomic_path(target) as tmp, zipfile.ZipFile(source) as src, \
+            zipfile.ZipFile(tmp, "w", zipfile.ZIP_DEFLATED) as dst:
+        for item in src.infolist():
+            data = src.read(item.filename)
+            if item.filename.endswith("optimizer.pth"):
+                state = torch.load(io.BytesIO(data), map_location="cpu", weights_only=True)
+                state["state"] = {}
+                buffer = io.BytesIO()
+                torch.save(state, buffer)
+                data = buffer.getvalue()
+            dst.writestr(item, data)
     return target
 
 

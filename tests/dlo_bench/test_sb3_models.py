@@ -99,3 +99,19 @@ def test_a_path_without_a_model_is_refused_naming_what_sb3_takes(tmp_path):
     (tmp_path / "junk.zip").write_text("not a zip")
     with pytest.raises(ValueError, match="not a Stable-Baselines3 model zip"):
         find_sb3(tmp_path / "junk.zip")
+
+
+def test_a_slim_model_acts_as_the_full_one_in_a_smaller_file(tmp_path):
+    from dlo_bench.baselines import slim_model
+
+    full = shipped_baseline("sac-her") / "model.zip"
+    slim = slim_model(full, tmp_path / "model.zip")
+    assert slim.stat().st_size < 0.7 * full.stat().st_size
+    env = gym.make(ENV)
+    obs, _ = env.reset(seed=0)
+    from stable_baselines3 import SAC
+    from stable_baselines3.common.vec_env import DummyVecEnv
+
+    act = [SAC.load(p, env=DummyVecEnv([lambda: env]), buffer_size=1).predict(
+        obs, deterministic=True)[0] for p in (full, slim)]
+    assert np.array_equal(act[0], act[1])

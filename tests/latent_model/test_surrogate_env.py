@@ -289,3 +289,13 @@ def test_latent_mpc_acts_in_the_surrogate_as_in_pymunk(grasp):
         if terminated:
             break
     assert info["is_success"]
+
+
+def test_settled_metrics_are_those_of_the_cord_at_rest_now():
+    env = gym.make(IDS["head"], device="cpu").unwrapped
+    with pytest.raises(RuntimeError, match="reset"):
+        env.settled_metrics()
+    obs, info = env.reset(seed=0)
+    rest = env.settled_metrics()
+    assert rest["at_rest"] and rest["error"] == info["error"]
+    assert np.array_equal(rest["shape"].reshape(-1), obs["achieved_goal"])
