@@ -428,6 +428,8 @@ def _load_sb3_agent(name: str, env: Any) -> LoadedAgent:
         policy = build_agent(name, env)
     except ValueError as exc:
         return LoadedAgent(name, None, missing=str(exc).splitlines()[0], applicable=False)
+    except ImportError as exc:  # a TQC model without sb3_contrib, say
+        return LoadedAgent(name, None, missing=str(exc).splitlines()[0])
     meta = {}
     if source.kind == "dlo baseline":
         from dlo_bench.baselines import read_baseline_metadata

@@ -101,6 +101,11 @@ def _zoo_facts(folder: Path) -> tuple[Path | None, str | None, float | None]:
     (``args.yml``) and training threshold (``env_kwargs`` of ``config.yml``; None when it
     leaves the environment's default)."""
     env_id = threshold = None
+    normalised = sorted(folder.glob("*/vecnormalize.pkl"))
+    if normalised:
+        raise ValueError(f"sb3:PATH: {folder} was trained on normalised observations "
+                         f"({normalised[0].name}), which sb3: does not apply: train without "
+                         "normalize, or wrap the model so its predict normalises")
     for args_file in sorted(folder.glob("*/args.yml"))[:1]:
         env_id = _read_zoo_yaml(args_file).get("env")
         config = args_file.with_name("config.yml")

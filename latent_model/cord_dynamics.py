@@ -66,7 +66,8 @@ def inextensible(points: torch.Tensor, rest: float | torch.Tensor, pin_first: bo
     longest = MAX_MOVE * rest
     for _ in range(iterations):
         ex, ey = x[1:] - x[:-1], y[1:] - y[:-1]
-        length = torch.sqrt(ex * ex + ey * ey).clamp_min(1e-12)
+        # sqrt of a clamped square: finite gradients where a length or a step is exactly 0
+        length = torch.sqrt((ex * ex + ey * ey).clamp_min(1e-24))
         ex, ey = ex / length, ey / length
         excess = length - rest
         off = -(ex[:-1] * ex[1:] + ey[:-1] * ey[1:])  # (m - 1, B)
@@ -84,7 +85,7 @@ def inextensible(points: torch.Tensor, rest: float | torch.Tensor, pin_first: bo
         zero = px.new_zeros(1, b)
         dx = (torch.cat([px, zero]) - torch.cat([zero, px])) * free_col
         dy = (torch.cat([py, zero]) - torch.cat([zero, py])) * free_col
-        step = torch.sqrt((dx * dx + dy * dy).amax(dim=0, keepdim=True))
+        step = torch.sqrt((dx * dx + dy * dy).amax(dim=0, keepdim=True).clamp_min(1e-24))
         scale = longest / torch.maximum(step, longest)
         x, y = x + dx * scale, y + dy * scale
     return torch.stack([x.T, y.T], dim=-1)
@@ -174,6 +175,11 @@ class CordDynamics:
             ``return_std`` also the spread (no gradient).
         """
         b = len(shapes)
+        if shapes.dim() != 3 or shapes.shape[-1] != 2:
+            raise ValueError(f"shapes must have shape (B, n, 2), got {tuple(shapes.shape)}")
+        if tuple(displacement.shape) != (b, self.action_width):
+            raise ValueError(f"displacement must have shape ({b}, {self.action_width}) for "
+                             f"grasp={self.grasp!r}, got {tuple(displacement.shape)}")
         moves = self.reachable(shapes, displacement)
         grasp = torch.full((b,), self._code, dtype=torch.int64, device=shapes.device)
         cord = None if self._cord is None else self._cord.expand(b, -1)

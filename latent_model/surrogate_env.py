@@ -69,12 +69,15 @@ class TaskBatch:
         goals: ``(B, n, 2)`` float32 goal shapes (the model's shapes after ``moves``).
         moves: ``(B, K, action_dim)`` float32 straight moves, metres (``K`` 0: given goals).
         difficulty: ``(B,)`` int moves per task (0: a given goal).
+        given: The ``Task`` objects of ``options["task"]``, one per row (None: made here):
+            their seeds and reference actions are reported as they are.
     """
 
     starts: np.ndarray
     goals: np.ndarray
     moves: np.ndarray
     difficulty: np.ndarray
+    given: list[Task] | None = None
 
     @staticmethod
     def concat(batches: list[TaskBatch]) -> TaskBatch:
@@ -87,8 +90,9 @@ class TaskBatch:
 
     def take(self, index: np.ndarray) -> TaskBatch:
         """The tasks at ``index``."""
+        given = None if self.given is None else [self.given[i] for i in index]
         return TaskBatch(self.starts[index], self.goals[index], self.moves[index],
-                         self.difficulty[index])
+                         self.difficulty[index], given)
 
     def __len__(self) -> int:
         return len(self.starts)
@@ -373,19 +377,26 @@ class SurrogateCords:
         p = self.params
         arr = np.asarray(options[name], dtype=np.float32)
         single = arr.ndim == 1 or (arr.ndim == 2 and arr.shape == (p.n_points, 2))
-        rows = [arr] if single else list(arr)
+        rows = arr[None] if single else arr
         if not single and len(rows) != count:
             raise ValueError(f"options['{name}'] must be one shape or one per environment "
                              f"({count}), got {len(rows)}")
-        shapes = np.stack([validate_shape(r, n_points=p.n_points, length=p.length,
-                                          name=f"options['{name}']") for r in rows])
+        shapes = self._checked(rows, f"options['{name}']")
+        return np.broadcast_to(shapes, (count,) + shapes.shape[1:]).astype(np.float32)
+
+    def _checked(self, rows: np.ndarray, name: str) -> np.ndarray:
+        """Shapes ``rows`` checked as the pymunk environment checks them (``validate_shape``;
+        with both ends held, the ends within the span); ``(k, n, 2)`` float32."""
+        p = self.params
+        shapes = np.stack([validate_shape(r, n_points=p.n_points, length=p.length, name=name)
+                           for r in rows])
         if self.grasp == "both":
             span = np.linalg.norm(shapes[:, -1] - shapes[:, 0], axis=-1)
             if (span >= p.max_span * p.length).any():
-                raise ValueError(f"options['{name}'] must have its head and tail closer than "
+                raise ValueError(f"{name} must have its head and tail closer than "
                                  f"max_span * length = {p.max_span * p.length:.3f} m when both "
                                  f"ends are held, got {span.max():.3f} m")
-        return np.broadcast_to(shapes, (count,) + shapes.shape[1:]).astype(np.float32)
+        return shapes.astype(np.float32)
 
     def _given_tasks(self, tasks: Any, count: int) -> TaskBatch:
         tasks = [tasks] if isinstance(tasks, Task) else list(tasks)
@@ -410,8 +421,10 @@ class SurrogateCords:
         moves = np.zeros((count, k, 2 * len(self.ends)), dtype=np.float32)
         for i, t in enumerate(tasks):
             moves[i, :t.difficulty] = t.moves
-        return TaskBatch(np.stack([t.start for t in tasks]), np.stack([t.goal for t in tasks]),
-                         moves, np.array([t.difficulty for t in tasks], dtype=np.int64))
+        starts = self._checked(np.stack([t.start for t in tasks]), "options['task'].start")
+        goals = self._checked(np.stack([t.goal for t in tasks]), "options['task'].goal")
+        return TaskBatch(starts, goals, moves,
+                         np.array([t.difficulty for t in tasks], dtype=np.int64), tasks)
 
 
 class _SurrogateArgs:
@@ -503,8 +516,13 @@ class _SurrogateArgs:
         moves = np.empty(b, dtype=object)
         actions = np.empty(b, dtype=object)
         moves[:] = [m[:k] for m, k in zip(tasks.moves, tasks.difficulty)]
-        actions[:] = self.cords.reference_actions(tasks.moves, tasks.difficulty)
-        return {"difficulty": tasks.difficulty.copy(), "task_seed": np.full(b, -1),
+        seeds = np.full(b, -1)
+        if tasks.given is not None:  # the suites' tasks, as they are
+            actions[:] = [t.reference_actions for t in tasks.given]
+            seeds[:] = [t.seed for t in tasks.given]
+        else:
+            actions[:] = self.cords.reference_actions(tasks.moves, tasks.difficulty)
+        return {"difficulty": tasks.difficulty.copy(), "task_seed": seeds,
                 "moves": moves, "reference_actions": actions}
 
     def _render_one(self, shape: np.ndarray, goal: np.ndarray) -> np.ndarray | None:
@@ -524,6 +542,7 @@ class _SurrogateArgs:
         if self._renderer is not None:
             self._renderer.close()
             self._renderer = None
+        super().close(**kwargs)  # a vector env marks itself closed
 
 
 def _check_actions(actions: Any, shape: tuple[int, ...]) -> np.ndarray:
@@ -593,7 +612,8 @@ class SurrogateCordVectorEnv(_SurrogateArgs, GoalReward, VectorEnv):
         if not (isinstance(num_envs, (int, np.integer)) and not isinstance(num_envs, bool)
                 and num_envs >= 1):
             raise ValueError(f"num_envs must be an int >= 1, got {num_envs!r}")
-        if not (isinstance(max_episode_steps, (int, np.integer)) and max_episode_steps >= 1):
+        if not (isinstance(max_episode_steps, (int, np.integer)) and not isinstance(
+                max_episode_steps, bool) and max_episode_steps >= 1):
             raise ValueError(f"max_episode_steps must be an int >= 1, got {max_episode_steps!r}")
         mode = autoreset_mode.value if isinstance(autoreset_mode, AutoresetMode) else (
             autoreset_mode)
@@ -617,11 +637,15 @@ class SurrogateCordVectorEnv(_SurrogateArgs, GoalReward, VectorEnv):
         self.steps = np.zeros(self.num_envs, dtype=np.int64)
         self._prev_done = np.zeros(self.num_envs, dtype=bool)
         self._stock: TaskBatch | None = None
+        self._stock_settings: tuple[Any, float] | None = None
         self._started = False
 
     # ------------------------------------------------------------- tasks
     def _autoreset_tasks(self, count: int) -> TaskBatch:
         """``count`` tasks of the default difficulty, from a stock drawn in large batches."""
+        settings = (self.difficulty, self.success_threshold)
+        if settings != self._stock_settings:  # drawn for other settings: not these
+            self._stock, self._stock_settings = None, settings
         if self._stock is None or len(self._stock) < count:
             fresh = self.cords.draw_tasks(self.np_random, max(TASK_BATCH, self.num_envs, count),
                                           self.difficulty, self.success_threshold)
@@ -791,12 +815,15 @@ class SurrogateCordEnv(_SurrogateArgs, GoalReward, gym.Env[dict[str, np.ndarray]
         obs, info = self._one(None)
         extra = self._reset_info(tasks)
         k = int(tasks.difficulty[0])
-        self.task = Task(start=tasks.starts[0], goal=tasks.goals[0],
-                         reference_actions=extra["reference_actions"][0], difficulty=k,
-                         seed=-1, grasp=self.grasp, moves=tasks.moves[0, :k],
-                         max_step=self.max_step) if k else None
+        if tasks.given is not None:
+            self.task = tasks.given[0]
+        else:
+            self.task = Task(start=tasks.starts[0], goal=tasks.goals[0],
+                             reference_actions=extra["reference_actions"][0], difficulty=k,
+                             seed=-1, grasp=self.grasp, moves=tasks.moves[0, :k],
+                             max_step=self.max_step) if k else None
         info.update({"params": self.params, "pegs": (), "task": self.task, "difficulty": k,
-                     "task_seed": -1,
+                     "task_seed": int(extra["task_seed"][0]),
                      "reference_actions": tuple(extra["reference_actions"][0]),
                      "moves": tuple(extra["moves"][0])})
         return obs, info

@@ -99,6 +99,9 @@ class GradMPCPolicy(LatentMPCPolicy):
                                                                                      goal))))
         start = mean + std * self._rng.standard_normal((cfg.samples,) + dims)
         start[0] = mean
+        # A move of exactly zero leaves the cord where it is, so it has no gradient: nudge it.
+        still = np.linalg.norm(start, axis=-1, keepdims=True) == 0
+        start = np.where(still, cfg.min_std * self._rng.standard_normal(start.shape), start)
         plans = torch.tensor(self._clip(start), dtype=torch.float32, requires_grad=True)
         origin = torch.from_numpy(shape.astype(np.float32)).expand(cfg.samples, -1, -1)
         target = torch.from_numpy(goal.astype(np.float32))

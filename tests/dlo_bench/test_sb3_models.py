@@ -75,6 +75,9 @@ def test_an_rl_zoo3_run_folder_gives_its_environment_and_threshold(plain_zip, tm
     source = find_sb3(run)
     assert (source.kind, source.env_id, source.training_threshold) == ("rl-zoo3", ENV, 0.01)
     _acts(f"sb3:{run}")
+    (params / "vecnormalize.pkl").write_bytes(b"")  # trained on normalised observations
+    with pytest.raises(ValueError, match="normalised observations"):
+        find_sb3(run)
 
 
 def test_a_baseline_folder_whose_metadata_disagrees_with_its_model_is_refused(tmp_path):

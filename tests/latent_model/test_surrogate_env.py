@@ -141,6 +141,45 @@ def test_a_suite_task_loads_as_it_is_and_its_reference_actions_nearly_solve_it(g
     assert np.median(errors) < 0.01
 
 
+def test_a_given_task_keeps_its_seed_and_reference_actions_and_is_checked():
+    task = load_suite("linear-2", "test", limit=1)[0]
+    env = gym.make(IDS["head"], device="cpu")
+    _, info = env.reset(options={"task": task})
+    assert info["task"] is task and info["task_seed"] == task.seed
+    assert np.array_equal(np.asarray(info["reference_actions"]), task.reference_actions)
+    venv = make_vec("head", 2)
+    _, info = venv.reset(options={"task": [task, task]})
+    assert list(info["task_seed"]) == [task.seed] * 2
+    stretched = type(task)(start=task.start * 1.3, goal=task.goal, difficulty=task.difficulty,
+                           reference_actions=task.reference_actions, seed=task.seed,
+                           grasp="head", moves=task.moves)
+    with pytest.raises(ValueError, match="options\\['task'\\].start"):
+        env.reset(options={"task": stretched})
+
+
+def test_a_displacement_of_the_wrong_width_is_refused(model):
+    with pytest.raises(ValueError, match="displacement must have shape"):
+        CordDynamics(model, "both").step(torch.zeros(3, 20, 2), torch.zeros(3, 2))
+
+
+def test_projection_gradients_are_finite_on_a_cord_already_at_rest_length():
+    points = torch.zeros(2, 5, 2)
+    points[..., 0] = torch.arange(5) * 0.25
+    points.requires_grad_(True)
+    inextensible(points, 0.25, True, False, 3).sum().backward()
+    assert torch.isfinite(points.grad).all()
+
+
+def test_changing_the_difficulty_draws_new_tasks_at_the_next_autoreset():
+    venv = make_vec("head", 2, max_episode_steps=1)
+    venv.reset(seed=0)
+    venv.unwrapped.difficulty = 4
+    zero = np.zeros((2, 2), np.float32)
+    venv.step(zero)
+    info = venv.step(zero)[-1]
+    assert list(info["difficulty"]) == [4, 4]
+
+
 def test_drawn_tasks_replay_their_moves_through_the_model(model):
     env = gym.make(IDS["head"], device="cpu", difficulty=2)
     obs, info = env.reset(seed=3)
