@@ -361,8 +361,8 @@ AGENTS: dict[str, AgentSpec] = {spec.name: spec for spec in (
               environments=(ENDPOINT, DUAL_ENDPOINT), extra="rl",
               train="dlo baseline --algo sac-her --env {env}"),
     AgentSpec("ppo-surrogate", "PPO trained in the surrogate environment (the learned cord), no "
-              "pymunk step", _sb3("ppo", "ppo-surrogate"), environments=(ENDPOINT,),
-              extra="rl",
+              "pymunk step", _sb3("ppo", "ppo-surrogate"),
+              environments=(ENDPOINT, DUAL_ENDPOINT), extra="rl",
               train="dlo baseline --algo ppo --surrogate --n-envs 256 --difficulty 1 2 3 4 5 "
                     "--success-threshold 0.01 --timesteps 5000000 --set ppo_n_steps=64 "
                     "ppo_batch_size=2048 ppo_epochs=5 --env {env}",
