@@ -14,7 +14,7 @@ from dlo_cli.main import main
 
 AGENTS = ["straight-line", "latent-tree", "latent-tree-closed", "latent-tree-kino", "physics-mpc",
           "latent-mpc", "grad-mpc", "ppo",
-          "sac-her", "bc"]
+          "sac-her", "ppo-surrogate", "bc"]
 ROW_KEYS = {"agent", "difficulty", "success_rate", "median_error", "seconds_per_episode",
             "training_env_steps", "status"}
 
@@ -36,6 +36,7 @@ def models(tmp_path_factory):
         train_baseline(BaselineConfig(algo=algo, **tiny), root / algo, progress_bar=False)
     ShapeModel(ModelConfig(), Normalisation(), device="cpu").save(root / "shape.pt")
     shutil.copytree(shipped_baseline("bc"), root / "bc")  # trained offline: no extra needed
+    shutil.copytree(shipped_baseline("ppo-surrogate"), root / "ppo-surrogate")
     return root
 
 
