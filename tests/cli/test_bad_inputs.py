@@ -65,7 +65,7 @@ CASES = [
     # Others found by trying.
     ("evaluate --agent teleport --out OUT", "--agent", ("'teleport'", "straight-line")),
     ("benchmark --agent teleport --out OUT", "--agent", ("'teleport'", "straight-line")),
-    ("benchmark --agent sb3:runs/ppo --out OUT", "--agent", ("sb3:runs/ppo",)),
+    ("benchmark --agent sb3:runs/ppo --out OUT", "--agent", ("runs/ppo", "no such file")),
     ("evaluate --agent sb3:OUT/nope --out OUT", "--agent", ("nope", "dlo baseline")),
     ("evaluate --out OUT", "--agent", ("required",)),
     ("evaluate --agent straight-line --split nope --out OUT", "--split", ("'nope'", "test")),
