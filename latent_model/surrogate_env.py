@@ -26,6 +26,7 @@ from dlo_env.cord import PEG_RADIUS, CordParams
 from dlo_env.envs.goal_api import (
     GoalReward,
     check_goal_args,
+    check_task,
     goal_metrics,
     goal_spaces,
     option_difficulty,
@@ -404,18 +405,10 @@ class SurrogateCords:
             raise ValueError(f"options['task'] must be one Task or one per environment "
                              f"({count}), got {len(tasks)}")
         for task in tasks:
-            if not isinstance(task, Task):
-                raise ValueError(f"options['task'] must be a dlo_env.tasks.Task, got "
-                                 f"{type(task).__name__}")
-            if task.grasp != self.grasp:
-                raise ValueError(f"options['task'] must have grasp {self.grasp!r} for this "
-                                 f"environment, got {task.grasp!r}")
+            check_task(task, self.grasp, self.max_step)
             if len(task.pegs):
                 raise ValueError("options['task'] has pegs: the surrogate environments model "
                                  "the empty table")
-            if task.max_step != self.max_step:
-                raise ValueError(f"options['task'] was made with max_step {task.max_step}, "
-                                 f"this environment uses {self.max_step}")
         tasks = tasks * count if len(tasks) == 1 else tasks
         k = max(t.difficulty for t in tasks)
         moves = np.zeros((count, k, 2 * len(self.ends)), dtype=np.float32)

@@ -102,6 +102,23 @@ def option_difficulty(options: dict[str, Any], known: tuple[str, ...], difficult
     return difficulty
 
 
+def check_task(task: object, grasp: str, max_step: float) -> Any:
+    """``options["task"]`` checked against an environment: a ``dlo_env.tasks.Task`` of its
+    grasp and ``max_step`` (a one-line ``ValueError`` naming the option otherwise)."""
+    from dlo_env.tasks import Task
+
+    if not isinstance(task, Task):
+        raise ValueError(f"options['task'] must be a dlo_env.tasks.Task, got "
+                         f"{type(task).__name__}")
+    if task.grasp != grasp:
+        raise ValueError(f"options['task'] must have grasp {grasp!r} for this environment, "
+                         f"got {task.grasp!r}")
+    if task.max_step != max_step:
+        raise ValueError(f"options['task'] was made with max_step {task.max_step}, this "
+                         f"environment uses {max_step}")
+    return task
+
+
 class GoalReward:
     """Gymnasium-Robotics' goal API over batches: the reward, termination and truncation of
     any achieved and desired goals, as ``step`` computes them (hindsight relabelling is

@@ -26,6 +26,7 @@ from dlo_env.cord import (
 from dlo_env.envs.goal_api import (
     GoalReward,
     check_goal_args,
+    check_task,
     goal_metrics,
     goal_spaces,
     option_difficulty,
@@ -341,15 +342,7 @@ class CordGoalEnv(GoalReward, gym.Env[dict[str, np.ndarray], np.ndarray]):
         return task.start, task.goal, task, p, task.pegs
 
     def _check_task(self, task: object, p: CordParams) -> Task:
-        if not isinstance(task, Task):
-            raise ValueError(f"options['task'] must be a dlo_env.tasks.Task, got "
-                             f"{type(task).__name__}")
-        if task.grasp != self.grasp:
-            raise ValueError(f"options['task'] must have grasp {self.grasp!r} for this "
-                             f"environment, got {task.grasp!r}")
-        if task.max_step != self.max_step:
-            raise ValueError(f"options['task'] was made with max_step {task.max_step}, "
-                             f"this environment uses {self.max_step}")
+        task = check_task(task, self.grasp, self.max_step)
         if len(task.pegs) > self.max_pegs:
             raise ValueError(f"options['task'] has {len(task.pegs)} pegs, more than this "
                              f"environment observes: make it with gym.make(id, max_pegs="
