@@ -433,9 +433,7 @@ class _SurrogateArgs:
                success_metric: str, judge_at_rest: bool, difficulty: int | tuple[int, ...],
                max_pegs: int,
                uncertainty_penalty: float, merge_runs: bool, render_mode: str | None) -> None:
-        if params is not None and not isinstance(params, CordParams):
-            raise ValueError(f"params must be a CordParams or None, got {type(params).__name__}")
-        check_goal_args(max_step=max_step, reward_type=reward_type,
+        check_goal_args(params=params, max_step=max_step, reward_type=reward_type,
                         success_threshold=success_threshold, success_metric=success_metric,
                         judge_at_rest=judge_at_rest, max_pegs=max_pegs, render_mode=render_mode,
                         render_modes=self.metadata["render_modes"])

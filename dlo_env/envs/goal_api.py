@@ -20,10 +20,14 @@ from dlo_env.shapes import SUCCESS_METRICS, TABLE_HALF, bead_share, error, max_e
 REWARD_TYPES = ("dense", "sparse")
 
 
-def check_goal_args(*, max_step: object, reward_type: object, success_threshold: object,
-                    success_metric: object, judge_at_rest: object, max_pegs: object,
-                    render_mode: object, render_modes: list[str]) -> None:
+def check_goal_args(*, params: object, max_step: object, reward_type: object,
+                    success_threshold: object, success_metric: object, judge_at_rest: object,
+                    max_pegs: object, render_mode: object, render_modes: list[str]) -> None:
     """Raise a one-line ``ValueError`` naming the first constructor argument out of range."""
+    from dlo_env.cord import CordParams
+
+    if params is not None and not isinstance(params, CordParams):
+        raise ValueError(f"params must be a CordParams or None, got {type(params).__name__}")
     if not (isinstance(max_step, (int, float)) and np.isfinite(max_step) and max_step > 0):
         raise ValueError(f"max_step must be a finite number > 0 (metres), got {max_step!r}")
     if reward_type not in REWARD_TYPES:
