@@ -15,6 +15,7 @@ from pathlib import Path
 from typing import Any
 
 from dlo_bench.paths import shipped_baseline
+from dlo_bench.policy_file import weights_file
 from planners.interfaces import Policy, ShapeSurrogate
 from planners.policy import DEFAULT_REPLAN_EVERY
 
@@ -148,9 +149,9 @@ def model_files(name: str, env: Any, model: Any = None, transition_model: Any = 
     """The model files agent ``name`` plans or acts with in ``env``: its shape model
     (``model``, a path or None for the shipped one), its transition model
     (``transition_model``; None: the shipped one it loads there, the model that sees pegs where
-    pegs are observed) and a trained policy's ``model.zip`` (its ``sb3:`` folder, or the shipped
-    one for the environment), for the provenance of its results. A model passed already loaded
-    is named by its type."""
+    pegs are observed) and a trained policy's weights (``weights_file`` of its ``sb3:`` folder
+    or of the shipped one for the environment), for the provenance of its results. A model
+    passed already loaded is named by its type."""
     from dlo_bench.paths import shape_model_file, transition_model_file
 
     spec = agent_spec(name)
@@ -158,7 +159,7 @@ def model_files(name: str, env: Any, model: Any = None, transition_model: Any = 
     if spec.extra == "rl":  # the folder _sb3 and _bc load
         folder = Path(spec.defaults.get("baseline") or shipped_baseline(
             name, env.unwrapped.spec.id, pegs=observes_pegs(env)))
-        files.append(str(folder if folder.suffix == ".zip" else folder / "model.zip"))
+        files.append(str(folder if folder.suffix == ".zip" else weights_file(folder)))
     for wanted, given, file in (
             (spec.shape_model, model, shape_model_file),
             (spec.transition_model, transition_model,

@@ -1,12 +1,15 @@
 """Model-free RL baselines with Stable-Baselines3: PPO, SAC and SAC + HER.
 
 ``train_baseline`` trains one of them on a ``dlo_env`` environment with vectorised
-environments, and writes into its output folder: the model (``model.zip``), its
-hyperparameters (``hyperparameters.json``), the ``Monitor`` logs (``monitor/*.monitor.csv``,
-with ``is_success``) and a learning-curve PNG. A checkpoint (``checkpoint.zip``) is written
+environments, and writes into its output folder: the model (``model.zip``), its acting
+weights (``policy.pt``, :mod:`dlo_bench.policy_file`), its hyperparameters
+(``hyperparameters.json``), the ``Monitor`` logs (``monitor/*.monitor.csv``, with
+``is_success``) and a learning-curve PNG. A checkpoint (``checkpoint.zip``) is written
 atomically every ``checkpoint_every`` steps, so an interrupted run resumes (``resume=True``).
 ``load_baseline`` loads such a folder back as an object with ``predict``, which the evaluation
-harness drives like any planner policy. The shipped baselines are in ``dlo_bench/pretrained/``.
+harness drives like any planner policy. The shipped baselines are in ``dlo_bench/pretrained/``:
+``policy.pt`` and the run's hyperparameters, logs and curve (``model.zip`` is left out; the
+agent's training command rebuilds it).
 """
 
 from __future__ import annotations
@@ -24,6 +27,7 @@ from typing import Any
 import gymnasium as gym
 import numpy as np
 
+from dlo_bench.policy_file import POLICY_FILE, load_policy_file, write_policy_file
 from dlo_env.atomic import atomic_path, write_text_atomic
 from dlo_env.checks import (
     check_fields,
@@ -442,6 +446,7 @@ def train_baseline(
                     reset_num_timesteps=not resuming)
         seconds = time.perf_counter() - t0
         _save_atomic(model, out / "model.zip")
+        write_policy_file(model, out / POLICY_FILE)
     finally:
         env.close()
     previous = 0.0
@@ -491,19 +496,20 @@ def read_monitor_logs(monitor_dir: str | os.PathLike) -> dict[str, Any]:
 
 
 def read_baseline_metadata(path: str | os.PathLike) -> dict[str, Any]:
-    """The ``hyperparameters.json`` of a baseline folder (or of the folder of its ``model.zip``).
+    """The ``hyperparameters.json`` of a baseline folder (or of the folder of a file in it).
 
     Raises:
         FileNotFoundError: If there is no such file.
         ValueError: If its format version is not this module's.
     """
     p = Path(path)
-    folder = p.parent if p.suffix == ".zip" else p
+    folder = p.parent if p.is_file() else p
     meta_path = folder / "hyperparameters.json"
-    if not meta_path.is_file() or not (folder / "model.zip").is_file():
+    if not meta_path.is_file() or not any((folder / f).is_file()
+                                          for f in ("model.zip", POLICY_FILE)):
         raise FileNotFoundError(
-            f"path must be a baseline folder with model.zip and hyperparameters.json (written "
-            f"by `dlo baseline`), got {str(path)!r}"
+            f"path must be a baseline folder with hyperparameters.json and model.zip or "
+            f"{POLICY_FILE} (written by `dlo baseline`), got {str(path)!r}"
         )
     meta = json.loads(meta_path.read_text())
     if meta.get("format_version") != FORMAT_VERSION:
@@ -512,31 +518,6 @@ def read_baseline_metadata(path: str | os.PathLike) -> dict[str, Any]:
             f"expected {FORMAT_VERSION}"
         )
     return meta
-
-
-def slim_model(source: str | os.PathLike, target: str | os.PathLike) -> Path:
-    """Write ``source``'s SB3 model zip to ``target`` with its optimizers' running moments
-    emptied (``state`` of every ``*optimizer.pth``; their settings kept): the policy the agents
-    load, acting the same, in about a third of the file. Training continues from the run's own
-    ``model.zip`` or ``checkpoint.zip``."""
-    import io
-    import zipfile
-
-    import torch
-
-    target = Path(target)
-    with atomic_path(target) as tmp, zipfile.ZipFile(source) as src, \
-            zipfile.ZipFile(tmp, "w", zipfile.ZIP_DEFLATED) as dst:
-        for item in src.infolist():
-            data = src.read(item.filename)
-            if item.filename.endswith("optimizer.pth"):
-                state = torch.load(io.BytesIO(data), map_location="cpu", weights_only=True)
-                state["state"] = {}
-                buffer = io.BytesIO()
-                torch.save(state, buffer)
-                data = buffer.getvalue()
-            dst.writestr(item, data)
-    return target
 
 
 def load_baseline(path: str | os.PathLike, device: str = "cpu", algo: str = "",
@@ -560,17 +541,21 @@ def load_baseline(path: str | os.PathLike, device: str = "cpu", algo: str = "",
     from stable_baselines3 import PPO, SAC
 
     p = Path(path)
-    folder = p.parent if p.suffix == ".zip" else p
+    folder = p.parent if p.is_file() else p
     config = BaselineConfig.from_dict(read_baseline_metadata(folder)["config"])
     if algo and config.algo != algo:
         raise ValueError(f"baseline {str(folder)!r} holds a {config.algo} model, not {algo}")
     if cords and config.cords != cords:
         raise ValueError(f"baseline {str(folder)!r} was trained with --cords {config.cords}, "
                          f"not --cords {cords}")
+    # One in-process env is enough to act (HER rebuilds its empty buffer around it).
+    acting = replace(config, n_envs=1, subprocess=False, surrogate=False,
+                     sac_learning_starts=10**9, sac_buffer_size=1,
+                     ppo_n_steps=config.ppo_batch_size)  # (a rollout buffer of one batch)
     model_path = folder / "model.zip"
+    if not model_path.is_file():  # the acting weights alone (what ships)
+        return load_policy_file(build_model(acting, make_vec_env(acting), device=device),
+                                folder / POLICY_FILE)
     if config.algo == "ppo":
         return PPO.load(model_path, device=device)
-    # HER needs an env to rebuild its (empty) buffer; one in-process env is enough to act.
-    env = make_vec_env(replace(config, n_envs=1, subprocess=False, surrogate=False,
-                               sac_learning_starts=10**9))
-    return SAC.load(model_path, env=env, device=device, buffer_size=1)
+    return SAC.load(model_path, env=make_vec_env(acting), device=device, buffer_size=1)

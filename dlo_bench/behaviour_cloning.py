@@ -8,9 +8,10 @@ this project's Gymnasium 1.4 and SB3 2.9, so the few lines of the loss live here
 (networks, distributions, optimiser, saving, ``predict``) is SB3's, and the data is read with
 Minari's own ``load_dataset``.
 
-``train_bc`` writes a folder like ``dlo baseline`` does: ``model.zip`` (``PPO.load`` reads it)
-and ``hyperparameters.json`` whose ``trained_timesteps`` is the sample cost: the environment
-steps of the demonstrations used (no environment interaction happens during training).
+``train_bc`` writes a folder like ``dlo baseline`` does: ``model.zip`` (``PPO.load`` reads
+it), ``policy.pt`` (the acting weights, what ships) and ``hyperparameters.json``, whose
+``trained_timesteps`` is the sample cost: the environment steps of the demonstrations used (no
+environment interaction happens during training).
 """
 
 from __future__ import annotations
@@ -24,6 +25,7 @@ from typing import Any
 
 import numpy as np
 
+from dlo_bench.policy_file import POLICY_FILE, load_policy_file, write_policy_file
 from dlo_env.atomic import atomic_path, write_text_atomic
 
 FORMAT_VERSION = 1
@@ -140,17 +142,13 @@ def train_bc(config: BCConfig, out_dir: str | os.PathLike[str], threads: int | N
     """
     import gymnasium as gym
     import torch
-    from stable_baselines3 import PPO
     from stable_baselines3.common.utils import obs_as_tensor
 
     if threads is not None:
         torch.set_num_threads(threads)
     demos = load_demonstrations(config)
     env = gym.make(demos.env_spec)
-    model = PPO("MultiInputPolicy", env, seed=config.seed, device="cpu", verbose=0,
-                learning_rate=config.learning_rate,
-                policy_kwargs={"net_arch": list(config.net_arch),
-                               "log_std_init": config.log_std_init})
+    model = build_bc_model(config, env)
     policy = model.policy
     policy.set_training_mode(True)
     observations = obs_as_tensor(demos.observations, policy.device)
@@ -176,6 +174,7 @@ def train_bc(config: BCConfig, out_dir: str | os.PathLike[str], threads: int | N
     out.mkdir(parents=True, exist_ok=True)
     with atomic_path(out / "model.zip") as tmp:  # the temporary name ends in .zip, as SB3 wants
         model.save(tmp)
+    write_policy_file(model, out / POLICY_FILE)
     meta = {"format_version": FORMAT_VERSION, "algo": "bc", "config": asdict(config),
             "env_id": demos.env_spec.id, "trained_timesteps": n,
             "demonstration_episodes": demos.episodes, "environment_interaction_steps": 0,
@@ -206,7 +205,7 @@ def load_bc(path: str | os.PathLike[str], device: str = "cpu", env_id: str | Non
     from dlo_bench.baselines import read_baseline_metadata
 
     p = Path(path)
-    folder = p.parent if p.suffix == ".zip" else p
+    folder = p.parent if p.is_file() else p
     meta = read_baseline_metadata(folder)
     if meta.get("algo") != "bc":
         raise ValueError(f"path {str(folder)!r} holds no behaviour-cloning model (algo "
@@ -214,4 +213,20 @@ def load_bc(path: str | os.PathLike[str], device: str = "cpu", env_id: str | Non
     if env_id is not None and meta.get("env_id") != env_id:
         raise ValueError(f"path {str(folder)!r} holds a policy cloned in {meta.get('env_id')}, "
                          f"not {env_id}")
+    if not (folder / "model.zip").is_file():  # the acting weights alone (what ships)
+        import gymnasium as gym
+
+        with gym.make(meta["env_id"]) as env:
+            model = build_bc_model(BCConfig.from_dict(meta["config"]), env, device)
+        return load_policy_file(model, folder / POLICY_FILE)
     return PPO.load(folder / "model.zip", device=device)
+
+
+def build_bc_model(config: BCConfig, env: Any, device: str = "cpu") -> Any:
+    """The untrained SB3 model (PPO's policy) that ``config`` clones into, on ``env``."""
+    from stable_baselines3 import PPO
+
+    return PPO("MultiInputPolicy", env, seed=config.seed, device=device, verbose=0,
+               learning_rate=config.learning_rate,
+               policy_kwargs={"net_arch": list(config.net_arch),
+                              "log_std_init": config.log_std_init})

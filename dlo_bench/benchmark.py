@@ -66,6 +66,7 @@ from dlo_bench.paths import (
     baseline_folder_name,
     shipped_baseline,
 )
+from dlo_bench.policy_file import weights_file
 from dlo_bench.report import json_ready, threshold_label, write_evaluation
 from dlo_env.atomic import file_digest
 from dlo_env.cord_suites import CORD_SUITES
@@ -385,7 +386,7 @@ def load_agent(name: str, config: BenchmarkConfig, env: Any,
         if surrogate:  # trained in the learned cord: both kinds of step, apart
             cost += f" + {_steps(surrogate)} surrogate steps"
         return LoadedAgent(name, policy, training_env_steps=steps, sample_cost=cost,
-                           models=(str(folder / "model.zip"),))
+                           models=(str(weights_file(folder)),))
     options: dict[str, Any] = {"seed": config.seed}
     costs, steps = [], None
     path = (config.cords_transition_model if spec.cords

@@ -20,6 +20,8 @@ from typing import Any
 
 import gymnasium as gym
 
+from dlo_bench.policy_file import POLICY_FILE, weights_file
+
 #: SB3 algorithm classes by the package path of their policies; on-policy models of
 #: ``common.policies`` are PPO when they have a clip range, else A2C.
 _ALGO_BY_MODULE = {"stable_baselines3.sac": "SAC", "stable_baselines3.td3": "TD3",
@@ -32,7 +34,8 @@ class SB3Source:
 
     Attributes:
         path: The path as given.
-        model_file: The model's zip.
+        model_file: The model's zip (a ``dlo baseline`` folder's ``policy.pt`` where it has
+            no ``model.zip``, as the shipped ones).
         algo: The SB3 class name (``"PPO"``, ``"SAC"``, ``"TD3"``, ``"A2C"``, ``"TQC"``).
         her: It learned with a HER replay buffer (loading it needs an environment).
         kind: ``"dlo baseline"``, ``"rl-zoo3"`` or ``"model.zip"``.
@@ -135,16 +138,18 @@ def find_sb3(path: str | os.PathLike) -> SB3Source:
         raise FileNotFoundError(f"sb3:PATH must be an SB3 model.zip, a `dlo baseline` folder "
                                 f"or an rl-zoo3 run folder, got {str(path)!r} (no such file)")
     meta = p / "hyperparameters.json"
-    if (p / "model.zip").is_file() and meta.is_file():
+    weights = weights_file(p)
+    if weights.is_file() and meta.is_file():
         from dlo_bench.baselines import BaselineConfig, read_baseline_metadata
 
         config = read_baseline_metadata(p)["config"]
-        algo, her = _zip_facts(p / "model.zip")
         said = BaselineConfig.from_dict(config).algo
-        if said.upper() not in (algo, f"{algo}-HER") or (said == "sac-her") != her:
+        algo, her = said.split("-")[0].upper(), said == "sac-her"
+        if weights.suffix == ".zip" and _zip_facts(weights) != (algo, her):
+            algo, her = _zip_facts(weights)
             raise ValueError(f"{meta} says {said}, but model.zip holds a {algo}"
                              f"{' + HER' if her else ''} model")
-        return SB3Source(str(path), p / "model.zip", algo, her, "dlo baseline",
+        return SB3Source(str(path), weights, algo, her, "dlo baseline",
                          config.get("env_id"), config.get("success_threshold", 0.02), config)
     if (p / "model.zip").is_file():
         algo, her = _zip_facts(p / "model.zip")
@@ -172,12 +177,25 @@ def load_sb3(source: SB3Source, env: Any, device: str = "cpu") -> Any:
         cls = sb3_contrib.TQC
     else:
         cls = getattr(sb3, source.algo)
+    if source.model_file.name == POLICY_FILE:  # a dlo baseline folder's acting weights
+        from dlo_bench.baselines import load_baseline
+
+        model = load_baseline(source.model_file.parent, device=device)
+        return _fitted(model, source, env)
     extra: dict[str, Any] = {}
     if source.her:  # HER rebuilds its (empty) buffer around an environment
         from stable_baselines3.common.vec_env import DummyVecEnv
 
         extra = {"env": DummyVecEnv([lambda: env]), "buffer_size": 1}
-    model = cls.load(source.model_file, device=device, **extra)
+    return _fitted(cls.load(source.model_file, device=device, **extra), source, env)
+
+
+def _fitted(model: Any, source: SB3Source, env: Any) -> Any:
+    """``model`` acting in ``env``: as it is, or on flattened observations.
+
+    Raises:
+        ValueError: One line when its spaces are not ``env``'s.
+    """
     if model.action_space != env.action_space:
         raise ValueError(f"sb3:{source.path}: the model's action space is "
                          f"{model.action_space}, the environment's {env.action_space}")

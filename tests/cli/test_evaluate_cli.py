@@ -82,7 +82,7 @@ def test_evaluate_records_the_policy_file_of_an_rl_agent(tmp_path):
     assert main(["evaluate", "--agent", "ppo", f"sb3:{folder}", "--episodes", "1",
                  "--no-fidelity", "--out", str(out)]) == 0
     rows = json.loads((out / "summary.json").read_text())
-    assert [row["models"] for row in rows] == [[str(folder / "model.zip")]] * 2
+    assert [row["models"] for row in rows] == [[str(folder / "policy.pt")]] * 2
 
 
 def test_evaluate_rejects_an_unknown_agent(tmp_path, capsys):

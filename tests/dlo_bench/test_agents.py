@@ -122,7 +122,7 @@ def test_agent_names_list_the_registry_and_the_sb3_form():
 
 def test_shipped_baselines_are_found_from_any_working_directory(tmp_path, monkeypatch):
     monkeypatch.chdir(tmp_path)
-    assert (shipped_baseline("ppo") / "model.zip").is_file()
+    assert (shipped_baseline("ppo") / "policy.pt").is_file()
     with gym.make(ENDPOINT) as env:
         assert env.action_space.contains(
             _first_action(build_agent("ppo", env), env).astype(np.float32))

@@ -20,6 +20,7 @@ from dlo_bench.baselines import (
     read_monitor_logs,
     train_baseline,
 )
+from dlo_bench.policy_file import POLICY_FILE
 from dlo_env.tasks import load_suite
 from planners.physics_mpc import PhysicsMPCConfig, PhysicsMPCPolicy
 
@@ -184,6 +185,26 @@ def test_training_writes_model_hyperparameters_logs_and_curve_and_reloads(tiny_m
     obs, _ = gym.make(ENV_ID).reset(seed=0)
     np.testing.assert_array_equal(agent.predict(obs, deterministic=True)[0],
                                   model.predict(obs, deterministic=True)[0])
+
+
+@pytest.mark.slow
+def test_a_folder_with_the_acting_weights_alone_acts_as_its_model(tiny_models, tmp_path):
+    for algo in ("ppo", "sac-her"):
+        shipped = tmp_path / algo  # as dlo_bench/pretrained/ holds them: no model.zip
+        shutil.copytree(tiny_models / algo, shipped, ignore=shutil.ignore_patterns("model.zip"))
+        assert (shipped / POLICY_FILE).stat().st_size < 0.6 * (
+            tiny_models / algo / "model.zip").stat().st_size
+        full, alone = load_baseline(tiny_models / algo), load_baseline(shipped)
+        env = gym.make(ENV_ID)
+        obs, _ = env.reset(seed=1)
+        for _ in range(5):
+            action = full.predict(obs, deterministic=True)[0]
+            np.testing.assert_array_equal(alone.predict(obs, deterministic=True)[0], action)
+            obs = env.step(action)[0]
+        other = "sac-her" if algo == "ppo" else "ppo"
+        shutil.copy(tiny_models / other / POLICY_FILE, shipped / POLICY_FILE)
+        with pytest.raises(ValueError, match="weights of another policy"):
+            load_baseline(shipped)
 
 
 @pytest.mark.slow

@@ -86,8 +86,23 @@ def test_a_baseline_folder_whose_metadata_disagrees_with_its_model_is_refused(tm
     meta = json.loads((folder / "hyperparameters.json").read_text())
     meta["config"]["algo"] = "sac-her"
     (folder / "hyperparameters.json").write_text(json.dumps(meta))
+    assert find_sb3(folder).model_file.name == "policy.pt"  # shipped: the acting weights alone
+    with pytest.raises(ValueError, match="weights of another policy"):
+        build_agent(f"sb3:{folder}", gym.make(ENV))
+    PPO("MultiInputPolicy", gym.make(ENV), n_steps=32, batch_size=32).save(folder / "model.zip")
     with pytest.raises(ValueError, match="says sac-her, but model.zip holds a PPO"):
         find_sb3(folder)
+
+
+def test_a_shipped_baseline_folder_acts_as_an_sb3_agent():
+    folder = shipped_baseline("ppo")
+    assert not (folder / "model.zip").exists()
+    source = find_sb3(folder)
+    assert (source.algo, source.her, source.kind) == ("PPO", False, "dlo baseline")
+    env = gym.make(ENV)
+    obs, _ = env.reset(seed=0)
+    np.testing.assert_array_equal(build_agent(f"sb3:{folder}", env).predict(obs)[0],
+                                  build_agent("ppo", env).predict(obs)[0])
 
 
 def test_the_shipped_baselines_describe_their_training():
@@ -102,19 +117,3 @@ def test_a_path_without_a_model_is_refused_naming_what_sb3_takes(tmp_path):
     (tmp_path / "junk.zip").write_text("not a zip")
     with pytest.raises(ValueError, match="not a Stable-Baselines3 model zip"):
         find_sb3(tmp_path / "junk.zip")
-
-
-def test_a_slim_model_acts_as_the_full_one_in_a_smaller_file(tmp_path):
-    from dlo_bench.baselines import slim_model
-
-    full = shipped_baseline("sac-her") / "model.zip"
-    slim = slim_model(full, tmp_path / "model.zip")
-    assert slim.stat().st_size < 0.7 * full.stat().st_size
-    env = gym.make(ENV)
-    obs, _ = env.reset(seed=0)
-    from stable_baselines3 import SAC
-    from stable_baselines3.common.vec_env import DummyVecEnv
-
-    act = [SAC.load(p, env=DummyVecEnv([lambda: env]), buffer_size=1).predict(
-        obs, deterministic=True)[0] for p in (full, slim)]
-    assert np.array_equal(act[0], act[1])
