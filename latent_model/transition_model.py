@@ -19,7 +19,6 @@ from __future__ import annotations
 
 import math
 import os
-import warnings
 from dataclasses import asdict, dataclass, replace
 from importlib import resources
 from numbers import Integral
@@ -58,6 +57,7 @@ from latent_model.move_frame import (
     to_frame,
 )
 from latent_model.shape_model import resolve_device
+from planners.deprecated import renamed_argument
 
 #: Marks a file as a transition-model checkpoint.
 FORMAT = "dlo-transition-model"
@@ -154,15 +154,8 @@ def recorded_cord(config: dict[str, Any], info: dict[str, Any] | None) -> dict[s
                if CORD_FIELDS[key] in cord}, **config}
 
 
-def _grasp_argument(grasp: str | None, end: str | None) -> str:
-    """``grasp``, or the deprecated ``end`` with a warning; exactly one of them."""
-    if end is not None:
-        if grasp is not None:
-            raise ValueError(f"give grasp (end is its deprecated name), not both: got "
-                             f"grasp={grasp!r} and end={end!r}")
-        warnings.warn("TransitionModel: end=... is deprecated, use grasp=...",
-                      DeprecationWarning, stacklevel=3)
-        grasp = end
+def _required_grasp(grasp: str | None) -> str:
+    """``grasp``, which is required (a default of None keeps ``displacement`` third)."""
     if grasp is None:
         raise ValueError(f"grasp is required: one of {tuple(GRASP_CODES)}")
     return grasp
@@ -696,8 +689,9 @@ class TransitionModel(nn.Module):
                  base if length == base.length else replace(base, length=float(length)))
                 for i, length in enumerate(unique)]
 
+    @renamed_argument("end", "grasp")
     def reachable_moves(self, shapes: np.ndarray, grasp: str | None = None,
-                        displacement: np.ndarray | None = None, *, end: str | None = None,
+                        displacement: np.ndarray | None = None, *,
                         params: Any = None, pegs: np.ndarray | None = None,
                         peg_radius: float | None = None) -> np.ndarray:
         """``(B, 2, 2)`` displacement of [head, tail] the grippers really make, zero for an end
@@ -706,7 +700,7 @@ class TransitionModel(nn.Module):
         as in ``predict``; with ``pegs``, ``(m, 2)`` centres or ``(B, m, 2)`` each shape's own,
         a move stops where a gripper would touch one). ``end`` is the deprecated name of
         ``grasp``; ``peg_radius`` None: ``config.peg_radius``)."""
-        grasp = _grasp_argument(grasp, end)
+        grasp = _required_grasp(grasp)
         if displacement is None:
             raise ValueError("displacement is required")
         pegs = None if pegs is None else padded_pegs(pegs, len(shapes)).astype(np.float64)
@@ -798,10 +792,11 @@ class TransitionModel(nn.Module):
             raise ValueError("shapes and displacement must be finite, got NaN or infinite values")
         return arr, d, single
 
+    @renamed_argument("end", "grasp")
     @torch.no_grad()
     def predict(self, shapes: Any, grasp: str | None = None, displacement: Any = None,
                 params: Any = None, return_std: bool = False, members: int | None = None,
-                inextensible: bool = True, *, end: str | None = None,
+                inextensible: bool = True, *,
                 pegs: np.ndarray | None = None, peg_radius: float | None = None
                 ) -> np.ndarray | tuple[np.ndarray, np.ndarray]:
         """The shape at rest after one straight move of the held end(s).
@@ -809,7 +804,8 @@ class TransitionModel(nn.Module):
         Args:
             shapes: ``(n, 2)`` or ``(B, n, 2)`` world shapes at rest, metres; flat ``(2n,)``
                 or ``(B, 2n)`` (as observations hold them) too.
-            grasp: The held end(s) that move: ``"head"``, ``"tail"`` or ``"both"``.
+            grasp: The held end(s) that move: ``"head"``, ``"tail"`` or ``"both"``
+                (``end`` is its deprecated name).
             displacement: ``(2,)``/``(B, 2)`` for one end; ``(4,)``/``(B, 4)`` (head dx, dy,
                 then tail dx, dy) for both. Targets off the table are clipped as the
                 simulator clips them.
@@ -833,14 +829,13 @@ class TransitionModel(nn.Module):
             None, else the mean of the ensemble's (first ``members``) networks; with
             ``return_std`` also ``(B,)`` (``()``) the members' spread: the mean over points of
             each point's standard deviation (metres).
-            end: Deprecated name of ``grasp``.
             pegs, peg_radius: ``(m, 2)`` centres of pegs on the table (or ``(B, m, 2)``, each
                 shape's own, ``PEG_FAR`` in empty slots) and their radius: a move stops where a
                 gripper would touch one, as in the simulator (``reachable_moves``). A model
                 with ``config.peg_reach`` also sees them; one without does not predict the
                 cord's contact with them. ``peg_radius`` None: ``config.peg_radius``.
         """
-        grasp = _grasp_argument(grasp, end)
+        grasp = _required_grasp(grasp)
         if displacement is None:
             raise ValueError("displacement is required: (2,)/(B, 2) for one end, (4,)/(B, 4) "
                              "for both")
