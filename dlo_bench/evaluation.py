@@ -12,7 +12,6 @@ from __future__ import annotations
 
 import math
 import time
-import warnings
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any
@@ -20,6 +19,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from dlo_env.progress import progress_bar
+from planners.deprecated import renamed_argument
 from planners.interfaces import EpisodeStats, PlanningPolicy, Policy
 
 if TYPE_CHECKING:
@@ -371,6 +371,7 @@ def task_env_kwargs(difficulty: int | None = None, suite: str | None = None
     return {}
 
 
+@renamed_argument("env_id", "env")
 def evaluate(
     policy: Policy,
     env: gym.Env | str = DEFAULT_ENV,
@@ -384,7 +385,6 @@ def evaluate(
     fidelity: bool = True,
     env_kwargs: dict[str, Any] | None = None,
     progress: bool = False,
-    env_id: str | None = None,
     first: int = 0,
 ) -> Evaluation:
     """Run ``episodes`` episodes of ``policy`` and score them against the real cord.
@@ -395,7 +395,8 @@ def evaluate(
             environment): an environment given is used as it is and left open; one made from
             an id (with ``env_kwargs``; with a ``suite`` or ``difficulty``, episodes of
             ``dlo_env.tasks.suite_max_steps`` or ``difficulty_max_steps`` steps unless
-            ``env_kwargs`` says otherwise) is closed at the end.
+            ``env_kwargs`` says otherwise) is closed at the end. ``env_id`` is its deprecated
+            name.
         difficulty: Straight moves per task (the environment's default if None).
         suite: A named suite (``linear-1``, ..., a designed one such as ``shapes-curves``,
             scored direction-free in an environment made from an id, or a cord suite such as
@@ -408,7 +409,6 @@ def evaluate(
         fidelity: Compute the transition fidelity of plans (one extra simulation per episode).
         env_kwargs: Extra keyword arguments of ``gym.make``.
         progress: Show a tqdm progress bar.
-        env_id: Deprecated name of ``env`` (an id).
         first: Index of the first episode: run episodes ``first`` .. ``first + episodes - 1``
             (the suite's tasks of those indices, or reset seeds ``seed + index``), numbered so
             in the records. An episode depends only on its task, the seed and the policy's
@@ -429,12 +429,6 @@ def evaluate(
         raise ValueError(f"first must be an int >= 0 (an episode index), got {first!r}")
     if difficulty is not None and suite is not None:
         raise ValueError("give difficulty or suite, not both")
-    if env_id is not None:
-        if not (isinstance(env, str) and env in (DEFAULT_ENV, env_id)):
-            raise ValueError("give env (env_id is its deprecated name), not both")
-        warnings.warn("evaluate(env_id=...) is deprecated: use env=...", DeprecationWarning,
-                      stacklevel=2)
-        env = env_id
     owned = isinstance(env, str)
     if owned:
         env = gym.make(env, **{**task_env_kwargs(difficulty, suite), **(env_kwargs or {})})

@@ -2,8 +2,8 @@
 
 latent-mpc (CEM over straight moves scored by the transition model) and latent-tree-kino (the
 latent tree whose edges are predicted moves) against physics-mpc (the simulator as the model),
-closed loop on the same task; with ``--dual`` in ``DLODualEndpoint-v0`` (both ends held; the
-tree is for one end, so only the CEM planners run).
+closed loop on the same task; with ``--dual`` in ``DLODualEndpoint-v0`` (both ends held, each
+moving in straight lines).
 
     python examples/learned_model_planners.py --difficulty 3 --seed 4
     python examples/learned_model_planners.py --difficulty 2 --dual
@@ -20,6 +20,9 @@ import torch
 
 import dlo_env  # noqa: F401  (registers the environments)
 from dlo_bench import build_agent
+
+#: The planners compared, each in both environments.
+AGENTS = ("latent-mpc", "physics-mpc", "latent-tree-kino")
 
 
 @dataclass
@@ -45,12 +48,11 @@ if __name__ == "__main__":
     args = parse_args()
     torch.set_num_threads(1)  # small models: more threads only contend
     env_id = "dlo_env/DLODualEndpoint-v0" if args.dual else "dlo_env/DLOEndpoint-v0"
-    agents = ["latent-mpc", "physics-mpc"] + ([] if args.dual else ["latent-tree-kino"])
     with gym.make(env_id) as env:
         threshold = env.unwrapped.success_threshold  # the environment's default
     print(f"{env_id}, difficulty {args.difficulty}, task seed {args.seed}; solved: the cord at "
           f"rest within {100 * threshold:g} cm of the goal")
-    for name in agents:
+    for name in AGENTS:
         with gym.make(env_id) as env:
             policy = build_agent(name, env)
             obs, info = env.reset(seed=args.seed, options={"difficulty": args.difficulty})

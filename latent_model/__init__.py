@@ -1,4 +1,5 @@
-"""The learned surrogate of the cord: a GAN that decodes latents to shapes and an Encoder.
+"""The learned models of the cord: the shape model, the transition model, and the learned cord
+they make as a differentiable step function and as Gymnasium environments.
 
 Public API::
 
@@ -11,10 +12,24 @@ Public API::
     tm = TransitionModel.load_or_pretrained()
     nxt = tm.predict(shapes, "head", d)     # shape at rest after one move of the held end(s)
 
-Training (``train``), additional training (``finetune``) and the quality metrics
-(``latent_model.metrics``) are documented in their modules. ``torch`` is required.
-"""
+Modules:
 
+- The shape model (``ShapeModel``, in ``shape_model``): a GAN whose generator decodes latents
+  to shapes, and an Encoder that inverts it. ``config`` holds its settings, ``networks`` the
+  networks, ``pose`` and ``normalisation`` the frames and scales they work in, ``losses`` and
+  ``training`` its training (``train``) on shape files read by ``dataset``, ``finetune`` the
+  additional training (``finetune``), ``inversion`` the refinement of latents, ``metrics`` and
+  ``evaluation`` its quality.
+- The transition model (``TransitionModel``, in ``transition_model``): the shape at rest after
+  one straight move of the held end(s). ``move_frame`` is the frame it works in,
+  ``chain_network`` its chain-local design, ``inextensible`` the projection onto rest-length
+  segments, ``transition_training`` and ``transition_metrics`` its training and measurement.
+- The learned cord: ``cord_dynamics`` is the transition model as a batched, differentiable
+  step function in torch, ``surrogate_env`` the Gymnasium environments that step it.
+- ``checkpoint`` reads and writes the models' files.
+
+``torch`` is required.
+"""
 from latent_model.config import ModelConfig, TrainConfig
 from latent_model.finetune import FinetuneConfig, finetune
 from latent_model.shape_model import ShapeModel

@@ -2,7 +2,7 @@
 
 Defaults are the paper's (latent 5, n 20, alpha 0.5, five discriminator steps per generator
 step, Adam 2e-4 with beta1 0.5) except where a measured improvement is documented next to the
-field and in the README section "model".
+field and on the shape model's page, docs/shape_model.md.
 """
 
 from __future__ import annotations
@@ -27,7 +27,7 @@ class ModelConfig:
         latent_dim: Dimension of the generator's shape latent ``z ~ U[-1, 1]^latent_dim``.
         representation: ``"world"`` is the paper's: the generator outputs world coordinates, so
             ``z`` also has to encode where the cord lies and how it is turned. ``"canonical"``
-            (default, measured better, see README): the generator outputs the shape in its
+            (default, measured better, docs/shape_model.md): the generator outputs the shape in its
             canonical frame (centroid at the origin, arc-length regression direction along +x)
             and the pose is applied analytically; the full latent is then
             ``[z, centre_x, centre_y, cos(angle), sin(angle)]``.
@@ -37,8 +37,8 @@ class ModelConfig:
             then moved into its canonical frame; inextensibility holds by construction
             (spacing CV 0, exact length, spacing loss 0) and the network learns only the
             bending. ``"points"`` (default for ``"world"``) is the paper's tanh layer of
-            ``2 n`` coordinates kept near the rest spacing by the spacing loss. Measured, see
-            README "model".
+            ``2 n`` coordinates kept near the rest spacing by the spacing loss. Measured in
+            docs/shape_model.md.
         width: Hidden units of every fully connected layer.
         depth: Hidden layers of each network.
         leaky_slope: Negative slope of the LeakyReLU activations.
@@ -94,7 +94,8 @@ class TrainConfig:
 
     Attributes:
         batch_size: Shapes per step (the paper used 6000 on a GPU; 256 with 2 D-steps and
-            lr 5e-4 learns faster per CPU-minute than 1024 with 5 D-steps and lr 2e-4 — README).
+            lr 5e-4 learns faster per CPU-minute than 1024 with 5 D-steps and lr 2e-4: the
+            recipes' table in docs/shape_model.md).
         lr_generator: Adam learning rate of the Generator (paper 2e-4).
         lr_discriminator: Adam learning rate of the Discriminator (paper 2e-4).
         beta1: Adam beta1 (beta2 is 0.999).
@@ -107,12 +108,12 @@ class TrainConfig:
         reconstruction_weight: Weight of ``||x - G(E(x))||^2`` on real shapes, trained jointly
             into the Generator and the Encoder at every generator step (0 = the paper, where the
             Encoder is trained only after the GAN). It ties every training shape to a latent,
-            so the generator cannot drop modes (see README "model" for the measurement).
+            so the generator cannot drop modes (docs/shape_model.md has the measurement).
         prior_weight: Weight of the sliced Wasserstein distance between the Encoder's latents
             of real shapes and ``U[-1, 1]^k`` (only with ``reconstruction_weight > 0``).
         lr_schedule: ``"cosine"``: every learning rate follows half a cosine from its value to 0
             over its stage's budget (steps or minutes); the later part of a run swings less
-            (a small effect, README "model"). The GAN stage still keeps its best evaluation.
+            (a small effect, docs/shape_model.md). The GAN stage still keeps its best evaluation.
             ``"constant"``: the paper. Extending a finished run's budget restarts the
             decay part-way (at the old budget's share of the new one).
         eval_every: Generator steps between evaluations on the held-out split.

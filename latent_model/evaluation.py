@@ -1,7 +1,7 @@
 """The shipped model's quality report: every floor, measured the same way everywhere.
 
 ``quality_report`` is what ``dlo train`` prints at the end, what ``benchmarks/train_quality.py``
-logs and what the README quotes. ``foreign_shapes`` draws the cord-like shapes that do not
+logs and what docs/shape_model.md quotes. ``foreign_shapes`` draws the cord-like shapes that do not
 come from the collector (arcs, S-curves, clothoids) for the generalisation floor.
 """
 
@@ -17,7 +17,7 @@ from latent_model import metrics
 from latent_model.dataset import SHAPE_GROUPS, evaluation_subsets
 from latent_model.shape_model import ShapeModel
 
-#: Floors of the shipped model (README section "model").
+#: Floors of the shipped model (docs/shape_model.md).
 FLOORS = {
     "cov": (">=", 0.85),
     "mmd": ("<=", 0.015),

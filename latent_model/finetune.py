@@ -32,7 +32,7 @@ class FinetuneConfig:
         new_fraction: Share of the variants in the mixed training data.
         gan_steps: Generator steps of additional GAN training (200: enough to represent the
             new shapes without moving the generator far from the step training kept;
-            README "model" has the measurement).
+            docs/shape_model.md has the measurement).
         encoder_steps: Encoder steps afterwards.
         train: Optimisation settings (the model's training defaults).
     """

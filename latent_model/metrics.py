@@ -16,7 +16,8 @@ segment lengths, spacing CV and cord length live here too.
 With ``aligned=True`` (the protocol of the floors) every shape is first moved into its own
 canonical frame (``latent_model.pose``), so the set metrics compare shapes, not poses: in
 world coordinates the pose adds three dimensions and even two samples of the simulator's own
-data are centimetres apart at any affordable sample size (measured in the README).
+data are centimetres apart at any affordable sample size (two sets of 2000 environment
+starts, ``random_cord_shape`` seeds 0 and 1: MMD 8.3 cm in the world frame, 0.44 cm aligned).
 """
 
 from __future__ import annotations

@@ -19,7 +19,6 @@ from __future__ import annotations
 
 import math
 import os
-import warnings
 from dataclasses import asdict, dataclass, replace
 from importlib import resources
 from numbers import Integral
@@ -58,6 +57,7 @@ from latent_model.move_frame import (
     to_frame,
 )
 from latent_model.shape_model import resolve_device
+from planners.deprecated import renamed_argument
 
 #: Marks a file as a transition-model checkpoint.
 FORMAT = "dlo-transition-model"
@@ -89,6 +89,15 @@ REQUIRED_CONFIG = ("rim_targets", "mean_network", "mirror", "mean_by_grasp", "co
 #: handednesses, the leading end's rim alone, a mean network of another width than the
 #: ensemble's) is refused; a file from before ``mean_width`` existed may omit it.
 RETIRED_CONFIG = {"rim_targets": 2, "mirror": True, "mean_width": None}
+#: The default cord: what a model of several cords predicts without ``params``.
+DEFAULT_CORD = CordParams()
+#: The fields of ``TransitionModelConfig`` that record the cord trained on, by the
+#: ``CordParams`` field each holds (``PARAM_COLUMNS``, the cord's settings that data vary).
+CORD_FIELDS = {f"cord_{k}": k for k in PARAM_COLUMNS}
+#: The ``CORD_FIELDS`` added after files were first written (``cord_length`` is older): a file
+#: states them only off the default cord, and one from before them is read by
+#: :func:`recorded_cord`.
+LATER_CORD_FIELDS = ("cord_bending_stiffness", "cord_friction", "cord_mass")
 #: The held ends' targets whose rim (and peg) vectors the network sees: both (the other end's
 #: target is its start when it is not held).
 RIM_TARGETS = RETIRED_CONFIG["rim_targets"]
@@ -120,30 +129,40 @@ def current_config(config: dict[str, Any]) -> dict[str, Any]:
 
 def saved_config(config: TransitionModelConfig) -> dict[str, Any]:
     """``config`` as files store it: with the ``RETIRED_CONFIG`` fields, and without the peg
-    fields of a model that does not see pegs (so earlier versions still read its file)."""
+    fields of a model that does not see pegs and the cord fields of a model of the default
+    cord (so earlier versions still read its file)."""
     saved = {**asdict(config), **RETIRED_CONFIG}
     if not config.peg_reach:
         for key in ("peg_reach", "peg_radius"):
             saved.pop(key)
+    for key in LATER_CORD_FIELDS:
+        if getattr(config, key) == getattr(DEFAULT_CORD, CORD_FIELDS[key]):
+            saved.pop(key)
     return saved
 
 
-def _grasp_argument(grasp: str | None, end: str | None) -> str:
-    """``grasp``, or the deprecated ``end`` with a warning; exactly one of them."""
-    if end is not None:
-        if grasp is not None:
-            raise ValueError(f"give grasp (end is its deprecated name), not both: got "
-                             f"grasp={grasp!r} and end={end!r}")
-        warnings.warn("TransitionModel: end=... is deprecated, use grasp=...",
-                      DeprecationWarning, stacklevel=3)
-        grasp = end
+def recorded_cord(config: dict[str, Any], info: dict[str, Any] | None) -> dict[str, Any]:
+    """A saved ``config`` with the ``LATER_CORD_FIELDS`` it lacks (a file from before they
+    existed, or of the default cord) filled in: a model of one cord gets its training data's
+    cord, as its provenance records it (``info["data"]["cord"]``); a file that names none, and
+    a model of several cords, keep the default cord's (the fields' defaults)."""
+    data = (info or {}).get("data")
+    cord = data.get("cord") if isinstance(data, dict) else None
+    if config.get("cord_inputs") or not isinstance(cord, dict):
+        return config
+    return {**{key: cord[CORD_FIELDS[key]] for key in LATER_CORD_FIELDS
+               if CORD_FIELDS[key] in cord}, **config}
+
+
+def _required_grasp(grasp: str | None) -> str:
+    """``grasp``, which is required (a default of None keeps ``displacement`` third)."""
     if grasp is None:
         raise ValueError(f"grasp is required: one of {tuple(GRASP_CODES)}")
     return grasp
 
 
 #: The default cord's ``PARAM_COLUMNS``: ``cord_features`` are log ratios to these.
-DEFAULT_CORD_ROW = np.array([getattr(CordParams(), k) for k in PARAM_COLUMNS], dtype=np.float64)
+DEFAULT_CORD_ROW = np.array([getattr(DEFAULT_CORD, k) for k in PARAM_COLUMNS], dtype=np.float64)
 
 
 def cord_features(rows: np.ndarray) -> np.ndarray:
@@ -189,7 +208,12 @@ class TransitionModelConfig:
 
     Attributes:
         n_points: Points of the cord.
-        cord_length: Rest length of the cord, metres.
+        cord_length, cord_bending_stiffness, cord_friction, cord_mass: The cord trained on
+            (``CordParams``' ``length`` in metres, ``bending_stiffness`` in N m^2,
+            ``friction``, ``mass`` in kg); its other settings are the default cord's. A model
+            of several cords (``cord_inputs``) has the default cord's, which ``predict``
+            takes when no ``params`` are given. Files from before the last three existed
+            are read as of their training data's cord (:func:`recorded_cord`).
         max_step: The environments' ``max_step`` the moves were carried out with, metres.
         members: Networks in the ensemble.
         width: Hidden units per layer.
@@ -239,9 +263,14 @@ class TransitionModelConfig:
     cord_inputs: bool = False
     peg_reach: float = 0.0
     peg_radius: float = PEG_RADIUS
+    cord_bending_stiffness: float = DEFAULT_CORD.bending_stiffness
+    cord_friction: float = DEFAULT_CORD.friction
+    cord_mass: float = DEFAULT_CORD.mass
 
     def __post_init__(self) -> None:
         positive_ints(self, "n_points", "members", "width", "depth")
+        positive(self, "cord_mass")
+        non_negative(self, "cord_friction", "cord_bending_stiffness")
         non_negative(self, "peg_reach")
         positive(self, "peg_radius")
         if not math.isfinite(self.peg_reach):
@@ -258,6 +287,12 @@ class TransitionModelConfig:
         if self.mean_by_grasp and not self.mean_network:
             raise ValueError("TransitionModelConfig.mean_by_grasp needs mean_network=True "
                              "(it splits the mean network by grasp)")
+
+    @property
+    def cord(self) -> dict[str, Any]:
+        """The cord trained on as ``CordParams`` fields: ``n_points`` and ``CORD_FIELDS``."""
+        return {"n_points": self.n_points,
+                **{value: getattr(self, key) for key, value in CORD_FIELDS.items()}}
 
     @property
     def rim_inputs(self) -> int:
@@ -436,8 +471,29 @@ class TransitionModel(nn.Module):
     # ------------------------------------------------------------- facts
     @property
     def cord_params(self) -> CordParams:
-        """The default ``CordParams`` with this model's number of points and length."""
-        return CordParams(n_points=self.config.n_points, length=self.config.cord_length)
+        """The cord this model was trained on (``TransitionModelConfig.cord``): that of its
+        ``predict`` without ``params``."""
+        return CordParams(**self.config.cord)
+
+    def check_env_cord(self, params: CordParams) -> None:
+        """Raise a one-line ``ValueError`` unless this model predicts an environment's cord
+        ``params``: its points and length, and for a model of one cord (without
+        ``cord_inputs``) its stiffness, friction and mass too."""
+        own = self.cord_params
+        if (params.n_points, params.length) != (own.n_points, own.length):
+            raise ValueError(
+                f"the transition model was trained for a cord of {own.n_points} points "
+                f"and {own.length} m, but the environment's cord has {params.n_points} "
+                f"points and {params.length} m: train a model for this cord")
+        if self.config.cord_inputs:  # it is told the cord
+            return
+        differ = [f"{k}={getattr(own, k)!r} where the environment's cord has "
+                  f"{getattr(params, k)!r}" for k in PARAM_COLUMNS
+                  if not math.isclose(getattr(params, k), getattr(own, k), rel_tol=1e-9)]
+        if differ:
+            raise ValueError(f"the transition model was trained for one cord, with "
+                             f"{', '.join(differ)}: train a model for this cord, or one of "
+                             "several cords (--cord-inputs)")
 
     # ------------------------------------------------------------- torch core
     def networks(self, members: int, design: str = "mlp") -> EnsembleMLP | EnsembleChainNet:
@@ -633,8 +689,9 @@ class TransitionModel(nn.Module):
                  base if length == base.length else replace(base, length=float(length)))
                 for i, length in enumerate(unique)]
 
+    @renamed_argument("end", "grasp")
     def reachable_moves(self, shapes: np.ndarray, grasp: str | None = None,
-                        displacement: np.ndarray | None = None, *, end: str | None = None,
+                        displacement: np.ndarray | None = None, *,
                         params: Any = None, pegs: np.ndarray | None = None,
                         peg_radius: float | None = None) -> np.ndarray:
         """``(B, 2, 2)`` displacement of [head, tail] the grippers really make, zero for an end
@@ -643,7 +700,7 @@ class TransitionModel(nn.Module):
         as in ``predict``; with ``pegs``, ``(m, 2)`` centres or ``(B, m, 2)`` each shape's own,
         a move stops where a gripper would touch one). ``end`` is the deprecated name of
         ``grasp``; ``peg_radius`` None: ``config.peg_radius``)."""
-        grasp = _grasp_argument(grasp, end)
+        grasp = _required_grasp(grasp)
         if displacement is None:
             raise ValueError("displacement is required")
         pegs = None if pegs is None else padded_pegs(pegs, len(shapes)).astype(np.float64)
@@ -735,10 +792,11 @@ class TransitionModel(nn.Module):
             raise ValueError("shapes and displacement must be finite, got NaN or infinite values")
         return arr, d, single
 
+    @renamed_argument("end", "grasp")
     @torch.no_grad()
     def predict(self, shapes: Any, grasp: str | None = None, displacement: Any = None,
                 params: Any = None, return_std: bool = False, members: int | None = None,
-                inextensible: bool = True, *, end: str | None = None,
+                inextensible: bool = True, *,
                 pegs: np.ndarray | None = None, peg_radius: float | None = None
                 ) -> np.ndarray | tuple[np.ndarray, np.ndarray]:
         """The shape at rest after one straight move of the held end(s).
@@ -746,7 +804,8 @@ class TransitionModel(nn.Module):
         Args:
             shapes: ``(n, 2)`` or ``(B, n, 2)`` world shapes at rest, metres; flat ``(2n,)``
                 or ``(B, 2n)`` (as observations hold them) too.
-            grasp: The held end(s) that move: ``"head"``, ``"tail"`` or ``"both"``.
+            grasp: The held end(s) that move: ``"head"``, ``"tail"`` or ``"both"``
+                (``end`` is its deprecated name).
             displacement: ``(2,)``/``(B, 2)`` for one end; ``(4,)``/``(B, 4)`` (head dx, dy,
                 then tail dx, dy) for both. Targets off the table are clipped as the
                 simulator clips them.
@@ -770,14 +829,13 @@ class TransitionModel(nn.Module):
             None, else the mean of the ensemble's (first ``members``) networks; with
             ``return_std`` also ``(B,)`` (``()``) the members' spread: the mean over points of
             each point's standard deviation (metres).
-            end: Deprecated name of ``grasp``.
             pegs, peg_radius: ``(m, 2)`` centres of pegs on the table (or ``(B, m, 2)``, each
                 shape's own, ``PEG_FAR`` in empty slots) and their radius: a move stops where a
                 gripper would touch one, as in the simulator (``reachable_moves``). A model
                 with ``config.peg_reach`` also sees them; one without does not predict the
                 cord's contact with them. ``peg_radius`` None: ``config.peg_radius``.
         """
-        grasp = _grasp_argument(grasp, end)
+        grasp = _required_grasp(grasp)
         if displacement is None:
             raise ValueError("displacement is required: (2,)/(B, 2) for one end, (4,)/(B, 4) "
                              "for both")
@@ -864,8 +922,8 @@ class TransitionModel(nn.Module):
         if isinstance(data.get("config"), dict):
             check_config_keys(data["config"], name)
         try:
-            config = config_from_dict(TransitionModelConfig, current_config(data["config"]),
-                                      "config")
+            config = config_from_dict(TransitionModelConfig, recorded_cord(
+                current_config(data["config"]), data.get("info")), "config")
             model = cls(config, device="cpu", info=data.get("info"))
             model.net.load_state_dict({k: v.float() for k, v in data["net"].items()})
             if model.mean_net is not None:

@@ -45,6 +45,8 @@ from dlo_env.randomize import near_test_cords
 from latent_model.checkpoint import load_checkpoint, save_atomic
 from latent_model.config import LR_SCHEDULES, config_from_dict
 from latent_model.transition_model import (
+    CORD_FIELDS,
+    LATER_CORD_FIELDS,
     EnsembleMLP,
     TransitionModel,
     TransitionModelConfig,
@@ -289,7 +291,7 @@ def _distil_from(teacher_path: str, mc: TransitionModelConfig
     # The teacher, checked against the data's cord; the student's config is the teacher's.
     teacher = TransitionModel.load(teacher_path, device="cpu")
     tcfg = teacher.config
-    for field in ("n_points", "cord_length", "max_step"):
+    for field in ("n_points", *CORD_FIELDS, "max_step"):
         if getattr(tcfg, field) != getattr(mc, field):
             raise ValueError(f"teacher {teacher_path!r} was trained for {field}="
                              f"{getattr(tcfg, field)!r}, the data has {getattr(mc, field)!r}")
@@ -344,7 +346,8 @@ def train_transition_model(
     if left_out.any():
         data = data.subset(~left_out)
     mc = TransitionModelConfig(**{**asdict(mc), "n_points": int(data.start.shape[1]),
-                                  "cord_length": float(cord.get("length", mc.cord_length)),
+                                  **{key: float(cord.get(name, getattr(mc, key)))
+                                     for key, name in CORD_FIELDS.items()},
                                   "max_step": float(data.metadata.get("collect", {}).get(
                                       "max_step", mc.max_step))})
     if mc.mean_network and not tc.teacher:
@@ -380,8 +383,10 @@ def train_transition_model(
         # A network without contact vectors is a fine start for one with them, one of the
         # default cord for one of several cords, and one of the empty table for one that
         # sees pegs (the new inputs' weights start at zero: it first predicts as before,
-        # every cord as the default and every peg as absent).
-        seen = replace(start.config, mean_network=False, mean_by_grasp=False)
+        # every cord as the default and every peg as absent); one of another stiffness,
+        # friction or mass for one of the data's cord.
+        seen = replace(start.config, mean_network=False, mean_by_grasp=False,
+                       **{key: getattr(mc, key) for key in LATER_CORD_FIELDS})
         grow_contact = not seen.contact_reach and mc.contact_reach
         grow_cord = not seen.cord_inputs and mc.cord_inputs
         grow_pegs = not seen.peg_reach and mc.peg_reach

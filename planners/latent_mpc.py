@@ -122,12 +122,7 @@ class LatentMPCPolicy(CEMPolicy):
     def check_env(self, env: object) -> None:
         """Raise ``ValueError`` unless the environment's cord, grasp and step fit the model."""
         base = getattr(env, "unwrapped", env)
-        p = base.params
-        if (p.n_points, p.length) != (self.params.n_points, self.params.length):
-            raise ValueError(
-                f"the transition model was trained for a cord of {self.params.n_points} points "
-                f"and {self.params.length} m, but the environment's cord has {p.n_points} "
-                f"points and {p.length} m: train a model for this cord")
+        self.model.check_env_cord(base.params)
         if abs(base.max_step - self.max_step) > 1e-12:
             raise ValueError(
                 f"the transition model was trained with max_step={self.max_step} m, but the "

@@ -19,7 +19,6 @@ from __future__ import annotations
 
 import math
 import time
-import warnings
 from dataclasses import dataclass, fields, replace
 from typing import Any
 
@@ -32,7 +31,7 @@ from dlo_env.shapes import (
     segment_lengths,
     turning_cosines,
 )
-from planners.deprecated import renamed_field
+from planners.deprecated import renamed_argument, renamed_field
 from planners.interfaces import Plan, ShapeSurrogate
 from planners.observation import as_shape
 from planners.surrogate import Surrogate
@@ -238,21 +237,19 @@ class LatentTreePlanner:
             function of (start, goal, seed).
         transition_model: A ``latent_model.TransitionModel`` (needed by ``edges="moves"``).
         **overrides: Any ``TreeConfig`` field, overriding ``config``
-            (``LatentTreePlanner(model, step_length=0.1)``).
+            (``LatentTreePlanner(model, step_length=0.1)``; ``end`` is the deprecated name of
+            ``grasp``).
 
     Example:
         >>> plan = LatentTreePlanner(model, seed=0).plan(start_shape, goal_shape)
         >>> plan.success, plan.moves  # straight displacements of the head, metres
     """
 
+    @renamed_argument("end", "grasp")
     def __init__(
         self, model: ShapeSurrogate, config: TreeConfig | None = None, *, seed: int = 0,
         transition_model: Any = None, **overrides: Any,
     ) -> None:
-        if "end" in overrides and "grasp" not in overrides:  # grasp's deprecated name
-            warnings.warn("LatentTreePlanner(end=...) is deprecated: use grasp=...",
-                          DeprecationWarning, stacklevel=2)
-            overrides["grasp"] = overrides.pop("end")
         known = {f.name for f in fields(TreeConfig)}
         unknown = sorted(set(overrides) - known)
         if unknown:

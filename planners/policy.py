@@ -183,6 +183,8 @@ class PlannerPolicy(EpisodicPolicy):
                 f"max_step={step} m: pass max_step=env.unwrapped.max_step"
             )
         transition = getattr(self.planner, "transition_model", None)
+        if transition is not None and params is not None:
+            transition.check_env_cord(params)
         if transition is not None and step is not None and abs(
                 float(step) - transition.config.max_step) > 1e-12:
             raise ValueError(

@@ -1,5 +1,6 @@
 """Every relative link of the README and docs/ points at a file that exists, and every
-``#anchor`` at a heading of that file (GitHub's anchors)."""
+``#anchor`` at a heading of that file (GitHub's anchors); so does every page or README section
+the code names."""
 
 from __future__ import annotations
 
@@ -11,6 +12,14 @@ import pytest
 ROOT = Path(__file__).resolve().parent.parent
 PAGES = [ROOT / "README.md", *sorted((ROOT / "docs").glob("*.md"))]
 LINK = re.compile(r"\]\(([^)\s]+)\)")
+#: The code whose docstrings and comments name pages: the packages, examples, benchmarks.
+SOURCES = sorted(p for folder in ("dlo_env", "latent_model", "planners", "dlo_bench", "dlo_cli",
+                                  "examples", "benchmarks")
+                 for p in (ROOT / folder).rglob("*.py"))
+#: ``docs/page.md`` or ``docs/page.md#anchor``.
+PAGE = re.compile(r"docs/([\w-]+\.md)(?:#([\w-]+))?")
+#: ``README "Heading"`` or ``README section "Heading"``.
+SECTION = re.compile(r'README\s+(?:section\s+)?"([^"]+)"')
 
 
 def _anchor(heading: str) -> str:
@@ -39,3 +48,20 @@ def test_relative_links_resolve(page):
         elif anchor and file.suffix == ".md" and anchor not in _anchors(file):
             broken.append(target)
     assert not broken, f"{page.name}: broken links {broken}"
+
+
+def test_the_pages_and_readme_sections_the_code_names_exist():
+    readme = re.sub(r"```.*?```", "", (ROOT / "README.md").read_text(), flags=re.S)
+    headings = {line.lstrip("#").strip().lower() for line in readme.splitlines()
+                if line.startswith("#")}
+    broken = []
+    for source in SOURCES:
+        text = source.read_text()
+        name = source.relative_to(ROOT)
+        for page, anchor in PAGE.findall(text):
+            file = ROOT / "docs" / page
+            if not file.exists() or (anchor and anchor not in _anchors(file)):
+                broken.append(f"{name}: docs/{page}{'#' * bool(anchor)}{anchor}")
+        broken += [f'{name}: README "{h}"' for h in SECTION.findall(text)
+                   if h.lower() not in headings]
+    assert not broken, f"names of pages or sections that do not exist: {broken}"

@@ -50,7 +50,7 @@ def run_zoo(script: str, args: list[str], cwd: Path) -> str:
     temp dir."""
     env = {**os.environ, "SB3_LOGDIR": str(cwd / "sb3-log")}
     result = subprocess.run([sys.executable, "-m", f"rl_zoo3.{script}", *args], cwd=cwd,
-                            capture_output=True, text=True, timeout=600, env=env)
+                            capture_output=True, text=True, timeout=540, env=env)
     assert result.returncode == 0, (result.stdout[-2000:], result.stderr[-3000:])
     return result.stdout
 

@@ -2,13 +2,13 @@
 
 from __future__ import annotations
 
-from dataclasses import replace
+from dataclasses import asdict, replace
 
 import numpy as np
 import pytest
 import torch
 
-from dlo_env.cord import Cord, reachable_targets
+from dlo_env.cord import Cord, CordParams, reachable_targets
 from dlo_env.dataset.transitions import TransitionCollectConfig, collect_transition_chunk
 from dlo_env.shapes import error, random_cord_shape
 from dlo_env.tasks import DEFAULT_MAX_STEP, apply_action, split_move
@@ -914,3 +914,23 @@ def test_a_gripper_sliding_along_the_edge_stops_at_a_peg_there_as_in_the_simulat
     moves = model.reachable_moves(shape[None], "head", d[None], pegs=pegs)[0]
     np.testing.assert_allclose(moves[0], real, atol=1e-6)
     assert real[1] < 0.6  # the peg stopped it
+
+
+def test_a_model_of_one_cord_records_the_cord_it_trained_on_and_its_file_keeps_it(tmp_path):
+    slippery = CordParams(friction=0.3, mass=0.2, bending_stiffness=0.02)
+    data = collect_transition_chunk(TransitionCollectConfig(seed=3, cord=slippery), 0, 20)
+    tc = TransitionTrainConfig(steps=2, batch_size=16, eval_every=2, validation_fraction=0.2)
+    model = train_transition_model(data, tmp_path, tc, TINY, device="cpu")
+    assert model.cord_params == slippery
+    assert TransitionModel.load(tmp_path, device="cpu").cord_params == slippery
+    with pytest.raises(ValueError, match="trained for one cord"):
+        model.predict(_shapes(1)[0], "head", [0.05, 0.0], params=CordParams())
+
+
+def test_a_file_without_the_cords_record_is_of_its_training_datas_cord_else_the_default():
+    state = TransitionModel(TINY, device="cpu").state()
+    assert not {"cord_mass", "cord_friction", "cord_bending_stiffness"} & set(state["config"])
+    assert TransitionModel.from_state(state, device="cpu").cord_params == CordParams()
+    state["info"] = {"data": {"cord": {**asdict(CordParams()), "friction": 0.3}}}
+    assert TransitionModel.from_state(state, device="cpu").cord_params == CordParams(
+        friction=0.3)

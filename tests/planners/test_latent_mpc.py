@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from dataclasses import replace
+
 import gymnasium as gym
 import numpy as np
 import pytest
@@ -96,3 +98,21 @@ def test_by_default_it_scores_with_one_network_the_mean_network_when_there_is_on
                                 device="cpu")
     assert LatentMPCPolicy(with_mean).members is None  # predict's default: the mean network
     assert LatentMPCPolicy(with_mean, config=LatentMPCConfig(members=2)).members == 2
+
+
+def test_a_model_trained_on_another_stiffness_is_refused_in_one_line(tmp_path):
+    from dlo_env.dataset.transitions import TransitionCollectConfig, collect_transition_chunk
+    from latent_model.transition_training import TransitionTrainConfig, train_transition_model
+
+    stiff = CordParams(bending_stiffness=0.02)
+    data = collect_transition_chunk(TransitionCollectConfig(seed=3, cord=stiff), 0, 20)
+    model = train_transition_model(data, tmp_path, TransitionTrainConfig(
+        steps=1, batch_size=8, eval_every=1, validation_fraction=0.2), TINY, device="cpu")
+    with pytest.raises(ValueError, match=r"trained for one cord, with bending_stiffness=0\.02 "
+                       r"where the environment's cord has 0\.01") as info:
+        LatentMPCPolicy.for_env(gym.make("dlo_env/DLOEndpoint-v0"), model=model)
+    assert "\n" not in str(info.value)
+    env = gym.make("dlo_env/DLOEndpoint-v0", params=stiff)
+    LatentMPCPolicy.for_env(env, model=model)
+    several = TransitionModel(replace(TINY, cord_inputs=True), device="cpu")
+    LatentMPCPolicy.for_env(env, model=several)  # a model of several cords sees the cord

@@ -6,9 +6,10 @@ from __future__ import annotations
 import gymnasium as gym
 import numpy as np
 import pytest
+from scripts import load_script
 
 import dlo_env  # noqa: F401  (registers the environments)
-from dlo_bench import build_agent
+from dlo_bench import AGENTS, build_agent
 from dlo_bench.fidelity import transition_fidelity
 from dlo_env.cord import Cord
 from dlo_env.shapes import error
@@ -81,3 +82,10 @@ def test_the_tree_agents_act_in_the_dual_environment(agent):
         if terminated or truncated:
             break
     assert info["is_success"]
+
+
+def test_the_learned_model_example_runs_the_kino_tree_with_both_ends_held_too():
+    example = load_script("examples/learned_model_planners.py")
+    assert "latent-tree-kino" in example.AGENTS
+    for name in example.AGENTS:  # each in both of the example's environments
+        assert {"dlo_env/DLOEndpoint-v0", DUAL} <= set(AGENTS[name].environments)

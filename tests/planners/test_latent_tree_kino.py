@@ -82,3 +82,15 @@ def test_the_agent_executes_one_move_then_plans_again_from_the_cord_at_rest():
 @pytest.mark.slow
 def test_it_solves_train_tasks_of_difficulty_two_closed_loop(solved):
     assert solved("latent-tree-kino", "linear-2", 5) >= 4
+
+
+def test_a_transition_model_of_another_cord_is_refused_for_the_environment(models):
+    from dataclasses import replace
+
+    shape_model, transition = models
+    slippery = TransitionModel(replace(transition.config, cord_friction=0.3, members=1,
+                                       mean_network=False, mean_by_grasp=False), device="cpu")
+    planner = LatentTreePlanner(shape_model, KINO_CONFIG, transition_model=slippery)
+    with pytest.raises(ValueError, match=r"trained for one cord, with friction=0\.3 where the "
+                       r"environment's cord has 0\.4"):
+        PlannerPolicy(shape_model, planner).check_env(gym.make("dlo_env/DLOEndpoint-v0"))
