@@ -47,7 +47,8 @@ def test_a_docstring_argument_the_signature_lacks_fails_the_build(tmp_path):
     config = yaml.safe_load((ROOT / "mkdocs.yml").read_text())
     config["nav"] = [{"Home": "index.md"}]
     config["markdown_extensions"] = []
-    config["plugins"][1]["mkdocstrings"]["handlers"]["python"]["paths"] = [str(tmp_path)]
+    plugin = next(p for p in config["plugins"] if isinstance(p, dict) and "mkdocstrings" in p)
+    plugin["mkdocstrings"]["handlers"]["python"]["paths"] = [str(tmp_path)]
     (tmp_path / "mkdocs.yml").write_text(yaml.safe_dump(config))
     result = _build(tmp_path / "mkdocs.yml", tmp_path / "site", tmp_path)
     assert result.returncode != 0
