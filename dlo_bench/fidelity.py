@@ -70,7 +70,8 @@ def transition_fidelity(
         params: The cord's parameters (the default cord if None).
         max_step: Displacement of an action of 1.0, metres.
         settle_steps: Zero actions after the motion before ``final_shape`` is read.
-        pegs, peg_radius: The pegs on the table (None: none) and their radius, metres.
+        pegs: The pegs on the table (None: none).
+        peg_radius: The pegs' radius, metres.
 
     Returns:
         The per-shape errors, their mean, and the real shapes.

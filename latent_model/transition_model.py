@@ -593,8 +593,12 @@ class TransitionModel(nn.Module):
         the left of its move's line (``in_frame`` mirrors).
 
         Args:
-            points, lead, other, both: The batch in the move frames (flat over members and
-                batch when ``members_batch`` is given, else shared by the members).
+            points: ``(B, n, 2)`` the cords in the move frames (flat over members and batch
+                when ``members_batch`` is given, else shared by the members, as are the next
+                three).
+            lead: ``(B,)`` the length of the leading end's move.
+            other: ``(B, 2)`` the other end's move in the frame (zero unless both are held).
+            both: ``(B,)`` whether both ends are held.
             rim: ``(B, config.rim_inputs + config.peg_inputs, 2)`` rim vectors of the points
                 and the targets (then, with ``contact_reach``, their contact vectors, and with
                 ``peg_reach`` their peg vectors).

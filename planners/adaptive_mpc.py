@@ -96,7 +96,10 @@ class AdaptiveLatentMPCPolicy(LatentMPCPolicy):
 
     Args:
         model: A ``latent_model.TransitionModel`` with ``config.cord_inputs``.
-        grasp, success_threshold, config, success_metric: As ``LatentMPCPolicy``.
+        grasp: As ``LatentMPCPolicy``.
+        success_threshold: As ``LatentMPCPolicy``.
+        config: As ``LatentMPCPolicy``.
+        success_metric: As ``LatentMPCPolicy``.
         adapt: How the cord is fitted.
     """
 
