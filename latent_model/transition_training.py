@@ -514,6 +514,8 @@ class _Batches:
     @classmethod
     def of(cls, run: _Run, train: TransitionTensors, train_data: TransitionDataset,
            tc: TransitionTrainConfig) -> _Batches:
+        """The batches of ``run`` (its teacher's targets computed once), drawn by a stream
+        seeded with ``tc.seed`` and the step the run starts at."""
         distil = run.teacher is not None
         targets = mean_predictions(run.model, train) if distil else None
         extra = extra_targets = None
