@@ -371,6 +371,66 @@ def task_env_kwargs(difficulty: int | None = None, suite: str | None = None
     return {}
 
 
+def _check_evaluate_arguments(policy: Policy, episodes: int, first: int,
+                              difficulty: int | None, suite: str | None) -> None:
+    """Refuse ``evaluate``'s arguments that cannot make an evaluation."""
+    if not isinstance(policy, Policy):
+        raise ValueError(f"policy must have a predict() method, got {type(policy).__name__}")
+    if not (isinstance(episodes, int) and episodes >= 1):
+        raise ValueError(f"episodes must be an int >= 1, got {episodes!r}")
+    if not (isinstance(first, int) and not isinstance(first, bool) and first >= 0):
+        raise ValueError(f"first must be an int >= 0 (an episode index), got {first!r}")
+    if difficulty is not None and suite is not None:
+        raise ValueError("give difficulty or suite, not both")
+
+
+def _evaluation_env(env: gym.Env | str, env_kwargs: dict[str, Any] | None,
+                    difficulty: int | None, suite: str | None) -> tuple[gym.Env, bool]:
+    """The environment ``evaluate`` runs in, and whether it made it (from an id; then it
+    closes it)."""
+    import gymnasium as gym
+
+    import dlo_env  # noqa: F401  (registers the environments)
+
+    if isinstance(env, str):
+        return gym.make(env, **{**task_env_kwargs(difficulty, suite), **(env_kwargs or {})}), True
+    if not isinstance(env, gym.Env):
+        raise ValueError(f"env must be a dlo_env environment or its id, got "
+                         f"{type(env).__name__}")
+    if env_kwargs:
+        raise ValueError("env_kwargs apply to an environment made from an id; got an "
+                         "environment and env_kwargs")
+    if getattr(env.spec, "max_episode_steps", None) is None:
+        raise ValueError("env must end its episodes: make it with gym.make (which adds the "
+                         "registered TimeLimit) or wrap it in gymnasium.wrappers.TimeLimit")
+    return env, False
+
+
+def _run_episodes(
+    policy: Policy, env: gym.Env, options: list[dict[str, Any] | None], first: int,
+    seed: int | None, difficulty: int | None, fidelity: bool, bar: Any,
+) -> tuple[list[EpisodeRecord], list[FidelityProfile], list[np.ndarray], list[np.ndarray]]:
+    """Episodes ``first, first + 1, ...`` of ``policy``, one per task option (reset seeds
+    ``seed + index``; None: the tasks carry their own): the records, the first plans'
+    fidelity profiles, the goals and the shapes at rest. ``bar`` (None: none) counts them."""
+    records, profiles, goals, rest_shapes = [], [], [], []
+    for i, opts in enumerate(options, first):
+        reset_seed = None if seed is None else seed + i
+        record, profile, goal, rest = _run_episode(policy, env, i, reset_seed, opts,
+                                                   difficulty, fidelity)
+        records.append(record)
+        goals.append(goal)
+        rest_shapes.append(rest)
+        if profile is not None:
+            profiles.append(profile)
+        if bar is not None:
+            bar.update(1)
+            bar.set_postfix_str(f"success {np.mean([r.success for r in records]):.0%}")
+    if bar is not None:
+        bar.close()
+    return records, profiles, goals, rest_shapes
+
+
 @renamed_argument("env_id", "env")
 def evaluate(
     policy: Policy,
@@ -417,30 +477,8 @@ def evaluate(
     Returns:
         The records and their summary.
     """
-    import gymnasium as gym
-
-    import dlo_env  # noqa: F401  (registers the environments)
-
-    if not isinstance(policy, Policy):
-        raise ValueError(f"policy must have a predict() method, got {type(policy).__name__}")
-    if not (isinstance(episodes, int) and episodes >= 1):
-        raise ValueError(f"episodes must be an int >= 1, got {episodes!r}")
-    if not (isinstance(first, int) and not isinstance(first, bool) and first >= 0):
-        raise ValueError(f"first must be an int >= 0 (an episode index), got {first!r}")
-    if difficulty is not None and suite is not None:
-        raise ValueError("give difficulty or suite, not both")
-    owned = isinstance(env, str)
-    if owned:
-        env = gym.make(env, **{**task_env_kwargs(difficulty, suite), **(env_kwargs or {})})
-    elif not isinstance(env, gym.Env):
-        raise ValueError(f"env must be a dlo_env environment or its id, got "
-                         f"{type(env).__name__}")
-    elif env_kwargs:
-        raise ValueError("env_kwargs apply to an environment made from an id; got an "
-                         "environment and env_kwargs")
-    elif getattr(env.spec, "max_episode_steps", None) is None:
-        raise ValueError("env must end its episodes: make it with gym.make (which adds the "
-                         "registered TimeLimit) or wrap it in gymnasium.wrappers.TimeLimit")
+    _check_evaluate_arguments(policy, episodes, first, difficulty, suite)
+    env, owned = _evaluation_env(env, env_kwargs, difficulty, suite)
     spec = getattr(env.unwrapped, "spec", None)
     env_id = spec.id if spec is not None else type(env.unwrapped).__name__
     try:
@@ -449,21 +487,9 @@ def evaluate(
         options = _episode_options(difficulty, suite, split, first + episodes,
                                    env.unwrapped.grasp)[first:]
         bar = progress_bar(episodes, agent or "evaluate", "episode") if progress else None
-        records, profiles, goals, rest_shapes = [], [], [], []
-        for i, opts in enumerate(options, first):
-            reset_seed = seed + i if suite is None else None
-            record, profile, goal, rest = _run_episode(policy, env, i, reset_seed, opts,
-                                                       difficulty, fidelity)
-            records.append(record)
-            goals.append(goal)
-            rest_shapes.append(rest)
-            if profile is not None:
-                profiles.append(profile)
-            if bar is not None:
-                bar.update(1)
-                bar.set_postfix_str(f"success {np.mean([r.success for r in records]):.0%}")
-        if bar is not None:
-            bar.close()
+        records, profiles, goals, rest_shapes = _run_episodes(
+            policy, env, options, first, seed if suite is None else None, difficulty, fidelity,
+            bar)
     finally:
         if owned:
             env.close()

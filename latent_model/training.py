@@ -331,6 +331,161 @@ FLOORS = {"cov": 0.85, "mmd": 0.015, "nna": 0.75, "spacing_cv": 0.05, "inversion
 
 
 # --------------------------------------------------------------------- train
+@dataclass(frozen=True)
+class _StageBudget:
+    """What one stage of ``train`` may spend: ``steps`` (a step count), or else ``seconds``
+    of training."""
+
+    name: str
+    steps: int | None
+    seconds: float
+
+    @property
+    def by_steps(self) -> bool:
+        return self.steps is not None
+
+    @property
+    def total(self) -> int:
+        """The budget in the progress bar's unit (steps or seconds)."""
+        return self.steps if self.steps is not None else round(self.seconds)
+
+    def steps_done(self, prog: Progress) -> int:
+        return getattr(prog, f"{self.name}_step")
+
+    def seconds_done(self, prog: Progress) -> float:
+        return getattr(prog, f"{self.name}_seconds")
+
+    def done(self, prog: Progress) -> int:
+        """What the stage has spent, in the progress bar's unit."""
+        return self.steps_done(prog) if self.by_steps else round(self.seconds_done(prog))
+
+    def spent(self, prog: Progress) -> bool:
+        if self.steps is not None:
+            return self.steps_done(prog) >= self.steps
+        return self.seconds_done(prog) >= self.seconds
+
+    def fraction(self, prog: Progress) -> float:
+        """How far through its budget the stage is (the learning-rate schedule's clock)."""
+        if self.steps is not None:
+            return self.steps_done(prog) / self.steps
+        return self.seconds_done(prog) / max(self.seconds, 1e-9)
+
+
+def _stage_budgets(stage: str, minutes: float, encoder_fraction: float,
+                   gan_steps: int | None, encoder_steps: int | None) -> list[_StageBudget]:
+    """The stages ``stage`` runs, in order, with their budgets."""
+    encoder_share = encoder_fraction if stage == "all" else (1.0 if stage == "encoder" else 0.0)
+    seconds = {"gan": (1 - encoder_share) * minutes * 60, "encoder": encoder_share * minutes * 60}
+    steps = {"gan": gan_steps, "encoder": encoder_steps}
+    names = {"gan": ["gan"], "encoder": ["encoder"], "all": ["gan", "encoder"]}[stage]
+    return [_StageBudget(name, steps[name], seconds[name]) for name in names]
+
+
+@dataclass
+class _Run:
+    """A ``train`` call's trainer, output folder and provenance: its evaluations, logs and
+    checkpoints."""
+
+    trainer: Trainer
+    out: Path
+    info: dict[str, Any]
+
+    def model(self) -> ShapeModel:
+        """The run's model, with its provenance and last evaluation."""
+        prog = self.trainer.progress
+        last = prog.rows[-1] if prog.rows else None
+        return self.trainer.model(dict(self.info, gan_step=prog.gan_step,
+                                       encoder_step=prog.encoder_step, last_metrics=last))
+
+    def save(self) -> None:
+        """Write the checkpoint and ``model.pt``."""
+        save_atomic(self.trainer.state(self.info), self.out / CHECKPOINT_FILE)
+        self.model().save(self.out / "model.pt")
+
+    def write_logs(self) -> None:
+        """Rewrite the metrics CSV and PNG."""
+        rows = self.trainer.progress.rows
+        write_csv(rows, self.out / METRICS_CSV)
+        plot_curves(rows, self.out / METRICS_PNG, FLOORS)
+
+    def log_eval(self, name: str) -> dict[str, Any]:
+        """Evaluate after stage ``name``'s current step, keep the best GAN step so far, log
+        the row; returns it."""
+        trainer, prog = self.trainer, self.trainer.progress
+        row = {"stage": name, "step": getattr(prog, f"{name}_step"),
+               "train_minutes": prog.total_seconds / 60}
+        row.update(trainer.evaluate())
+        row.update(trainer.last)
+        if name == "gan" and row["cov"] - row["nna"] > prog.best_score:
+            prog.best_score, prog.best_step = row["cov"] - row["nna"], prog.gan_step
+            trainer.best_state = trainer.networks_state()
+        prog.rows.append(row)
+        self.write_logs()
+        return row
+
+    def keep_best_gan(self) -> None:
+        """Go back to the best GAN step (its row logged again as ``gan-best``)."""
+        trainer, prog = self.trainer, self.trainer.progress
+        for net in ("generator", "discriminator", "encoder"):
+            getattr(trainer, net).load_state_dict(trainer.best_state[net])
+        best_row = next(r for r in prog.rows
+                        if r["stage"] == "gan" and r["step"] == prog.best_step)
+        prog.rows.append(dict(best_row, stage="gan-best"))
+        self.write_logs()
+
+
+def _train_steps(run: _Run, budget: _StageBudget, progress_bar: bool) -> None:
+    """Steps of one stage until its budget is spent: evaluations every ``eval_every`` steps,
+    checkpoints every ``checkpoint_every_seconds``."""
+    from dlo_env.progress import progress_bar as bar_of
+
+    trainer, prog, tc = run.trainer, run.trainer.progress, run.trainer.tc
+    step_fn = trainer.gan_step if budget.name == "gan" else trainer.encoder_step
+    seconds_attr = f"{budget.name}_seconds"
+    bar = bar_of(budget.total, budget.name, "step" if budget.by_steps else "s",
+                 enabled=progress_bar)
+    bar.update(budget.done(prog))
+    last_save = time.perf_counter()
+    while not budget.spent(prog):
+        trainer.set_lr_fraction(budget.fraction(prog))
+        t0 = time.perf_counter()
+        step_fn()
+        dt = time.perf_counter() - t0
+        setattr(prog, seconds_attr, getattr(prog, seconds_attr) + dt)
+        prog.total_seconds += dt
+        bar.update(1 if budget.by_steps else 0)
+        if not budget.by_steps:
+            bar.n = min(budget.total, round(getattr(prog, seconds_attr)))
+            bar.refresh()
+        if budget.steps_done(prog) % tc.eval_every == 0:
+            r = run.log_eval(budget.name)
+            bar.set_postfix(cov=f"{r['cov']:.2f}", mmd=f"{100 * r['mmd']:.2f}cm",
+                            inv=f"{r['inversion_refined']:.2f}", refresh=False)
+        if time.perf_counter() - last_save > tc.checkpoint_every_seconds:
+            run.save()
+            last_save = time.perf_counter()
+    bar.close()
+
+
+def _train_stage(run: _Run, budget: _StageBudget, progress_bar: bool) -> None:
+    """One stage within its budget, evaluated at its last step; the GAN stage ends at its
+    best step. Checkpoints at the end."""
+    trainer, prog, name = run.trainer, run.trainer.progress, budget.name
+    if name == "encoder" and prog.encoder_for_gan_step != prog.gan_step:
+        # The generator changed since the Encoder was trained: train it again (warm start).
+        prog.encoder_step, prog.encoder_seconds = 0, 0.0
+        prog.encoder_for_gan_step = prog.gan_step
+    _train_steps(run, budget, progress_bar)
+    if not prog.rows or prog.rows[-1]["stage"] != name or \
+            prog.rows[-1]["step"] != budget.steps_done(prog):
+        run.log_eval(name)
+    if name == "gan" and trainer.best_state is not None and prog.best_step != prog.gan_step:
+        # GAN quality oscillates from evaluation to evaluation: keep the best one (chosen
+        # on the validation subsets) and go on from there.
+        run.keep_best_gan()
+    run.save()
+
+
 def train(
     train_shapes: np.ndarray,
     heldout_shapes: np.ndarray,
@@ -358,8 +513,6 @@ def train(
     Returns:
         The trained model (also saved to ``out_dir/model.pt``).
     """
-    from dlo_env.progress import progress_bar as bar_of
-
     if stage not in STAGES:
         raise ValueError(f"stage must be one of {STAGES}, got {stage!r}")
     if not minutes > 0:
@@ -375,87 +528,7 @@ def train(
     trainer = Trainer(train_shapes, heldout_shapes, mc, tc, device, seed)
     if ckpt_path.exists():
         trainer.load_state(load_checkpoint(ckpt_path, name="checkpoint"))
-    info = dict(data_info or {}, seed=seed)
-    prog = trainer.progress
-    encoder_share = tc.encoder_fraction if stage == "all" else (1.0 if stage == "encoder" else 0.0)
-    budgets = {"gan": (1 - encoder_share) * minutes * 60, "encoder": encoder_share * minutes * 60}
-    step_budgets = {"gan": gan_steps, "encoder": encoder_steps}
-    stages = {"gan": ["gan"], "encoder": ["encoder"], "all": ["gan", "encoder"]}[stage]
-
-    def save(final: bool = False) -> None:
-        save_atomic(trainer.state(info), ckpt_path)
-        last = prog.rows[-1] if prog.rows else None
-        trainer.model(dict(info, gan_step=prog.gan_step, encoder_step=prog.encoder_step,
-                           last_metrics=last)).save(out / "model.pt")
-
-    def log_eval(name: str) -> None:
-        row = {"stage": name, "step": getattr(prog, f"{name}_step"),
-               "train_minutes": prog.total_seconds / 60}
-        row.update(trainer.evaluate())
-        row.update(trainer.last)
-        if name == "gan" and row["cov"] - row["nna"] > prog.best_score:
-            prog.best_score, prog.best_step = row["cov"] - row["nna"], prog.gan_step
-            trainer.best_state = trainer.networks_state()
-        prog.rows.append(row)
-        write_csv(prog.rows, out / METRICS_CSV)
-        plot_curves(prog.rows, out / METRICS_PNG, FLOORS)
-
-    for name in stages:
-        if name == "encoder" and prog.encoder_for_gan_step != prog.gan_step:
-            # The generator changed since the Encoder was trained: train it again (warm start).
-            prog.encoder_step, prog.encoder_seconds = 0, 0.0
-            prog.encoder_for_gan_step = prog.gan_step
-        step_fn = trainer.gan_step if name == "gan" else trainer.encoder_step
-        seconds_attr, step_attr = f"{name}_seconds", f"{name}_step"
-        limit_steps = step_budgets[name]
-
-        def done(limit_steps=limit_steps, step_attr=step_attr, seconds_attr=seconds_attr,
-                 name=name) -> bool:
-            if limit_steps is not None:
-                return getattr(prog, step_attr) >= limit_steps
-            return getattr(prog, seconds_attr) >= budgets[name]
-
-        total = limit_steps if limit_steps is not None else round(budgets[name])
-        bar = bar_of(total, name, "step" if limit_steps is not None else "s",
-                     enabled=progress_bar)
-        bar.update(getattr(prog, step_attr) if limit_steps is not None
-                   else round(getattr(prog, seconds_attr)))
-        last_save = time.perf_counter()
-        while not done():
-            trainer.set_lr_fraction(
-                getattr(prog, step_attr) / limit_steps if limit_steps is not None
-                else getattr(prog, seconds_attr) / max(budgets[name], 1e-9))
-            t0 = time.perf_counter()
-            step_fn()
-            dt = time.perf_counter() - t0
-            setattr(prog, seconds_attr, getattr(prog, seconds_attr) + dt)
-            prog.total_seconds += dt
-            bar.update(1 if limit_steps is not None else 0)
-            if limit_steps is None:
-                bar.n = min(total, round(getattr(prog, seconds_attr)))
-                bar.refresh()
-            if getattr(prog, step_attr) % tc.eval_every == 0:
-                log_eval(name)
-                r = prog.rows[-1]
-                bar.set_postfix(cov=f"{r['cov']:.2f}", mmd=f"{100 * r['mmd']:.2f}cm",
-                                inv=f"{r['inversion_refined']:.2f}", refresh=False)
-            if time.perf_counter() - last_save > tc.checkpoint_every_seconds:
-                save()
-                last_save = time.perf_counter()
-        bar.close()
-        if not prog.rows or prog.rows[-1]["stage"] != name or \
-                prog.rows[-1]["step"] != getattr(prog, step_attr):
-            log_eval(name)
-        if name == "gan" and trainer.best_state is not None and prog.best_step != prog.gan_step:
-            # GAN quality oscillates from evaluation to evaluation: keep the best one (chosen
-            # on the validation subsets) and go on from there.
-            for net in ("generator", "discriminator", "encoder"):
-                getattr(trainer, net).load_state_dict(trainer.best_state[net])
-            best_row = next(r for r in prog.rows
-                            if r["stage"] == "gan" and r["step"] == prog.best_step)
-            prog.rows.append(dict(best_row, stage="gan-best"))
-            write_csv(prog.rows, out / METRICS_CSV)
-            plot_curves(prog.rows, out / METRICS_PNG, FLOORS)
-        save()
-    return trainer.model(dict(info, gan_step=prog.gan_step, encoder_step=prog.encoder_step,
-                              last_metrics=prog.rows[-1] if prog.rows else None))
+    run = _Run(trainer, out, dict(data_info or {}, seed=seed))
+    for budget in _stage_budgets(stage, minutes, tc.encoder_fraction, gan_steps, encoder_steps):
+        _train_stage(run, budget, progress_bar)
+    return run.model()

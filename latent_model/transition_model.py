@@ -844,6 +844,29 @@ class TransitionModel(nn.Module):
             raise ValueError("displacement is required: (2,)/(B, 2) for one end, (4,)/(B, 4) "
                              "for both")
         arr, d, single = self._inputs(shapes, grasp, displacement)
+        members = self._members_argument(members, return_std)
+        rows = (self.cord_rows(params, len(arr)) if params is not None or self.config.cord_inputs
+                else None)
+        moves = self.reachable_moves(arr, grasp, d, params=rows, pegs=pegs,
+                                     peg_radius=peg_radius)
+        mean, spread = self._mean_and_spread(arr, grasp, moves, rows, pegs, members, return_std)
+        if inextensible and len(mean):
+            held = (np.full(len(mean), grasp != "tail"), np.full(len(mean), grasp != "head"))
+            length = (self.config.cord_length if rows is None
+                      else rows[:, PARAM_COLUMNS.index("length")])
+            mean = make_inextensible(mean, length / (self.config.n_points - 1), *held)
+        still = np.abs(moves).sum(axis=(1, 2)) == 0  # nothing moves: the cord stays at rest
+        mean[still] = arr[still]
+        spread[still] = 0.0
+        mean = np.clip(mean, -TABLE_HALF, TABLE_HALF).astype(np.float32)
+        spread = spread.astype(np.float32)
+        if single:
+            mean, spread = mean[0], spread[0]
+        return (mean, spread) if return_std else mean
+
+    def _members_argument(self, members: Any, return_std: bool) -> int | None:
+        """``predict``'s ``members``, checked: None or an int in 1..members (two for the
+        spread)."""
         total = self.config.members
         if members is not None and not (isinstance(members, Integral) and not isinstance(
                 members, bool) and 1 <= members <= total):
@@ -853,20 +876,26 @@ class TransitionModel(nn.Module):
         if return_std and (members == 1 or (members is None and total == 1)):
             raise ValueError("return_std needs members >= 2 (one network has no spread), "
                              f"got members={members or total}")
+        return members
+
+    @torch.no_grad()
+    def _mean_and_spread(self, arr: np.ndarray, grasp: str, moves: np.ndarray,
+                         rows: np.ndarray | None, pegs: Any, members: int | None,
+                         return_std: bool) -> tuple[np.ndarray, np.ndarray]:
+        """The raw mean prediction ``(B, n, 2)`` of shapes ``arr`` under reachable ``moves``,
+        in chunks, and the members' spread ``(B,)`` (zeros without ``return_std``): the mean
+        network's prediction when the model has one and ``members`` is None, else the mean
+        of the ensemble's (first ``members``) networks."""
         use_mean_net = members is None and self.mean_net is not None
-        rows = (self.cord_rows(params, len(arr)) if params is not None or self.config.cord_inputs
-                else None)
-        moves = self.reachable_moves(arr, grasp, d, params=rows, pegs=pegs,
-                                     peg_radius=peg_radius)
         seen_pegs = (torch.from_numpy(padded_pegs(pegs, len(arr))).to(self.device)
                      if self.config.peg_reach and pegs is not None else None)
         cord = (None if rows is None or not self.config.cord_inputs
                 else torch.from_numpy(cord_features(rows)).to(self.device))
-        grasp_name, grasp = grasp, torch.full((len(arr),), GRASP_CODES[grasp], dtype=torch.int64)
+        codes = torch.full((len(arr),), GRASP_CODES[grasp], dtype=torch.int64)
         means, spreads = [], []
         for lo in range(0, len(arr), PREDICT_CHUNK):
             part = slice(lo, lo + PREDICT_CHUNK)
-            batch = (torch.from_numpy(arr[part]).to(self.device), grasp[part].to(self.device),
+            batch = (torch.from_numpy(arr[part]).to(self.device), codes[part].to(self.device),
                      torch.from_numpy(moves[part]).to(self.device))
             mine = None if cord is None else cord[part]
             near = None if seen_pegs is None else seen_pegs[part]
@@ -884,20 +913,7 @@ class TransitionModel(nn.Module):
             spreads = [torch.zeros(len(arr))]
         mean = torch.cat(means).cpu().numpy() if means else np.zeros((0,) + arr.shape[1:])
         spread = torch.cat(spreads).cpu().numpy() if spreads else np.zeros(0)
-        if inextensible and len(mean):
-            held = (np.full(len(mean), grasp_name != "tail"),
-                    np.full(len(mean), grasp_name != "head"))
-            length = (self.config.cord_length if rows is None
-                      else rows[:, PARAM_COLUMNS.index("length")])
-            mean = make_inextensible(mean, length / (self.config.n_points - 1), *held)
-        still = np.abs(moves).sum(axis=(1, 2)) == 0  # nothing moves: the cord stays at rest
-        mean[still] = arr[still]
-        spread[still] = 0.0
-        mean = np.clip(mean, -TABLE_HALF, TABLE_HALF).astype(np.float32)
-        spread = spread.astype(np.float32)
-        if single:
-            mean, spread = mean[0], spread[0]
-        return (mean, spread) if return_std else mean
+        return mean, spread
 
     # ------------------------------------------------------------- persistence
     def state(self, half: bool = True) -> dict[str, Any]:

@@ -298,6 +298,338 @@ def _distil_from(teacher_path: str, mc: TransitionModelConfig
     return teacher, replace(tcfg, mean_network=True, mean_by_grasp=mc.mean_by_grasp)
 
 
+def _output_folder(out: str | os.PathLike[str], resume: bool) -> tuple[Path, Path]:
+    """The output folder (made) and its checkpoint's path; a checkpoint there needs
+    ``resume``."""
+    out = Path(out)
+    out.mkdir(parents=True, exist_ok=True)
+    checkpoint = out / CHECKPOINT_FILE
+    if checkpoint.exists() and not resume:
+        raise ValueError(f"out {str(out)!r} holds a training checkpoint; pass resume=True "
+                         "(--resume) to continue it, or choose another folder")
+    return out, checkpoint
+
+
+def _training_data(data: TransitionDataset, tc: TransitionTrainConfig,
+                   mc: TransitionModelConfig
+                   ) -> tuple[TransitionDataset, TransitionModelConfig, np.ndarray]:
+    """The transitions a run trains on, the architecture fitted to them (their points, cord
+    length, action size and pegs) and which transitions were left out (near the test cords)."""
+    # A model of one cord learns the cord its data's metadata names; a cord-conditioned one
+    # (cord_inputs) the cords of every transition, its own being the default cord's length.
+    conditioned = mc.cord_inputs or bool(
+        tc.teacher and TransitionModel.load(tc.teacher, device="cpu").config.cord_inputs)
+    cord = {} if conditioned else asdict(data.one_cord("data"))
+    # A model of several cords never trains on the cords near the held-out test cords.
+    left_out = near_test_cords(data.params, PARAM_COLUMNS) if conditioned \
+        else np.zeros(len(data), dtype=bool)
+    if left_out.all():
+        raise ValueError("data holds only cords near the held-out test cords "
+                         "(dlo_env.randomize.TEST_CORDS): nothing to train on")
+    if left_out.any():
+        data = data.subset(~left_out)
+    mc = TransitionModelConfig(**{**asdict(mc), "n_points": int(data.start.shape[1]),
+                                  **{key: float(cord.get(name, getattr(mc, key)))
+                                     for key, name in CORD_FIELDS.items()},
+                                  "max_step": float(data.metadata.get("collect", {}).get(
+                                      "max_step", mc.max_step))})
+    if mc.mean_network and not tc.teacher:
+        raise ValueError("model_config.mean_network: a mean network is made by distilling a "
+                         "trained ensemble (TransitionTrainConfig.teacher, --teacher), not "
+                         "trained with it")
+    collected = data.metadata.get("collect", {})
+    if mc.peg_reach and "peg_radius" in collected:  # the pegs the data went around
+        mc = replace(mc, peg_radius=float(collected["peg_radius"]))
+    return data, mc, left_out
+
+
+def _check_pegs(data: TransitionDataset, mc: TransitionModelConfig) -> None:
+    """Transitions around pegs need a model that sees them."""
+    if len(data) and data.peg_count.any() and not mc.peg_reach:
+        raise ValueError("data holds transitions around pegs (collected with max_pegs); a "
+                         "model without peg_reach (--peg-reach) does not see pegs: give it one, "
+                         "or use data of an empty table")
+
+
+def _start_from_teacher(model: TransitionModel, teacher: TransitionModel,
+                        mc: TransitionModelConfig) -> EnsembleMLP:
+    """Copy the teacher's ensemble into ``model`` and freeze it; returns the mean network,
+    what the run trains."""
+    model.net.load_state_dict(teacher.net.state_dict())
+    model.net.requires_grad_(False)
+    trained = model.mean_net
+    # Start from the ensemble's first member (the MLP student of a chain ensemble starts
+    # from its own random weights).
+    first = model.net.first(1) if mc.architecture == "mlp" else None
+    with torch.no_grad():
+        for mine, theirs in zip(trained.parameters(),
+                                [] if first is None else first.parameters()):
+            mine.copy_(theirs)
+    return trained
+
+
+def _grown_network(start: TransitionModel, mc: TransitionModelConfig, init: str
+                   ) -> EnsembleMLP:
+    """``start``'s ensemble with the inputs ``mc`` adds (their weights zero), checked to be
+    of the architecture and cord ``mc`` describes otherwise."""
+    # A network without contact vectors is a fine start for one with them, one of the
+    # default cord for one of several cords, and one of the empty table for one that
+    # sees pegs (the new inputs' weights start at zero: it first predicts as before,
+    # every cord as the default and every peg as absent); one of another stiffness, friction
+    # or mass for one of the data's cord.
+    seen = replace(start.config, mean_network=False, mean_by_grasp=False,
+                   **{key: getattr(mc, key) for key in LATER_CORD_FIELDS})
+    grow_contact = not seen.contact_reach and mc.contact_reach
+    grow_cord = not seen.cord_inputs and mc.cord_inputs
+    grow_pegs = not seen.peg_reach and mc.peg_reach
+    grown = replace(seen, contact_reach=mc.contact_reach if grow_contact
+                    else seen.contact_reach, cord_inputs=seen.cord_inputs or grow_cord,
+                    peg_reach=mc.peg_reach if grow_pegs else seen.peg_reach,
+                    peg_radius=mc.peg_radius if grow_pegs else seen.peg_radius)
+    differ = [f"{k}={v!r} (this run {getattr(mc, k)!r})" for k, v in asdict(grown).items()
+              if getattr(mc, k) != v]
+    if differ:
+        raise ValueError(f"init {init!r} is a model of another architecture or cord: "
+                         f"{', '.join(differ)}")
+    net = start.net
+    if grow_contact:
+        after = replace(seen, contact_reach=mc.contact_reach)
+        net = net.with_inputs(seen.contact_at, after.inputs - seen.inputs)
+        seen = after
+    if grow_pegs:  # the peg vectors come after the rim's (and contact's)
+        after = replace(seen, peg_reach=mc.peg_reach, peg_radius=mc.peg_radius)
+        net = net.with_inputs(seen.peg_at, 2 * after.peg_inputs)
+        seen = after
+    if grow_cord:  # the cord's features come before the move's four inputs
+        net = net.with_inputs(seen.inputs - 4, mc.cord_features)
+    return net
+
+
+def _start_from_init(model: TransitionModel, init: str, mc: TransitionModelConfig
+                     ) -> dict[str, Any]:
+    """Load the ensemble of the model file ``init`` into ``model``; returns what fine-tuning
+    started from: its weights' fingerprint and its own provenance."""
+    start = TransitionModel.load(init, device="cpu")
+    model.net.load_state_dict(_grown_network(start, mc, init).state_dict())
+    return {"fingerprint": fingerprint(start.net), "info": start.info}
+
+
+@dataclass
+class _Run:
+    """One training run: its model, the networks it trains, the optimiser and its provenance.
+
+    Attributes:
+        trained: The networks the optimiser moves (the ensemble, or the mean network).
+        net: The networks the losses run (None: the ensemble).
+        teacher: The distilled teacher (None: an ensemble is trained).
+        teacher_ensemble: The fingerprint of the teacher's ensemble (None: no teacher).
+        init_record: What fine-tuning started from (None: random weights or a teacher).
+        step: Optimiser steps done.
+    """
+
+    model: TransitionModel
+    trained: EnsembleMLP
+    net: EnsembleMLP | None
+    optimiser: torch.optim.Optimizer
+    teacher: TransitionModel | None
+    teacher_ensemble: str | None
+    init_record: dict[str, Any] | None
+    step: int = 0
+
+    @property
+    def init_fingerprint(self) -> str | None:
+        """The fingerprint of the model fine-tuning started from (else what it has: None)."""
+        return self.init_record and self.init_record["fingerprint"]
+
+
+def _start_run(model_class: type[TransitionModel], mc: TransitionModelConfig,
+               tc: TransitionTrainConfig, device: str | torch.device,
+               teacher: TransitionModel | None) -> _Run:
+    """The seeded model, started from the teacher's ensemble, a model file or random
+    weights, and the optimiser of what it trains."""
+    torch.manual_seed(tc.seed)
+    model = model_class(mc, device=device)
+    trained, init_record = model.net, None
+    if teacher is not None:  # the ensemble is the teacher's, frozen; the mean network learns
+        trained = _start_from_teacher(model, teacher, mc)
+    elif tc.init:
+        init_record = _start_from_init(model, tc.init, mc)
+    return _Run(model=model, trained=trained, net=None if teacher is None else trained,
+                optimiser=torch.optim.Adam(trained.parameters(), lr=tc.lr), teacher=teacher,
+                teacher_ensemble=None if teacher is None else fingerprint(model.net),
+                init_record=init_record)
+
+
+def _resume(run: _Run, checkpoint: Path, tc: TransitionTrainConfig,
+            mc: TransitionModelConfig) -> None:
+    """Continue ``run`` from ``checkpoint``, written by a run of the same settings, teacher
+    and start."""
+    saved = load_checkpoint(checkpoint, str(checkpoint), kind=CHECKPOINT_FORMAT, version=1)
+    check_config_keys(saved["model_config"], str(checkpoint), checkpoint=True)
+    saved_mc = config_from_dict(TransitionModelConfig, current_config(saved["model_config"]),
+                                "model_config")
+    saved_tc = config_from_json(saved["train_config"])
+    if saved_tc != tc or saved_mc != mc:
+        differ = [f"{k}={a!r} (now {b!r})" for old, new in ((saved_tc, tc), (saved_mc, mc))
+                  for (k, a), b in zip(asdict(old).items(), asdict(new).values()) if a != b]
+        raise ValueError(f"resume: {checkpoint} was written with other settings: "
+                         f"{', '.join(differ)}; use the same settings or another --out")
+    if saved.get("teacher_ensemble", run.teacher_ensemble) != run.teacher_ensemble:
+        raise ValueError(f"resume: {checkpoint} distils another ensemble than teacher "
+                         f"{tc.teacher!r} holds now; use that teacher or another --out")
+    if saved.get("init_fingerprint", run.init_fingerprint) != run.init_fingerprint:
+        raise ValueError(f"resume: {checkpoint} fine-tunes another model than init "
+                         f"{tc.init!r} holds now; use that model or another --out")
+    run.trained.load_state_dict(saved["net"])
+    run.optimiser.load_state_dict(saved["optimiser"])
+    run.step = int(saved["step"])
+
+
+@dataclass
+class _Batch:
+    """One training batch: the data's transitions ``idx`` first, then the teacher's moves."""
+
+    idx: torch.Tensor
+    start: torch.Tensor
+    grasp: torch.Tensor
+    moves: torch.Tensor
+    target: torch.Tensor | None  # the teacher's mean prediction (None: not distilling)
+    cord: torch.Tensor | None
+    pegs: torch.Tensor | None
+
+
+@dataclass
+class _Batches:
+    """Where a run's batches come from: the training transitions (with the teacher's mean
+    predictions of them, when distilling), the teacher's moves that fill each batch, and the
+    seeded stream that draws them.
+
+    Attributes:
+        real: Transitions of the data per batch (the rest are the teacher's moves).
+    """
+
+    train: TransitionTensors
+    targets: torch.Tensor | None
+    extra: TransitionTensors | None
+    extra_targets: torch.Tensor | None
+    real: int
+    size: int
+    gen: torch.Generator
+
+    @classmethod
+    def of(cls, run: _Run, train: TransitionTensors, train_data: TransitionDataset,
+           tc: TransitionTrainConfig) -> _Batches:
+        """The batches of ``run`` (its teacher's targets computed once), drawn by a stream
+        seeded with ``tc.seed`` and the step the run starts at."""
+        distil = run.teacher is not None
+        targets = mean_predictions(run.model, train) if distil else None
+        extra = extra_targets = None
+        real = tc.batch_size
+        if distil and tc.teacher_moves:
+            extra = paired_moves(run.model, train_data, tc.teacher_moves, seed=tc.seed)
+            extra_targets = mean_predictions(run.model, extra)
+            real = max(1, round(tc.batch_size / (tc.teacher_moves + 1)))
+        gen = torch.Generator(device="cpu").manual_seed(tc.seed * 1_000_003 + run.step)
+        return cls(train, targets, extra, extra_targets, real, tc.batch_size, gen)
+
+    def draw(self, device: torch.device) -> _Batch:
+        """The next batch, on ``device``."""
+        tr = self.train
+        idx = torch.randint(len(tr.grasp), (self.real,), generator=self.gen).to(device)
+        start, grasp, moves = tr.start[idx], tr.grasp[idx], tr.moves[idx]
+        target = None if self.targets is None else self.targets[idx]
+        cord, pegs = tr.rows("cord", idx), tr.rows("pegs", idx)
+        extra = self.extra
+        if extra is not None and self.real < self.size:  # the teacher's moves fill the batch
+            pick = torch.randint(len(extra.grasp), (self.size - self.real,),
+                                 generator=self.gen).to(device)
+            start, grasp, moves, target = (torch.cat([a, b[pick]]) for a, b in (
+                (start, extra.start), (grasp, extra.grasp), (moves, extra.moves),
+                (target, self.extra_targets)))
+            if cord is not None:
+                cord = torch.cat([cord, extra.cord[pick]])
+            if pegs is not None:
+                pegs = torch.cat([pegs, extra.pegs[pick]])
+        return _Batch(idx, start, grasp, moves, target, cord, pegs)
+
+
+def _train_step(run: _Run, batches: _Batches, tc: TransitionTrainConfig) -> dict[str, float]:
+    """One optimiser step on the next batch; returns its one-move loss (and, distilling, its
+    error to the teacher's mean)."""
+    batch = batches.draw(run.model.device)
+    pred = run.model(batch.start, batch.grasp, batch.moves, net=run.net, cord=batch.cord,
+                     pegs=batch.pegs)
+    errors = point_error(pred[:, :batches.real], batches.train.next[batch.idx][None])
+    loss_one = errors.mean()
+    loss = one_move_loss(errors, tc)
+    loss_teacher = torch.zeros(())
+    if batch.target is not None:
+        loss_teacher = point_error(pred, batch.target[None]).mean()
+        loss = loss + tc.teacher_weight * loss_teacher
+    run.optimiser.zero_grad(set_to_none=True)
+    loss.backward()
+    run.optimiser.step()
+    run.step += 1
+    stats = {"loss": float(loss_one.detach())}
+    if batches.targets is not None:
+        stats["teacher"] = float(loss_teacher.detach())
+    return stats
+
+
+def _lr_factor(tc: TransitionTrainConfig, step: int) -> float:
+    """The learning rate's share of ``tc.lr`` at ``step``."""
+    fraction = step / tc.steps
+    return 0.5 * (1 + math.cos(math.pi * fraction)) if tc.lr_schedule == "cosine" else 1.0
+
+
+def _record(run: _Run, validation: TransitionTensors, stats: dict[str, float], lr: float,
+            started: float, out: Path, tc: TransitionTrainConfig,
+            mc: TransitionModelConfig) -> None:
+    """Validate (into ``stats``), add a row to the training curve (seconds since
+    ``started``) and write the checkpoint."""
+    run.model.eval()
+    stats["validation_cm"] = 100 * validation_error(run.model, validation, net=run.net)
+    run.model.train()
+    _curve_row(out / CURVE_FILE, {"step": run.step, "lr": lr, **stats,
+                                  "seconds": round(time.perf_counter() - started, 1)})
+    save_atomic({"format": CHECKPOINT_FORMAT, "format_version": 1, "step": run.step,
+                 "train_config": asdict(tc), "model_config": saved_config(mc),
+                 "net": run.trained.state_dict(), "optimiser": run.optimiser.state_dict(),
+                 "teacher_ensemble": run.teacher_ensemble,
+                 "init_fingerprint": run.init_fingerprint},
+                out / CHECKPOINT_FILE)
+
+
+def _run_info(data: TransitionDataset, train: TransitionDataset, tc: TransitionTrainConfig,
+              left_out: np.ndarray) -> dict[str, Any]:
+    """The provenance of a run: its data, settings and sample cost."""
+    return {"data": data.metadata.get("collect", {}), "files": data.metadata.get("files"),
+            "sources": data.metadata.get("sources"),
+            "train_config": asdict(tc),
+            "transitions": len(train), "data_transitions": len(data),
+            "test_cords_left_out": int(left_out.sum()),
+            "env_steps": data.env_steps()}
+
+
+def _finish(run: _Run, info: dict[str, Any], validation: TransitionTensors, out: Path
+            ) -> TransitionModel:
+    """Record the trained model's provenance and final validation error; save it to ``out``."""
+    model, teacher = run.model, run.teacher
+    model.eval()
+    model.info = {**info, "steps": run.step,
+                  "validation_cm": 100 * validation_error(model, validation, net=run.net)}
+    if teacher is not None:  # the ensemble's own provenance, as its training recorded it
+        model.info["ensemble"] = (teacher.info.get("ensemble", teacher.info)
+                                  if teacher.config.mean_network else teacher.info)
+        model.info["teacher_ensemble"] = run.teacher_ensemble
+    if run.init_record is not None:
+        model.info["init_model"] = run.init_record
+    model.save(out)
+    with atomic_path(out / "transition-info.json") as tmp:
+        tmp.write_text(json.dumps(model.info, indent=1, sort_keys=True))
+    return model
+
+
 def train_transition_model(
     data: TransitionDataset,
     out: str | os.PathLike[str],
@@ -325,199 +657,32 @@ def train_transition_model(
         The trained model (also saved as ``out/transition.pt``).
     """
     tc = config if config is not None else TransitionTrainConfig()
-    out = Path(out)
-    out.mkdir(parents=True, exist_ok=True)
-    checkpoint = out / CHECKPOINT_FILE
-    if checkpoint.exists() and not resume:
-        raise ValueError(f"out {str(out)!r} holds a training checkpoint; pass resume=True "
-                         "(--resume) to continue it, or choose another folder")
-    mc = model_config if model_config is not None else TransitionModelConfig()
-    # A model of one cord learns the cord its data's metadata names; a cord-conditioned one
-    # (cord_inputs) the cords of every transition, its own being the default cord's length.
-    conditioned = mc.cord_inputs or bool(
-        tc.teacher and TransitionModel.load(tc.teacher, device="cpu").config.cord_inputs)
-    cord = {} if conditioned else asdict(data.one_cord("data"))
-    # A model of several cords never trains on the cords near the held-out test cords.
-    left_out = near_test_cords(data.params, PARAM_COLUMNS) if conditioned \
-        else np.zeros(len(data), dtype=bool)
-    if left_out.all():
-        raise ValueError("data holds only cords near the held-out test cords "
-                         "(dlo_env.randomize.TEST_CORDS): nothing to train on")
-    if left_out.any():
-        data = data.subset(~left_out)
-    mc = TransitionModelConfig(**{**asdict(mc), "n_points": int(data.start.shape[1]),
-                                  **{key: float(cord.get(name, getattr(mc, key)))
-                                     for key, name in CORD_FIELDS.items()},
-                                  "max_step": float(data.metadata.get("collect", {}).get(
-                                      "max_step", mc.max_step))})
-    if mc.mean_network and not tc.teacher:
-        raise ValueError("model_config.mean_network: a mean network is made by distilling a "
-                         "trained ensemble (TransitionTrainConfig.teacher, --teacher), not "
-                         "trained with it")
-    collected = data.metadata.get("collect", {})
-    if mc.peg_reach and "peg_radius" in collected:  # the pegs the data went around
-        mc = replace(mc, peg_radius=float(collected["peg_radius"]))
-    teacher = init_record = None
+    out, checkpoint = _output_folder(out, resume)
+    data, mc, left_out = _training_data(
+        data, tc, model_config if model_config is not None else TransitionModelConfig())
+    teacher = None
     if tc.teacher:
         teacher, mc = _distil_from(tc.teacher, mc)
-    if len(data) and data.peg_count.any() and not mc.peg_reach:
-        raise ValueError("data holds transitions around pegs (collected with max_pegs); a "
-                         "model without peg_reach (--peg-reach) does not see pegs: give it one, "
-                         "or use data of an empty table")
-    torch.manual_seed(tc.seed)
-    model = model_class(mc, device=device)
-    trained = model.net
-    if teacher is not None:  # the ensemble is the teacher's, frozen; the mean network learns
-        model.net.load_state_dict(teacher.net.state_dict())
-        model.net.requires_grad_(False)
-        trained = model.mean_net
-        # Start from the ensemble's first member (the MLP student of a chain ensemble starts
-        # from its own random weights).
-        first = model.net.first(1) if mc.architecture == "mlp" else None
-        with torch.no_grad():
-            for mine, theirs in zip(trained.parameters(),
-                                    [] if first is None else first.parameters()):
-                mine.copy_(theirs)
-    elif tc.init:
-        start = TransitionModel.load(tc.init, device="cpu")
-        # A network without contact vectors is a fine start for one with them, one of the
-        # default cord for one of several cords, and one of the empty table for one that
-        # sees pegs (the new inputs' weights start at zero: it first predicts as before,
-        # every cord as the default and every peg as absent); one of another stiffness,
-        # friction or mass for one of the data's cord.
-        seen = replace(start.config, mean_network=False, mean_by_grasp=False,
-                       **{key: getattr(mc, key) for key in LATER_CORD_FIELDS})
-        grow_contact = not seen.contact_reach and mc.contact_reach
-        grow_cord = not seen.cord_inputs and mc.cord_inputs
-        grow_pegs = not seen.peg_reach and mc.peg_reach
-        grown = replace(seen, contact_reach=mc.contact_reach if grow_contact
-                        else seen.contact_reach, cord_inputs=seen.cord_inputs or grow_cord,
-                        peg_reach=mc.peg_reach if grow_pegs else seen.peg_reach,
-                        peg_radius=mc.peg_radius if grow_pegs else seen.peg_radius)
-        differ = [f"{k}={v!r} (this run {getattr(mc, k)!r})" for k, v in asdict(grown).items()
-                  if getattr(mc, k) != v]
-        if differ:
-            raise ValueError(f"init {tc.init!r} is a model of another architecture or cord: "
-                             f"{', '.join(differ)}")
-        first_net = start.net
-        if grow_contact:
-            after = replace(seen, contact_reach=mc.contact_reach)
-            first_net = first_net.with_inputs(seen.contact_at, after.inputs - seen.inputs)
-            seen = after
-        if grow_pegs:  # the peg vectors come after the rim's (and contact's)
-            after = replace(seen, peg_reach=mc.peg_reach, peg_radius=mc.peg_radius)
-            first_net = first_net.with_inputs(seen.peg_at, 2 * after.peg_inputs)
-            seen = after
-        if grow_cord:  # the cord's features come before the move's four inputs
-            first_net = first_net.with_inputs(seen.inputs - 4, mc.cord_features)
-        model.net.load_state_dict(first_net.state_dict())
-        # What fine-tuning started from: its weights' fingerprint and its own provenance.
-        init_record = {"fingerprint": fingerprint(start.net), "info": start.info}
-    net = None if teacher is None else trained  # what the losses run
-    teacher_ensemble = None if teacher is None else fingerprint(model.net)
-    optimiser = torch.optim.Adam(trained.parameters(), lr=tc.lr)
-    step = 0
+    _check_pegs(data, mc)
+    run = _start_run(model_class, mc, tc, device, teacher)
     if resume and checkpoint.is_file():
-        saved = load_checkpoint(checkpoint, str(checkpoint), kind=CHECKPOINT_FORMAT, version=1)
-        check_config_keys(saved["model_config"], str(checkpoint), checkpoint=True)
-        saved_mc = config_from_dict(TransitionModelConfig, current_config(saved["model_config"]),
-                                    "model_config")
-        saved_tc = config_from_json(saved["train_config"])
-        if saved_tc != tc or saved_mc != mc:
-            differ = [f"{k}={a!r} (now {b!r})" for old, new in ((saved_tc, tc), (saved_mc, mc))
-                      for (k, a), b in zip(asdict(old).items(), asdict(new).values()) if a != b]
-            raise ValueError(f"resume: {checkpoint} was written with other settings: "
-                             f"{', '.join(differ)}; use the same settings or another --out")
-        if saved.get("teacher_ensemble", teacher_ensemble) != teacher_ensemble:
-            raise ValueError(f"resume: {checkpoint} distils another ensemble than teacher "
-                             f"{tc.teacher!r} holds now; use that teacher or another --out")
-        started_from = init_record and init_record["fingerprint"]
-        if saved.get("init_fingerprint", started_from) != started_from:
-            raise ValueError(f"resume: {checkpoint} fine-tunes another model than init "
-                             f"{tc.init!r} holds now; use that model or another --out")
-        trained.load_state_dict(saved["net"])
-        optimiser.load_state_dict(saved["optimiser"])
-        step = int(saved["step"])
+        _resume(run, checkpoint, tc, mc)
     train, validation = split_transitions(data, tc.validation_fraction, seed=tc.seed)
-    tr, va = as_tensors(model, train), as_tensors(model, validation)
-    targets = mean_predictions(model, tr) if teacher is not None else None
-    extra = extra_targets = None
-    real = tc.batch_size
-    if teacher is not None and tc.teacher_moves:
-        extra = paired_moves(model, train, tc.teacher_moves, seed=tc.seed)
-        extra_targets = mean_predictions(model, extra)
-        real = max(1, round(tc.batch_size / (tc.teacher_moves + 1)))
-    gen = torch.Generator(device="cpu").manual_seed(tc.seed * 1_000_003 + step)
-    info = {"data": data.metadata.get("collect", {}), "files": data.metadata.get("files"),
-            "sources": data.metadata.get("sources"),
-            "train_config": asdict(tc),
-            "transitions": len(train), "data_transitions": len(data),
-            "test_cords_left_out": int(left_out.sum()),
-            "env_steps": data.env_steps()}
+    tr, va = as_tensors(run.model, train), as_tensors(run.model, validation)
+    batches = _Batches.of(run, tr, train, tc)
+    info = _run_info(data, train, tc, left_out)
     started = time.perf_counter()
-    model.train()
-    while step < tc.steps:
-        fraction = step / tc.steps
-        factor = 0.5 * (1 + math.cos(math.pi * fraction)) if tc.lr_schedule == "cosine" else 1.0
-        for group in optimiser.param_groups:
+    run.model.train()
+    while run.step < tc.steps:
+        factor = _lr_factor(tc, run.step)
+        for group in run.optimiser.param_groups:
             group["lr"] = tc.lr * factor
-        idx = torch.randint(len(tr.grasp), (real,), generator=gen).to(model.device)
-        start, grasp, moves, target = tr.start[idx], tr.grasp[idx], tr.moves[idx], None
-        cord, pegs = tr.rows("cord", idx), tr.rows("pegs", idx)
-        if targets is not None:
-            target = targets[idx]
-        if extra is not None and real < tc.batch_size:  # the teacher's moves fill the batch
-            pick = torch.randint(len(extra.grasp), (tc.batch_size - real,),
-                                 generator=gen).to(model.device)
-            start, grasp, moves, target = (torch.cat([a, b[pick]]) for a, b in (
-                (start, extra.start), (grasp, extra.grasp), (moves, extra.moves),
-                (target, extra_targets)))
-            if cord is not None:
-                cord = torch.cat([cord, extra.cord[pick]])
-            if pegs is not None:
-                pegs = torch.cat([pegs, extra.pegs[pick]])
-        pred = model(start, grasp, moves, net=net, cord=cord, pegs=pegs)
-        errors = point_error(pred[:, :real], tr.next[idx][None])
-        loss_one = errors.mean()
-        loss = one_move_loss(errors, tc)
-        loss_teacher = torch.zeros(())
-        if target is not None:
-            loss_teacher = point_error(pred, target[None]).mean()
-            loss = loss + tc.teacher_weight * loss_teacher
-        optimiser.zero_grad(set_to_none=True)
-        loss.backward()
-        optimiser.step()
-        step += 1
-        stats = {"loss": float(loss_one.detach())}
-        if targets is not None:
-            stats["teacher"] = float(loss_teacher.detach())
-        if step % tc.eval_every == 0 or step == tc.steps:
-            model.eval()
-            stats["validation_cm"] = 100 * validation_error(model, va, net=net)
-            model.train()
-            _curve_row(out / CURVE_FILE, {"step": step, "lr": tc.lr * factor, **stats,
-                                          "seconds": round(time.perf_counter() - started, 1)})
-            save_atomic({"format": CHECKPOINT_FORMAT, "format_version": 1, "step": step,
-                         "train_config": asdict(tc), "model_config": saved_config(mc),
-                         "net": trained.state_dict(), "optimiser": optimiser.state_dict(),
-                         "teacher_ensemble": teacher_ensemble,
-                         "init_fingerprint": init_record and init_record["fingerprint"]},
-                        checkpoint)
+        stats = _train_step(run, batches, tc)
+        if run.step % tc.eval_every == 0 or run.step == tc.steps:
+            _record(run, va, stats, tc.lr * factor, started, out, tc, mc)
         if progress is not None:
-            progress(step, stats)
-    model.eval()
-    model.info = {**info, "steps": step,
-                  "validation_cm": 100 * validation_error(model, va, net=net)}
-    if teacher is not None:  # the ensemble's own provenance, as its training recorded it
-        model.info["ensemble"] = (teacher.info.get("ensemble", teacher.info)
-                                  if teacher.config.mean_network else teacher.info)
-        model.info["teacher_ensemble"] = teacher_ensemble
-    if init_record is not None:
-        model.info["init_model"] = init_record
-    model.save(out)
-    with atomic_path(out / "transition-info.json") as tmp:
-        tmp.write_text(json.dumps(model.info, indent=1, sort_keys=True))
-    return model
+            progress(run.step, stats)
+    return _finish(run, info, va, out)
 
 
 #: Training settings retired (the chain loss, off in every shipped model: ``chain_weight``

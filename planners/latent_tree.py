@@ -20,7 +20,7 @@ from __future__ import annotations
 import math
 import time
 from dataclasses import dataclass, fields, replace
-from typing import Any
+from typing import Any, Protocol
 
 import numpy as np
 
@@ -227,6 +227,35 @@ class _Tree:
         return out[::-1]
 
 
+class _Edges(Protocol):
+    """One edge type of the tree (``TreeConfig.edges``): how nodes connect to the goal and
+    extend, and how the tree becomes a plan. ``LatentTreePlanner._grow`` runs the search.
+
+    Attributes:
+        z_start, z_goal: The latents of the start and the goal.
+        root_shape: The shape of the tree's root.
+        reached: A node within ``goal_threshold`` of the goal (None: none yet).
+        connect_after_reach: Whether a reached node makes one more goal connection attempt
+            before the search ends (else it ends at once).
+    """
+
+    z_start: np.ndarray
+    z_goal: np.ndarray
+    root_shape: np.ndarray
+    reached: int | None
+    connect_after_reach: bool
+
+    def connect(self, tree: _Tree, candidates: np.ndarray) -> bool:
+        """Try to connect the ``candidates`` nearest the goal to it; True when one does."""
+
+    def extend(self, tree: _Tree, samples: np.ndarray, nearest: np.ndarray) -> np.ndarray:
+        """Extend the ``nearest`` nodes towards the latent ``samples``; returns the nodes
+        added."""
+
+    def plan(self, tree: _Tree, iterations: int, stop: str, t0: float, calls0: int) -> Plan:
+        """The plan the grown tree gives."""
+
+
 class LatentTreePlanner:
     """Search the latent space for a transition the manipulated end makes by straight moves.
 
@@ -367,119 +396,49 @@ class LatentTreePlanner:
             The plan. On failure (budget spent) ``success`` is False and the path leads to the
             node whose shape came closest to the goal.
         """
-        cfg = self.config
         t0 = time.perf_counter()
         calls0 = self.surrogate.decoder_calls
         n = self.n_points
         start = as_shape(start, n, "start")
         goal = as_shape(goal, n, "goal")
         rng = np.random.default_rng(self.seed if seed is None else seed)
-        if cfg.edges == "moves":
-            return self._plan_moves(start, goal, goal_latent, rng, t0, calls0)
-        counts = {"similarity": 0, "straightness": 0, "follow": 0, "cord": 0}
-        if goal_latent is None:
-            z, inv_err, inv_ok = self.invert(np.stack([start, goal]))
-            z_start, z_goal = z[0], z[1]
-            goal_err, goal_ok = float(inv_err[1]), bool(inv_ok[1])
-        else:
-            z_goal = np.asarray(goal_latent, dtype=np.float32).reshape(-1)
-            if z_goal.shape != (self.surrogate.latent_dim,):
-                raise ValueError(f"goal_latent must have shape ({self.surrogate.latent_dim},), "
-                                 f"got {np.shape(goal_latent)}")
-            z, inv_err, inv_ok = self.invert(start[None])
-            z_start = z[0]
-            goal_err, goal_ok = math.nan, True
-        ends = self.surrogate.decode(np.stack([z_start, z_goal]))
-        shape_goal = ends[1]
-        limits = _CordLimits.of(start, ends, cfg.max_stretch)
-        tree = _Tree(cfg.max_nodes + 1, self.surrogate.latent_dim, n)
-        tree.add(z_start[None], ends[:1], np.array([-1]), np.zeros(1), np.zeros(1, np.int64))
-        low, high = self._sample_box(z_start, z_goal)
+        edges: _Edges = (_MoveEdges(self, start, goal, goal_latent, rng)
+                         if self.config.edges == "moves"
+                         else _LatentEdges(self, start, goal, goal_latent))
+        tree = _Tree(self.config.max_nodes + 1, len(edges.z_goal), n)
+        tree.add(edges.z_start[None], edges.root_shape[None], np.array([-1]), np.zeros(1),
+                 np.zeros(1, np.int64))
+        iterations, stop = self._grow(tree, edges, rng, t0)
+        return edges.plan(tree, iterations, stop, t0, calls0)
 
-        goal_edge: tuple[int, int] | None = None  # (node, points) connected to the goal
-        reached: int | None = None  # a node within goal_threshold (the paper's stop)
+    def _grow(self, tree: _Tree, edges: _Edges, rng: np.random.Generator, t0: float
+              ) -> tuple[int, str]:
+        """Grow ``tree`` until the goal is reached or the budget is spent.
+
+        Every round, the newest nodes nearest the goal first try to connect to it; then a
+        batch of targets is drawn (``_sample_targets``) and ``edges`` extends each one's
+        nearest node towards it. Both edge types share this loop.
+
+        Returns:
+            The rounds of extension, and why the search stopped: ``"goal"``, ``"time"`` or
+            ``"nodes"``.
+        """
+        low, high = self._sample_box(edges.z_start, edges.z_goal)
         candidates = np.array([0])
         iterations = 0
-        stop = "goal"
         while True:
-            # Goal connection attempts from the newest nodes nearest the goal.
-            if len(candidates):
-                dist = np.linalg.norm(tree.latents[candidates] - z_goal, axis=1)
-                candidates = candidates[np.argsort(dist)[: cfg.connect_attempts]]
-                ok, _, points = self._try_edges(
-                    tree.latents[candidates], tree.shapes[candidates],
-                    np.broadcast_to(z_goal, (len(candidates), len(z_goal))), limits, counts,
-                )
-                if ok.any():
-                    passing = candidates[ok]
-                    head_goal = shape_goal[self._end]
-                    total = tree.cost[passing] + np.linalg.norm(
-                        tree.shapes[passing][:, self._end] - head_goal, axis=-1).sum(axis=1)
-                    goal_edge = (int(passing[np.argmin(total)]), points)
-                    break
-            if reached is not None:
-                break
+            if len(candidates) and edges.connect(tree, candidates):
+                return iterations, "goal"
+            if edges.reached is not None:
+                return iterations, "goal"
             spent = self._budget_spent(t0, tree)
             if spent:
-                stop = spent
-                break
+                return iterations, spent
             iterations += 1
-            samples, nearest = self._sample_targets(rng, low, high, z_goal, tree)
-            nodes = tree.latents[: tree.size]
-            direction = samples - nodes[nearest]
-            dist = np.linalg.norm(direction, axis=1)
-            keep = dist > 1e-6
-            nearest, direction, dist = nearest[keep], direction[keep], dist[keep]
-            if len(nearest) == 0:
-                candidates = np.array([], dtype=np.int64)
-                continue
-            step = np.minimum(dist, cfg.step_length)
-            targets = nodes[nearest] + direction * (step / dist)[:, None]
-            ok, shapes, points = self._try_edges(
-                nodes[nearest], tree.shapes[nearest], targets, limits, counts,
-                points=cfg.edge_points,
-            )
-            parents = nearest[ok]
-            moved = np.linalg.norm(shapes[ok][:, self._end] - tree.shapes[parents][:, self._end],
-                                   axis=-1).sum(axis=1)
-            added = tree.add(targets[ok].astype(np.float32), shapes[ok], parents,
-                             tree.cost[parents] + moved, np.full(len(parents), points))
-            candidates = added
-            if len(added):
-                close = np.asarray(error(tree.shapes[added], shape_goal)) <= cfg.goal_threshold
-                if close.any():
-                    reached = int(added[np.argmax(close)])
-
-        # The path: to the goal latent, else to the reached node, else to the closest node.
-        if goal_edge is not None:
-            node, points = goal_edge
-            path = tree.path(node)
-            path_latents = [tree.latents[i] for i in path] + [z_goal]
-            path_points = [int(tree.edge_points[i]) for i in path[1:]] + [points]
-            success = True
-        else:
-            if reached is None:
-                gaps = np.asarray(error(tree.shapes[: tree.size], shape_goal)).reshape(-1)
-                node, success = int(np.argmin(gaps)), False
-            else:
-                node, success = reached, True
-            path = tree.path(node)
-            path_latents = [tree.latents[i] for i in path]
-            path_points = [int(tree.edge_points[i]) for i in path[1:]]
-        path_latents = np.array(path_latents, dtype=np.float32)
-        if cfg.shortcut and len(path_latents) > 2:
-            path_latents, path_points = self._shortcut(path_latents, path_points, limits, counts)
-        stats = {
-            "nodes": int(tree.size),
-            "iterations": iterations,
-            "stop": stop if not success else "goal",
-            "start_inversion_error": float(inv_err[0]),
-            "start_verified": bool(inv_ok[0]),
-            "goal_inversion_error": goal_err,
-            "goal_verified": goal_ok,
-            "rejected": dict(counts),
-        }
-        return self._build_plan(path_latents, path_points, start, goal, success, stats, t0, calls0)
+            samples, nearest = self._sample_targets(rng, low, high, edges.z_goal, tree)
+            candidates = edges.extend(tree, samples, nearest)
+            if edges.reached is not None and not edges.connect_after_reach:
+                return iterations, "goal"
 
     def _budget_spent(self, t0: float, tree: _Tree) -> str:
         """``"time"`` or ``"nodes"`` when the search budget is spent, else ""."""
@@ -547,97 +506,6 @@ class LatentTreePlanner:
         pick = errs.argmin(axis=1)
         rows = np.arange(b)
         return moves[rows, pick], predicted[rows, pick], errs[rows, pick]
-
-    def _plan_moves(self, start: np.ndarray, goal: np.ndarray, goal_latent: np.ndarray | None,
-                    rng: np.random.Generator, t0: float, calls0: int) -> Plan:
-        """RRT with straight-move edges predicted by the transition model (``edges="moves"``).
-
-        Targets are drawn from the GAN's latent box around start and goal (or are the goal),
-        the nearest node in latent space is extended by the best of a batch of moves towards
-        the decoded target, and after every batch the nodes nearest the goal try to reach it
-        in one move. Nodes are predicted shapes at rest; the plan is the moves from the start.
-        """
-        cfg = self.config
-        n = self.n_points
-        if goal_latent is None:
-            goal_latent = self._encode(goal[None])[0]
-        z_goal = np.asarray(goal_latent, dtype=np.float32).reshape(-1)
-        z_start = self._encode(start[None])[0]
-        low, high = self._sample_box(z_start, z_goal)
-        tree = _Tree(cfg.max_nodes + 1, len(z_goal), n)
-        tree.add(z_start[None], start[None], np.array([-1]), np.zeros(1), np.zeros(1, np.int64))
-        e = len(self._end)
-        moves = np.zeros((cfg.max_nodes + 1, e, 2))
-        best_node, best_err = 0, float(error(start, goal))
-        found: tuple[int, np.ndarray, np.ndarray] | None = None  # (node, move, shape)
-        candidates = np.array([0])
-        iterations, stop = 0, "goal"
-        while True:
-            # Goal connection: the new nodes nearest the goal try to reach it in one move.
-            if len(candidates):
-                gaps = np.asarray(error(tree.shapes[candidates], goal)).reshape(-1)
-                candidates = candidates[np.argsort(gaps)[: cfg.connect_attempts]]
-                move, shape, err = self._best_moves(
-                    tree.shapes[candidates], np.broadcast_to(goal, (len(candidates), n, 2)), rng)
-                k = int(np.argmin(err))
-                if err[k] <= cfg.goal_threshold:
-                    found = (int(candidates[k]), move[k], shape[k])
-                    break
-            spent = self._budget_spent(t0, tree)
-            if spent:
-                stop = spent
-                break
-            iterations += 1
-            samples, nearest = self._sample_targets(rng, low, high, z_goal, tree)
-            targets = self.surrogate.decode(samples.astype(np.float32))
-            move, shape, _ = self._best_moves(tree.shapes[nearest], targets, rng)
-            new = np.asarray(error(shape, tree.shapes[nearest])).reshape(-1) > MIN_NODE_CHANGE
-            parents = nearest[new]
-            added = tree.add(self._encode(shape[new]) if new.any() else np.zeros((0, len(z_goal))),
-                             shape[new], parents, tree.cost[parents] + 1,
-                             np.ones(len(parents), np.int64))
-            moves[added] = move[new][: len(added)]
-            candidates = added
-            if len(added):
-                gaps = np.asarray(error(tree.shapes[added], goal)).reshape(-1)
-                if gaps.min() < best_err:
-                    best_node, best_err = int(added[np.argmin(gaps)]), float(gaps.min())
-                if gaps.min() <= cfg.goal_threshold:
-                    found = (best_node, np.zeros((e, 2)), tree.shapes[best_node])
-                    break
-        if found is not None:
-            node, last_move, last_shape = found
-            path = tree.path(node)
-            path_moves = [moves[i] for i in path[1:]]
-            path_shapes = [tree.shapes[i] for i in path]
-            if np.any(last_move):
-                path_moves.append(last_move)
-                path_shapes.append(last_shape)
-            success = True
-        else:
-            path = tree.path(best_node)
-            path_moves = [moves[i] for i in path[1:]]
-            path_shapes = [tree.shapes[i] for i in path]
-            success = False
-        shapes = np.array(path_shapes, dtype=np.float32)
-        corners = np.concatenate([start[self._end][None], shapes[1:][:, self._end]])
-        if e == 1:
-            corners = corners[:, 0]
-        stats = {
-            "nodes": int(tree.size),
-            "iterations": iterations,
-            "stop": stop if not success else "goal",
-            "edges": "moves",
-            "path_nodes": len(shapes),
-            "direct": len(shapes) == 2,
-            "predicted_error": float(error(shapes[-1], goal)),
-            "moves": np.array(path_moves).reshape(-1, 2 * e).tolist(),
-            "decoder_calls": self.surrogate.decoder_calls - calls0,
-            "seconds": time.perf_counter() - t0,
-        }
-        return Plan(shapes=shapes, latents=self._encode(shapes), waypoints=corners.astype(
-            np.float32), nodes=np.arange(len(shapes), dtype=np.int64), success=success,
-            stats=stats, grasp=cfg.grasp)
 
     def _shortcut(
         self, latents: np.ndarray, points: list[int], limits: _CordLimits, counts: dict[str, int]
@@ -711,3 +579,214 @@ class LatentTreePlanner:
             stats=stats,
             grasp=self.config.grasp,
         )
+
+
+# ---------------------------------------------------------------------- edge types
+class _LatentEdges:
+    """Edges of ``edges="latent"``: straight latent segments, decoded and checked.
+
+    Start and goal are inverted (the goal's latent may be given); nodes are latents, and
+    a node within ``goal_threshold`` of the decoded goal ends the search after one more goal
+    connection attempt, which (when it passes) ends the path at the goal's latent itself.
+    """
+
+    connect_after_reach = True
+
+    def __init__(self, planner: LatentTreePlanner, start: np.ndarray, goal: np.ndarray,
+                 goal_latent: np.ndarray | None) -> None:
+        self.planner, self.start, self.goal = planner, start, goal
+        self.counts = {"similarity": 0, "straightness": 0, "follow": 0, "cord": 0}
+        self.z_start, self.z_goal, self.inversion = self._invert(start, goal, goal_latent)
+        ends = planner.surrogate.decode(np.stack([self.z_start, self.z_goal]))
+        self.root_shape, self.shape_goal = ends[0], ends[1]
+        self.limits = _CordLimits.of(start, ends, planner.config.max_stretch)
+        self.goal_edge: tuple[int, int] | None = None  # (node, points) connected to the goal
+        self.reached: int | None = None  # a node within goal_threshold (the paper's stop)
+
+    def _invert(self, start: np.ndarray, goal: np.ndarray, goal_latent: np.ndarray | None
+                ) -> tuple[np.ndarray, np.ndarray, dict[str, Any]]:
+        """The latents of start and goal, and the inversions' errors for the plan's stats."""
+        planner = self.planner
+        if goal_latent is None:
+            z, inv_err, inv_ok = planner.invert(np.stack([start, goal]))
+            z_start, z_goal = z[0], z[1]
+            goal_err, goal_ok = float(inv_err[1]), bool(inv_ok[1])
+        else:
+            latent_dim = planner.surrogate.latent_dim
+            z_goal = np.asarray(goal_latent, dtype=np.float32).reshape(-1)
+            if z_goal.shape != (latent_dim,):
+                raise ValueError(f"goal_latent must have shape ({latent_dim},), "
+                                 f"got {np.shape(goal_latent)}")
+            z, inv_err, inv_ok = planner.invert(start[None])
+            z_start = z[0]
+            goal_err, goal_ok = math.nan, True
+        return z_start, z_goal, {
+            "start_inversion_error": float(inv_err[0]), "start_verified": bool(inv_ok[0]),
+            "goal_inversion_error": goal_err, "goal_verified": goal_ok}
+
+    def connect(self, tree: _Tree, candidates: np.ndarray) -> bool:
+        planner = self.planner
+        dist = np.linalg.norm(tree.latents[candidates] - self.z_goal, axis=1)
+        candidates = candidates[np.argsort(dist)[: planner.config.connect_attempts]]
+        ok, _, points = planner._try_edges(
+            tree.latents[candidates], tree.shapes[candidates],
+            np.broadcast_to(self.z_goal, (len(candidates), len(self.z_goal))), self.limits,
+            self.counts,
+        )
+        if not ok.any():
+            return False
+        passing = candidates[ok]
+        head_goal = self.shape_goal[planner._end]
+        total = tree.cost[passing] + np.linalg.norm(
+            tree.shapes[passing][:, planner._end] - head_goal, axis=-1).sum(axis=1)
+        self.goal_edge = (int(passing[np.argmin(total)]), points)
+        return True
+
+    def extend(self, tree: _Tree, samples: np.ndarray, nearest: np.ndarray) -> np.ndarray:
+        planner, cfg = self.planner, self.planner.config
+        nodes = tree.latents[: tree.size]
+        direction = samples - nodes[nearest]
+        dist = np.linalg.norm(direction, axis=1)
+        keep = dist > 1e-6
+        nearest, direction, dist = nearest[keep], direction[keep], dist[keep]
+        if len(nearest) == 0:
+            return np.array([], dtype=np.int64)
+        step = np.minimum(dist, cfg.step_length)
+        targets = nodes[nearest] + direction * (step / dist)[:, None]
+        ok, shapes, points = planner._try_edges(
+            nodes[nearest], tree.shapes[nearest], targets, self.limits, self.counts,
+            points=cfg.edge_points,
+        )
+        parents = nearest[ok]
+        moved = np.linalg.norm(shapes[ok][:, planner._end] - tree.shapes[parents][:, planner._end],
+                               axis=-1).sum(axis=1)
+        added = tree.add(targets[ok].astype(np.float32), shapes[ok], parents,
+                         tree.cost[parents] + moved, np.full(len(parents), points))
+        if len(added):
+            close = np.asarray(error(tree.shapes[added], self.shape_goal)) <= cfg.goal_threshold
+            if close.any():
+                self.reached = int(added[np.argmax(close)])
+        return added
+
+    def _path(self, tree: _Tree) -> tuple[np.ndarray, list[int], bool]:
+        """The path's latents and points per edge: to the goal latent, else to the reached
+        node, else to the closest node; and whether it reaches the goal."""
+        if self.goal_edge is not None:
+            node, points = self.goal_edge
+            path = tree.path(node)
+            latents = [tree.latents[i] for i in path] + [self.z_goal]
+            return (np.array(latents, dtype=np.float32),
+                    [int(tree.edge_points[i]) for i in path[1:]] + [points], True)
+        if self.reached is None:
+            gaps = np.asarray(error(tree.shapes[: tree.size], self.shape_goal)).reshape(-1)
+            node, success = int(np.argmin(gaps)), False
+        else:
+            node, success = self.reached, True
+        path = tree.path(node)
+        return (np.array([tree.latents[i] for i in path], dtype=np.float32),
+                [int(tree.edge_points[i]) for i in path[1:]], success)
+
+    def plan(self, tree: _Tree, iterations: int, stop: str, t0: float, calls0: int) -> Plan:
+        planner = self.planner
+        path_latents, path_points, success = self._path(tree)
+        if planner.config.shortcut and len(path_latents) > 2:
+            path_latents, path_points = planner._shortcut(path_latents, path_points,
+                                                          self.limits, self.counts)
+        stats = {
+            "nodes": int(tree.size),
+            "iterations": iterations,
+            "stop": stop if not success else "goal",
+            **self.inversion,
+            "rejected": dict(self.counts),
+        }
+        return planner._build_plan(path_latents, path_points, self.start, self.goal, success,
+                                   stats, t0, calls0)
+
+
+class _MoveEdges:
+    """Edges of ``edges="moves"``: straight moves whose outcome the transition model predicts.
+
+    Targets are drawn from the GAN's latent box around start and goal (or are the goal), the
+    nearest node in latent space is extended by the best of a batch of moves towards the
+    decoded target, and after every batch the nodes nearest the goal try to reach it in one
+    move. Nodes are predicted shapes at rest (their latents the encoder's); a node within
+    ``goal_threshold`` of the goal ends the search at once. The plan is the moves from the
+    start.
+    """
+
+    connect_after_reach = False
+
+    def __init__(self, planner: LatentTreePlanner, start: np.ndarray, goal: np.ndarray,
+                 goal_latent: np.ndarray | None, rng: np.random.Generator) -> None:
+        self.planner, self.start, self.goal, self.rng = planner, start, goal, rng
+        if goal_latent is None:
+            goal_latent = planner._encode(goal[None])[0]
+        self.z_goal = np.asarray(goal_latent, dtype=np.float32).reshape(-1)
+        self.z_start = planner._encode(start[None])[0]
+        self.root_shape = start
+        self.moves = np.zeros((planner.config.max_nodes + 1, len(planner._end), 2))
+        self.best_node, self.best_err = 0, float(error(start, goal))
+        self.connection: tuple[int, np.ndarray, np.ndarray] | None = None  # (node, move, shape)
+        self.reached: int | None = None
+
+    def connect(self, tree: _Tree, candidates: np.ndarray) -> bool:
+        planner, cfg = self.planner, self.planner.config
+        gaps = np.asarray(error(tree.shapes[candidates], self.goal)).reshape(-1)
+        candidates = candidates[np.argsort(gaps)[: cfg.connect_attempts]]
+        move, shape, err = planner._best_moves(
+            tree.shapes[candidates],
+            np.broadcast_to(self.goal, (len(candidates), planner.n_points, 2)), self.rng)
+        k = int(np.argmin(err))
+        if err[k] <= cfg.goal_threshold:
+            self.connection = (int(candidates[k]), move[k], shape[k])
+            return True
+        return False
+
+    def extend(self, tree: _Tree, samples: np.ndarray, nearest: np.ndarray) -> np.ndarray:
+        planner = self.planner
+        targets = planner.surrogate.decode(samples.astype(np.float32))
+        move, shape, _ = planner._best_moves(tree.shapes[nearest], targets, self.rng)
+        new = np.asarray(error(shape, tree.shapes[nearest])).reshape(-1) > MIN_NODE_CHANGE
+        parents = nearest[new]
+        added = tree.add(planner._encode(shape[new]) if new.any()
+                         else np.zeros((0, len(self.z_goal))),
+                         shape[new], parents, tree.cost[parents] + 1,
+                         np.ones(len(parents), np.int64))
+        self.moves[added] = move[new][: len(added)]
+        if len(added):
+            gaps = np.asarray(error(tree.shapes[added], self.goal)).reshape(-1)
+            if gaps.min() < self.best_err:
+                self.best_node, self.best_err = int(added[np.argmin(gaps)]), float(gaps.min())
+            if gaps.min() <= planner.config.goal_threshold:
+                self.reached = self.best_node
+        return added
+
+    def plan(self, tree: _Tree, iterations: int, stop: str, t0: float, calls0: int) -> Plan:
+        planner, e = self.planner, len(self.planner._end)
+        success = self.connection is not None or self.reached is not None
+        node = self.connection[0] if self.connection is not None else self.best_node
+        path = tree.path(node)
+        path_moves = [self.moves[i] for i in path[1:]]
+        path_shapes = [tree.shapes[i] for i in path]
+        if self.connection is not None and np.any(self.connection[1]):
+            path_moves.append(self.connection[1])
+            path_shapes.append(self.connection[2])
+        shapes = np.array(path_shapes, dtype=np.float32)
+        corners = np.concatenate([self.start[planner._end][None], shapes[1:][:, planner._end]])
+        if e == 1:
+            corners = corners[:, 0]
+        stats = {
+            "nodes": int(tree.size),
+            "iterations": iterations,
+            "stop": stop if not success else "goal",
+            "edges": "moves",
+            "path_nodes": len(shapes),
+            "direct": len(shapes) == 2,
+            "predicted_error": float(error(shapes[-1], self.goal)),
+            "moves": np.array(path_moves).reshape(-1, 2 * e).tolist(),
+            "decoder_calls": planner.surrogate.decoder_calls - calls0,
+            "seconds": time.perf_counter() - t0,
+        }
+        return Plan(shapes=shapes, latents=planner._encode(shapes), waypoints=corners.astype(
+            np.float32), nodes=np.arange(len(shapes), dtype=np.int64), success=success,
+            stats=stats, grasp=planner.config.grasp)
