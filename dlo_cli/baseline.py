@@ -14,6 +14,7 @@ from dlo_cli.flags import (
     positive_int,
     writable_folder,
 )
+from dlo_env.errors import InputError
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
@@ -93,11 +94,11 @@ def _overrides(items: list[str]) -> dict:
     for item in items:
         key, sep, text = item.partition("=")
         if not sep:
-            raise ValueError(f"--set takes FIELD=VALUE, got {item!r}")
+            raise InputError(f"--set takes FIELD=VALUE, got {item!r}")
         if key in FLAG_FIELDS:
-            raise ValueError(f"--set {key}: give it with {FLAG_FIELDS[key]}")
+            raise InputError(f"--set {key}: give it with {FLAG_FIELDS[key]}")
         if key not in others:
-            raise ValueError(f"--set {key}: unknown key; the fields --set takes are "
+            raise InputError(f"--set {key}: unknown key; the fields --set takes are "
                              f"{', '.join(others)}")
         try:
             values[key] = json.loads(text)
@@ -133,12 +134,12 @@ def run(args: argparse.Namespace) -> int:
     try:
         config = BaselineConfig.from_dict(settings)
     except TypeError as exc:  # a --set value of the wrong type
-        raise ValueError(f"--set: {exc}") from exc
+        raise InputError(f"--set: {exc}") from exc
     except ValueError as exc:  # "BaselineConfig.FIELD must be ...": the flag that gave FIELD
         field, _, rest = str(exc).removeprefix("BaselineConfig.").partition(" ")
         if field not in settings:
             raise
-        raise ValueError(f"{FLAG_FIELDS.get(field, '--set ' + field)} {rest}") from None
+        raise InputError(f"{FLAG_FIELDS.get(field, '--set ' + field)} {rest}") from None
     # the benchmark's folder names (sac-her-pegs-dual-endpoint...)
     name = baseline_folder_name(config.algo + ("-cords" if config.cords == "train" else "")
                                 + ("-surrogate" if config.surrogate else ""),

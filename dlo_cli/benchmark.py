@@ -19,6 +19,7 @@ from dlo_cli.flags import (
     positive_int,
     writable_folder,
 )
+from dlo_env.errors import InputError
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
@@ -143,7 +144,7 @@ def check_committed(allow_dirty: bool) -> None:
     if allow_dirty or state is None or not state.changed:
         return
     shown = ", ".join(state.changed[:3]) + (", ..." if len(state.changed) > 3 else "")
-    raise ValueError(f"{len(state.changed)} tracked file(s) of {state.root} have uncommitted "
+    raise InputError(f"{len(state.changed)} tracked file(s) of {state.root} have uncommitted "
                      f"changes ({shown}): results record the commit they ran ({state.commit}), "
                      "so commit first, or pass --allow-dirty to run anyway (marked "
                      f"{state.commit}+dirty)")
@@ -191,7 +192,7 @@ def split_agents(names: list[str], cords: bool) -> tuple[tuple[str, ...], tuple[
     cord_agents = tuple(a for a in names if agent_spec(a).cords or a in CORD_AGENTS) if cords \
         else ()
     if not agents and not cord_agents:
-        raise ValueError(f"--agent names only agents of the cords section ({' '.join(names)}), "
+        raise InputError(f"--agent names only agents of the cords section ({' '.join(names)}), "
                          "but no cord suite runs: add --cords SUITE")
     return agents, cord_agents
 
@@ -206,7 +207,7 @@ def run(args: argparse.Namespace) -> int:
     if thresholds is None:
         thresholds = [HEADLINE_THRESHOLD] if args.quick else list(BenchmarkConfig.thresholds)
     if len(set(thresholds)) < len(thresholds):
-        raise ValueError(f"--threshold must not repeat a value, got "
+        raise InputError(f"--threshold must not repeat a value, got "
                          f"{' '.join(map(str, thresholds))}")
     check_committed(args.allow_dirty)  # before anything is built or written
 
@@ -248,7 +249,7 @@ def run(args: argparse.Namespace) -> int:
     backend = backend_of(args)
     if args.jobs > 1:
         if backend is not None:
-            raise ValueError("--jobs runs the cells in local processes; with --backend ray the "
+            raise InputError("--jobs runs the cells in local processes; with --backend ray the "
                              "cluster's CPUs set how many run at once")
         from dlo_env.dataset.process_backend import ProcessBackend
 

@@ -18,6 +18,7 @@ from dlo_cli.flags import (
     number_in,
     positive_int,
 )
+from dlo_env.errors import InputError
 
 _cosine = number_in(float, -1.0, 1.0, expected="a number in [-1, 1]")
 _share = number_in(float, 0.0, 1.0, expected="a number in [0, 1]")
@@ -125,7 +126,7 @@ def refuse_other_kind(args: argparse.Namespace, flags: tuple[str, ...], kind: st
     """One line naming the first of ``flags`` given: it applies to ``--kind kind`` only."""
     for flag in flags:
         if getattr(args, flag) is not None:
-            raise ValueError(f"--{flag.replace('_', '-')} applies to --kind {kind} only, not to "
+            raise InputError(f"--{flag.replace('_', '-')} applies to --kind {kind} only, not to "
                              f"--kind {args.kind}")
 
 
@@ -148,7 +149,7 @@ def run(args: argparse.Namespace) -> int:
 
         return run_transitions(args)
     if args.num_shapes is None:
-        raise ValueError("--num-shapes is required with --kind shapes")
+        raise InputError("--num-shapes is required with --kind shapes")
     refuse_other_kind(args, TRANSITION_FLAGS, "transitions")
 
     from dlo_env.dataset.collect import CollectConfig, collect
@@ -160,7 +161,7 @@ def run(args: argparse.Namespace) -> int:
         config = CollectConfig(seed=args.seed, **{k: tuple(v) if isinstance(v, list) else v
                                                   for k, v in given.items()})
     except ValueError as exc:  # "grasp_weights must ..." names the flag
-        raise ValueError(f"--{str(exc).replace('_', '-', 1)}") from None
+        raise InputError(f"--{str(exc).replace('_', '-', 1)}") from None
     rejected_share = RejectedShare()
     result = run_chunked(
         args, lambda progress: collect(args.out, args.num_shapes, config, workers=args.workers,

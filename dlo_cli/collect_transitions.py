@@ -9,6 +9,7 @@ from __future__ import annotations
 import argparse
 
 from dlo_cli.flags import backend_of, engine_text
+from dlo_env.errors import InputError
 
 
 def run(args: argparse.Namespace) -> int:
@@ -24,30 +25,30 @@ def run(args: argparse.Namespace) -> int:
     )
 
     if args.num_transitions is None:
-        raise ValueError("--num-transitions is required with --kind transitions")
+        raise InputError("--num-transitions is required with --kind transitions")
     refuse_other_kind(args, SHAPE_FLAGS, "shapes")
     if args.grasp_weights is not None and sum(args.grasp_weights) <= 0:
-        raise ValueError(f"--grasp-weights must have a positive sum, got {args.grasp_weights}")
+        raise InputError(f"--grasp-weights must have a positive sum, got {args.grasp_weights}")
     push = TransitionCollectConfig.push_fraction if args.push_fraction is None \
         else args.push_fraction
     rim = TransitionCollectConfig.rim_fraction if args.rim_fraction is None else args.rim_fraction
     if rim + push > 1:
-        raise ValueError("--rim-fraction and --push-fraction (defaults "
+        raise InputError("--rim-fraction and --push-fraction (defaults "
                          f"{TransitionCollectConfig.rim_fraction:g} and "
                          f"{TransitionCollectConfig.push_fraction:g}) must have a sum <= 1, got "
                          f"{rim:g} and {push:g}")
     if (args.wide_fraction or 0) + (args.wavy_fraction or 0) > 1:
-        raise ValueError("--wide-fraction and --wavy-fraction must have a sum <= 1, got "
+        raise InputError("--wide-fraction and --wavy-fraction must have a sum <= 1, got "
                          f"{args.wide_fraction:g} and {args.wavy_fraction:g}")
     if args.test_cords and args.randomize:
-        raise ValueError("--test-cords and --randomize are two ways to choose the cords; give "
+        raise InputError("--test-cords and --randomize are two ways to choose the cords; give "
                          "one")
     given = {k: getattr(args, k) for k in (*TRANSITION_FLAGS[1:], *SHARED_FLAGS)
              if getattr(args, k) is not None}
     if "randomize" in given:
         names = [name for name, _ in given["randomize"]]
         if len(set(names)) < len(names):
-            raise ValueError(f"--randomize names a parameter twice: {' '.join(names)}")
+            raise InputError(f"--randomize names a parameter twice: {' '.join(names)}")
         given["randomize"] = dict(given["randomize"])
     try:
         config = TransitionCollectConfig(seed=args.seed, **{
@@ -55,7 +56,7 @@ def run(args: argparse.Namespace) -> int:
     except ValueError as exc:
         if "randomize" not in str(exc):
             raise
-        raise ValueError(f"--{exc}") from None
+        raise InputError(f"--{exc}") from None
     result = run_chunked(
         args, lambda progress: collect_transitions(
             args.out, args.num_transitions, config, workers=args.workers, resume=args.resume,

@@ -12,6 +12,7 @@ from dlo_cli.flags import (
     positive_int,
     writable_folder,
 )
+from dlo_env.errors import InputError
 
 non_negative_int = number_in(int, 0, expected="an integer >= 0")
 non_negative_float = number_in(float, 0.0, expected="a number >= 0")
@@ -148,7 +149,7 @@ def check_stage_flags(args: argparse.Namespace) -> None:
             stages = "--stage transition" if other == "transition" else \
                 "--stage gan, encoder or all"
             flag = "--" + given[0].replace("_", "-")
-            raise ValueError(f"{flag} applies to {stages} only, not to --stage {args.stage}")
+            raise InputError(f"{flag} applies to {stages} only, not to --stage {args.stage}")
 
 
 def run(args: argparse.Namespace) -> int:
@@ -177,7 +178,7 @@ def run(args: argparse.Namespace) -> int:
     if args.heldout is not None:
         heldout, groups = load_labelled_shapes(args.heldout, name="--heldout")
         if heldout.shape[1] != data.shape[1]:
-            raise ValueError(f"--heldout holds shapes of {heldout.shape[1]} points, --data of "
+            raise InputError(f"--heldout holds shapes of {heldout.shape[1]} points, --data of "
                              f"{data.shape[1]}")
     else:
         print("no --heldout file: holding out 5% of --data (near duplicates leak; see README)")

@@ -11,6 +11,8 @@ from __future__ import annotations
 
 import argparse
 
+from dlo_env.errors import InputError
+
 
 def run(args: argparse.Namespace) -> int:
     """Train (or resume), then print and write the held-out error report."""
@@ -40,16 +42,16 @@ def run(args: argparse.Namespace) -> int:
     try:
         data = load_transition_files(args.data)
     except ValueError as exc:
-        raise ValueError(f"--data: {exc}") from exc
+        raise InputError(f"--data: {exc}") from exc
     if args.heldout is not None:
         try:
             heldout = load_transition_files(args.heldout)
         except ValueError as exc:
-            raise ValueError(f"--heldout: {exc}") from exc
+            raise InputError(f"--heldout: {exc}") from exc
         conditioned = args.cord_inputs or bool(
             args.teacher and TransitionModel.load(args.teacher, device="cpu").config.cord_inputs)
         if not conditioned and heldout.one_cord("--heldout") != data.one_cord("--data"):
-            raise ValueError("--heldout was collected with another cord than --data")
+            raise InputError("--heldout was collected with another cord than --data")
     else:
         print("no --heldout file: holding out 5% of --data's episodes for the report")
         data, heldout = split_transitions(data, 0.05, seed=args.seed)
@@ -71,10 +73,10 @@ def run(args: argparse.Namespace) -> int:
                 if v is not None}
     if args.teacher and model_kw:
         given = ", ".join("--" + k.replace("_", "-") for k in model_kw)
-        raise ValueError(f"{given} shape a new ensemble, not --teacher's mean network (its "
+        raise InputError(f"{given} shape a new ensemble, not --teacher's mean network (its "
                          "architecture is the teacher's)")
     if args.mean_by_grasp and not args.teacher:
-        raise ValueError("--mean-by-grasp shapes the mean network a distillation makes; it "
+        raise InputError("--mean-by-grasp shapes the mean network a distillation makes; it "
                          "needs --teacher")
     if args.teacher:  # what shapes the mean network a distillation makes
         model_kw = {"mean_network": True, "mean_by_grasp": args.mean_by_grasp}

@@ -19,6 +19,7 @@ from typing import Any
 import gymnasium as gym
 import numpy as np
 
+from dlo_env.errors import InputError
 from dlo_env.tasks import MAX_SETTLE_ACTIONS, at_rest, split_move
 
 
@@ -32,7 +33,7 @@ class StraightMoves(gym.Wrapper, gym.utils.RecordConstructorArgs):
 
     def __init__(self, env: gym.Env, max_move: float = 0.5) -> None:
         if not (isinstance(max_move, (int, float)) and max_move > 0):
-            raise ValueError(f"max_move must be a number > 0 (metres), got {max_move!r}")
+            raise InputError(f"max_move must be a number > 0 (metres), got {max_move!r}")
         gym.utils.RecordConstructorArgs.__init__(self, max_move=max_move)
         super().__init__(env)
         self.max_move = float(max_move)
@@ -47,7 +48,7 @@ class StraightMoves(gym.Wrapper, gym.utils.RecordConstructorArgs):
         """
         move = np.asarray(action, dtype=np.float64)
         if move.shape != self.action_space.shape or not np.isfinite(move).all():
-            raise ValueError(f"action must be a finite array of shape "
+            raise InputError(f"action must be a finite array of shape "
                              f"{self.action_space.shape}, got {move.tolist()}")
         base = self.env.unwrapped
         zero = np.zeros(self.action_space.shape, dtype=np.float32)

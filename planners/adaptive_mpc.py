@@ -25,6 +25,7 @@ import numpy as np
 
 from dlo_env.checks import positive_ints
 from dlo_env.dataset.transitions import PARAM_COLUMNS
+from dlo_env.errors import InputError
 from dlo_env.randomize import DEFAULT_RANGES, check_randomize
 from dlo_env.shapes import cord_length, error
 from planners.latent_mpc import LatentMPCConfig, LatentMPCPolicy
@@ -57,7 +58,7 @@ class AdaptConfig:
     def __post_init__(self) -> None:
         positive_ints(self, "candidates", "min_moves")
         if not (isinstance(self.rounds, int) and self.rounds >= 0):
-            raise ValueError(f"AdaptConfig.rounds must be an int >= 0, got {self.rounds!r}")
+            raise InputError(f"AdaptConfig.rounds must be an int >= 0, got {self.rounds!r}")
         if self.ranges is not None:
             check_randomize(self.ranges, "AdaptConfig.ranges")
 
@@ -104,7 +105,7 @@ class AdaptiveLatentMPCPolicy(LatentMPCPolicy):
                  config: LatentMPCConfig | None = None, *, success_metric: str = "error",
                  adapt: AdaptConfig | None = None) -> None:
         if not getattr(model.config, "cord_inputs", False):
-            raise ValueError("model must be a transition model conditioned on the cord "
+            raise InputError("model must be a transition model conditioned on the cord "
                              "(TransitionModelConfig.cord_inputs; dlo train --stage transition "
                              "--cord-inputs)")
         self.adapt = adapt if adapt is not None else AdaptConfig()
@@ -126,7 +127,7 @@ class AdaptiveLatentMPCPolicy(LatentMPCPolicy):
         """Build the policy for a ``dlo_env`` environment (the cord's parameters are not read:
         they are what the policy fits)."""
         if model is None:
-            raise ValueError("model is required: a transition model of several cords "
+            raise InputError("model is required: a transition model of several cords "
                              "(TransitionModel.load_pretrained(cords=True) is the shipped one)")
         base = getattr(env, "unwrapped", env)
         policy = cls(model, grasp=base.grasp, success_threshold=base.success_threshold,

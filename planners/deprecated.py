@@ -6,6 +6,8 @@ import functools
 import warnings
 from typing import Any, TypeVar
 
+from dlo_env.errors import InputError
+
 T = TypeVar("T")
 
 
@@ -21,7 +23,7 @@ def renamed_field(old: str, new: str) -> Any:
         def __init__(self: Any, *args: Any, **kwargs: Any) -> None:
             if old in kwargs:
                 if new in kwargs:
-                    raise ValueError(f"give {cls.__name__}({new}=...) ({old} is its deprecated "
+                    raise InputError(f"give {cls.__name__}({new}=...) ({old} is its deprecated "
                                      f"name), not both")
                 warnings.warn(f"{cls.__name__}({old}=...) is deprecated: use {new}=...",
                               DeprecationWarning, stacklevel=2)
