@@ -140,7 +140,7 @@ def load_transition_model(model: Any, cords: bool = False, pegs: bool = False) -
     return _loaded_or_file(model, TransitionModel,
                            lambda m: TransitionModel.load_or_pretrained(m, device="cpu",
                                                                        cords=cords, pegs=pegs),
-                           "transition model", "dlo train --stage transition"
+                           "transition model", "dlo train transition"
                            + (" --cord-inputs" if cords else " --peg-reach" if pegs else ""))
 
 

@@ -143,7 +143,7 @@ class BenchmarkConfig:
         cords_transition_model: Transition model of several cords of the agents marked
             ``cords`` (latent-mpc-adaptive; None: the shipped ``transition-cords.pt``).
         pegs_transition_model: Transition model of the agents of the ``pegs`` section (a
-            model that sees pegs, ``dlo train --stage transition --peg-reach``; None: the
+            model that sees pegs, ``dlo train transition --peg-reach``; None: the
             shipped ``transition-pegs.pt``).
         replan_every: Steps between replans of ``latent-tree-closed``.
         max_seconds: Time budget of one latent-tree plan (None: the planner's default).

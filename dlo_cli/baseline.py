@@ -83,6 +83,15 @@ FLAG_FIELDS = {"algo": "--algo", "env_id": "--env", "difficulties": "--difficult
                "surrogate": "--surrogate"}
 
 
+def field_flags() -> dict[str, str]:
+    """``BaselineConfig`` field -> the flag that sets it: its own flag, else ``--set FIELD``."""
+    from dataclasses import fields
+
+    from dlo_bench.baselines import BaselineConfig
+
+    return {f.name: FLAG_FIELDS.get(f.name, f"--set {f.name}") for f in fields(BaselineConfig)}
+
+
 def _overrides(items: list[str]) -> dict:
     import json
     from dataclasses import fields
@@ -135,11 +144,6 @@ def run(args: argparse.Namespace) -> int:
         config = BaselineConfig.from_dict(settings)
     except TypeError as exc:  # a --set value of the wrong type
         raise InputError(f"--set: {exc}") from exc
-    except ValueError as exc:  # "BaselineConfig.FIELD must be ...": the flag that gave FIELD
-        field, _, rest = str(exc).removeprefix("BaselineConfig.").partition(" ")
-        if field not in settings:
-            raise
-        raise InputError(f"{FLAG_FIELDS.get(field, '--set ' + field)} {rest}") from None
     # the benchmark's folder names (sac-her-pegs-dual-endpoint...)
     name = baseline_folder_name(config.algo + ("-cords" if config.cords == "train" else "")
                                 + ("-surrogate" if config.surrogate else ""),

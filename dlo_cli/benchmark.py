@@ -22,6 +22,12 @@ from dlo_cli.flags import (
 from dlo_env.errors import InputError
 
 
+def field_flags() -> dict[str, str]:
+    """``BenchmarkConfig`` field -> the flag that sets it, for the fields named otherwise."""
+    return {"agents": "--agent", "cord_agents": "--agent", "peg_agents": "--agent",
+            "envs": "--env", "difficulties": "--difficulty", "thresholds": "--threshold"}
+
+
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     """Flags of ``dlo benchmark``; defaults are ``BenchmarkConfig``'s (the published table)."""
     from dlo_bench.benchmark import (
@@ -101,12 +107,12 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     add_model(parser)
     add_transition_model(parser)
     parser.add_argument("--cords-transition-model", default=None, metavar="FILE",
-                        help="transition model of several cords (dlo train --stage transition "
+                        help="transition model of several cords (dlo train transition "
                              "--cord-inputs), file or folder, for latent-mpc-adaptive (None: "
                              "the shipped latent_model/pretrained/transition-cords.pt)")
     parser.add_argument("--pegs-transition-model", default=None, metavar="FILE",
                         help="transition model of the pegs section's agents, file or folder (a "
-                             "model that sees pegs: dlo train --stage transition --peg-reach; "
+                             "model that sees pegs: dlo train transition --peg-reach; "
                              "None: the shipped latent_model/pretrained/transition-pegs.pt)")
     add_planner_flags(parser)
     add_seed(parser, "the planners' sampling (the tasks are the suites')",
@@ -201,35 +207,20 @@ def run(args: argparse.Namespace) -> int:
     """Run the benchmark, print the table and the speed ratio, write the results."""
     import time
 
-    from dlo_bench.benchmark import HEADLINE_THRESHOLD, BenchmarkConfig
+    from dlo_bench.benchmark import (
+        HEADLINE_THRESHOLD,
+        PEG_AGENTS,
+        QUICK_EPISODES,
+        BenchmarkConfig,
+    )
 
     thresholds = args.threshold
     if thresholds is None:
         thresholds = [HEADLINE_THRESHOLD] if args.quick else list(BenchmarkConfig.thresholds)
-    if len(set(thresholds)) < len(thresholds):
-        raise InputError(f"--threshold must not repeat a value, got "
-                         f"{' '.join(map(str, thresholds))}")
-    check_committed(args.allow_dirty)  # before anything is built or written
-
-    import torch
-
-    from dlo_bench.benchmark import (
-        QUICK_EPISODES,
-        BenchmarkConfig,
-        new_run_id,
-        run_benchmark,
-        suite_label,
-    )
-    from dlo_bench.benchmark_report import ratio_lines, write_results
-    from dlo_bench.report import threshold_label
-
-    torch.set_num_threads(args.threads)
     designed = section_suites(args)
     cords = section_suites(args, "cords")
     pegs = section_suites(args, "pegs")
     agents, cord_agents = split_agents(args.agent, bool(cords))
-    from dlo_bench.benchmark import PEG_AGENTS
-
     peg_agents = tuple(a for a in agents if a in PEG_AGENTS)
     episodes = args.episodes if args.episodes is not None else (
         QUICK_EPISODES if args.quick else BenchmarkConfig.episodes)
@@ -246,6 +237,15 @@ def run(args: argparse.Namespace) -> int:
         replan_every=args.replan_every, max_seconds=args.max_seconds,
         fidelity=not args.no_fidelity,
     )
+    check_committed(args.allow_dirty)  # before anything is built or written
+
+    import torch
+
+    from dlo_bench.benchmark import new_run_id, run_benchmark, suite_label
+    from dlo_bench.benchmark_report import ratio_lines, write_results
+    from dlo_bench.report import threshold_label
+
+    torch.set_num_threads(args.threads)
     backend = backend_of(args)
     if args.jobs > 1:
         if backend is not None:

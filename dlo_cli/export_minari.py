@@ -34,7 +34,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help="skip the demonstrations (export only --transitions)")
     parser.add_argument("--transitions", default=None, metavar="FILE",
                         type=existing_path("transitions"),
-                        help="also export this `dlo collect --kind transitions` file")
+                        help="also export this `dlo collect transitions` file")
     parser.add_argument("--name", default="transitions",
                         help="dataset name of the transition data: dlo/endpoint/NAME-v0")
 

@@ -44,7 +44,7 @@ DEFAULT_RANGES: dict[str, tuple[float, float]] = {
 #: Cords held out for testing a model of several cords, inside ``DEFAULT_RANGES`` and away
 #: from the default cord: a cord a third as stiff and one three times as heavy as the default
 #: (the cases users report), and four that change every parameter at once. Training leaves
-#: out the cords near them (:func:`near_test_cords`); ``dlo collect --kind transitions --cords
+#: out the cords near them (:func:`near_test_cords`); ``dlo collect transitions --cords
 #: test`` collects moves of these cords alone.
 TEST_CORDS: tuple[dict[str, float], ...] = (
     {"length": 1.0, "bending_stiffness": 0.0033, "friction": 0.4, "mass": 0.1},

@@ -4,7 +4,7 @@ The wrapper's action is the displacement of each held end in metres (head dx, dy
 dx, dy when both are held). A step carries it out exactly as tasks and the transition data do:
 :func:`dlo_env.tasks.split_move` actions through the environment's own ``step``, then zero
 actions until the cord is at rest (at most ``MAX_SETTLE_ACTIONS``), so a step of this wrapper is
-one transition of ``dlo collect --kind transitions``. The environment's time limit still counts
+one transition of ``dlo collect transitions``. The environment's time limit still counts
 its own steps.
 
 Example:

@@ -101,7 +101,7 @@ def check_config_keys(config: dict[str, Any], name: str, checkpoint: bool = Fals
     ``RETIRED_CONFIG``'s; ``checkpoint``: a training checkpoint's."""
     what, fix = (("training checkpoint", "give another --out or delete it") if checkpoint
                  else ("transition model file",
-                       "train it again with dlo train --stage transition"))
+                       "train it again with dlo train transition"))
     missing = [k for k in REQUIRED_CONFIG if k not in config]
     if missing:
         raise InputError(f"{name}: a {what} from before {', '.join(missing)} existed, which "

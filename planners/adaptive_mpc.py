@@ -37,8 +37,8 @@ class AdaptConfig:
 
     Attributes:
         ranges: Parameter -> (low, high) searched (the others stay the default cord's). None:
-            the ranges the model's training data was drawn from (``dlo collect --randomize``),
-            else ``dlo_env.randomize.DEFAULT_RANGES``.
+            the ranges the model's training data was drawn from (``dlo collect transitions
+            --randomize``), else ``dlo_env.randomize.DEFAULT_RANGES``.
         candidates: Cords scored per round.
         rounds: Rounds after the first, each around the best cord so far with half the spread.
         min_moves: Moves seen before the first fit (before it: the default cord, with the
@@ -65,8 +65,8 @@ class AdaptConfig:
 
 def trained_ranges(info: Mapping[str, Any]) -> dict[str, tuple[float, float]]:
     """The parameter ranges a transition model's training data were drawn from (``dlo collect
-    --randomize``), the union over its files (``info["sources"]``, else ``info["data"]``);
-    empty when none was randomised."""
+    transitions --randomize``), the union over its files (``info["sources"]``, else
+    ``info["data"]``); empty when none was randomised."""
     sources = info.get("sources") or [{"collect": info.get("data") or {}}]
     out: dict[str, tuple[float, float]] = {}
     for source in sources:
@@ -106,7 +106,7 @@ class AdaptiveLatentMPCPolicy(LatentMPCPolicy):
                  adapt: AdaptConfig | None = None) -> None:
         if not getattr(model.config, "cord_inputs", False):
             raise InputError("model must be a transition model conditioned on the cord "
-                             "(TransitionModelConfig.cord_inputs; dlo train --stage transition "
+                             "(TransitionModelConfig.cord_inputs; dlo train transition "
                              "--cord-inputs)")
         self.adapt = adapt if adapt is not None else AdaptConfig()
         self.default_row = np.array([getattr(model.cord_params, k) for k in PARAM_COLUMNS])

@@ -7,7 +7,7 @@ environment's spec recorded, so ``minari.load_dataset(id).recover_environment()`
 environment again in any process (the spec names its entry point). Episode ``i`` is the
 ``i``-th train task of the suite; it ends on success, as the environment does.
 
-:func:`export_transitions` turns a ``dlo collect --kind transitions`` file into one dataset
+:func:`export_transitions` turns a ``dlo collect transitions`` file into one dataset
 per environment: the head-held episodes for ``DLOEndpoint-v0``, the two-handed ones for
 ``DLODualEndpoint-v0`` (tail-held episodes have no environment and are left out). A step is one
 straight move: the recorded spec wraps the environment in
@@ -276,7 +276,7 @@ def export_transitions(
     """Write the head-held and the two-handed episodes of a transition file as datasets.
 
     Args:
-        path: A file written by ``dlo collect --kind transitions``.
+        path: A file written by ``dlo collect transitions``.
         name: Dataset name inside the ids (``dlo/endpoint/NAME-v0``).
         root: Minari dataset root (None: Minari's own).
         progress: ``progress(moves, 0)`` after every episode.
@@ -330,7 +330,7 @@ def export_transitions(
                        "(StraightMoves wrapper: action = displacement of the held end(s), "
                        "metres), goal = the shape after the last move; termination flags as the "
                        "environment reports.")
-        _write(dataset_id, buffers, env_spec, "dlo collect --kind transitions", description,
+        _write(dataset_id, buffers, env_spec, "dlo collect transitions", description,
                root)
         written.append(_summary(dataset_id, buffers, worst))
     return written

@@ -161,7 +161,7 @@ def load_shapes(path: str | os.PathLike[str]) -> ShapeDataset:
     arrays, meta = load_npz(
         path, format_name=FORMAT_NAME, format_version=FORMAT_VERSION, names=ARRAY_NAMES,
         what="shape dataset",
-        missing_hint=f"make one with `dlo collect --num-shapes N --out {Path(path).name}`")
+        missing_hint=f"make one with `dlo collect shapes --num-shapes N --out {Path(path).name}`")
     try:
         return ShapeDataset(**arrays, metadata=meta)
     except ValueError as exc:

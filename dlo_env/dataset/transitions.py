@@ -456,7 +456,7 @@ def save_transitions(path: str | os.PathLike[str], data: TransitionDataset) -> P
 
 
 def load_transitions(path: str | os.PathLike[str]) -> TransitionDataset:
-    """Read and validate a transition dataset written by ``dlo collect --kind transitions``.
+    """Read and validate a transition dataset written by ``dlo collect transitions``.
 
     Raises:
         FileNotFoundError: No file at ``path``.
@@ -466,7 +466,7 @@ def load_transitions(path: str | os.PathLike[str]) -> TransitionDataset:
         path, format_name=FORMAT_NAME, format_version=READABLE_VERSIONS,
         names=tuple(n for n in ARRAY_NAMES if n not in _SINCE), optional=tuple(_SINCE),
         what="transition dataset",
-        missing_hint=("make one with `dlo collect --kind transitions --num-transitions N "
+        missing_hint=("make one with `dlo collect transitions --num-transitions N "
                       f"--out {Path(path).name}`"))
     version = meta.get("format_version", FORMAT_VERSION)
     for name, since in _SINCE.items():
