@@ -60,11 +60,11 @@ def run(args: argparse.Namespace) -> int:
     if args.transitions is not None:
         try:
             check_name(args.name)
-        except ValueError as exc:
+        except InputError as exc:
             raise InputError(f"--name: {exc}") from None
         try:
             planned += transitions_ids(args.transitions, args.name)
-        except ValueError as exc:
+        except InputError as exc:
             raise InputError(f"--transitions: {exc}") from None
     if args.root is not None:
         writable_folder(args.root, "--root")

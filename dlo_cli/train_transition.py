@@ -117,12 +117,12 @@ def run(args: argparse.Namespace) -> int:
         torch.set_num_threads(args.threads)
     try:
         data = load_transition_files(args.data)
-    except ValueError as exc:
+    except InputError as exc:
         raise InputError(f"--data: {exc}") from exc
     if args.heldout is not None:
         try:
             heldout = load_transition_files(args.heldout)
-        except ValueError as exc:
+        except InputError as exc:
             raise InputError(f"--heldout: {exc}") from exc
         conditioned = args.cord_inputs or bool(
             args.teacher and TransitionModel.load(args.teacher, device="cpu").config.cord_inputs)
