@@ -1,6 +1,6 @@
 """How many moves latent-mpc-adaptive needs to know a cord: prediction error against moves seen.
 
-For episodes of the held-out test cords (a file of ``dlo collect --kind transitions
+For episodes of the held-out test cords (a file of ``dlo collect transitions
 --test-cords``: episodes of a few moves, each episode one cord and one grasp), the cord is
 fitted as ``AdaptiveLatentMPCPolicy`` fits it (its length read off the first shape, the rest by
 ``AdaptiveLatentMPCPolicy.fit``) to the episode's first k moves, k = 0 (the default cord at the

@@ -2,7 +2,7 @@
 
 For each model given, the mean one-move error (cm) and the share within 1 cm of moves of one
 end (head and tail) and of both ends, on every cord of a file collected with ``dlo collect
---kind transitions --test-cords`` (the six ``dlo_env.randomize.TEST_CORDS``, which no
+transitions --test-cords`` (the six ``dlo_env.randomize.TEST_CORDS``, which no
 cord-conditioned model trains near), and on a file of the default cord when ``--default``
 names one. A model of one cord predicts every cord as its own; a model of several cords
 (``cord_inputs``) is told each move's cord. The floors of a model of several cords on the test
@@ -138,10 +138,10 @@ def main() -> None:
                         help="transition models, files or folders ('' or none: the shipped "
                              "one-cord model)")
     parser.add_argument("--data", required=True,
-                        help="moves of the test cords (dlo collect --kind transitions "
+                        help="moves of the test cords (dlo collect transitions "
                              "--test-cords)")
     parser.add_argument("--default", default=None,
-                        help="moves of the default cord (dlo collect --kind transitions)")
+                        help="moves of the default cord (dlo collect transitions)")
     parser.add_argument("--speed", type=int, default=0,
                         help="time each model over this many calls (0: no timing)")
     parser.add_argument("--batch", type=int, default=1024, help="moves per timed call")
@@ -155,7 +155,7 @@ def main() -> None:
     torch.set_num_threads(args.threads)
     data = load_transitions(args.data)
     if not (cord_index(data) >= 0).any():
-        raise SystemExit(f"--data must hold moves of the test cords (dlo collect --kind "
+        raise SystemExit(f"--data must hold moves of the test cords (dlo collect "
                          f"transitions --test-cords), got none in {args.data}")
     default = load_transitions(args.default) if args.default else None
     results = []

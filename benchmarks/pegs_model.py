@@ -1,7 +1,7 @@
 """A transition model around pegs: its one-move error on moves that touch a peg and on the rest.
 
 For each model given, the mean one-move error (cm) and the share within 1 cm on a held-out
-file collected with ``dlo collect --kind transitions --max-pegs N``, split into the moves that
+file collected with ``dlo collect transitions --max-pegs N``, split into the moves that
 touch a peg (the cord, before or after, within ``TOUCH`` of a peg's surface, or a gripper
 stopped by one) and those that touch none, each by one end (head and tail) and both ends. Every
 model is told the move's pegs: one with ``peg_reach`` sees them, every model stops the
@@ -86,7 +86,7 @@ def replay_errors(data: TransitionDataset, idx: np.ndarray) -> np.ndarray:
     if recorded is None or "max_step" not in collected or (
             data.peg_count.any() and "peg_radius" not in collected):
         raise ValueError("replaying needs the collection's cord, max_step and peg_radius in "
-                         "the file's metadata (a file written by dlo collect --kind "
+                         "the file's metadata (a file written by dlo collect "
                          "transitions)")
     base = CordParams(**recorded)
     radius = float(collected.get("peg_radius", PEG_RADIUS))  # only read where pegs stand

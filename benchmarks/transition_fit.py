@@ -50,7 +50,7 @@ def main() -> None:
     parser.add_argument("--data", nargs="+", default=list(DEFAULT_DATA),
                         help="training files of the model (a sample of each is predicted)")
     parser.add_argument("--unseen", default="data/transitions-val-4.npz",
-                        help="a file the model never trained on (dlo collect --kind "
+                        help="a file the model never trained on (dlo collect "
                              "transitions --seed 4)")
     parser.add_argument("--sample", type=int, default=8000, help="moves drawn from each file")
     args = parser.parse_args()

@@ -284,7 +284,7 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--model", default=None, help="transition model (default: shipped)")
     parser.add_argument("--heldout", default="data/transitions-heldout.npz",
-                        help="held-out transitions (dlo collect --kind transitions --seed 1)")
+                        help="held-out transitions (dlo collect transitions --seed 1)")
     parser.add_argument("--curves", type=int, default=400, help="analytic-shape transitions")
     parser.add_argument("--seed", type=int, default=7,
                         help="seed of the analytic shapes and of the replayed moves")

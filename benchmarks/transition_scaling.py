@@ -148,8 +148,9 @@ def main() -> None:
                              "there (the shipped model: 840000, of several kinds)")
     parser.add_argument("--cord-inputs", action="store_true",
                         help="networks that see each move's cord, for --data of several cords "
-                             "(dlo collect --randomize); --validation may then be moves of the "
-                             "held-out test cords (dlo collect --test-cords)")
+                             "(dlo collect transitions --randomize); --validation may then be "
+                             "moves of the held-out test cords (dlo collect transitions "
+                             "--test-cords)")
     parser.add_argument("--threads", type=int, default=1)
     parser.add_argument("--seed", type=int, default=0)
     parser.add_argument("--runs", default="runs/transition-scaling",

@@ -16,6 +16,7 @@ from typing import Any
 
 from dlo_bench.paths import shipped_baseline
 from dlo_bench.policy_file import weights_file
+from dlo_env.errors import InputError, MissingFileError
 from planners.interfaces import Policy, ShapeSurrogate
 from planners.policy import DEFAULT_REPLAN_EVERY
 
@@ -110,7 +111,7 @@ def _loaded_or_file(model: Any, loaded: type, load: Callable[[Any], Any], what: 
     try:
         return load(model)
     except FileNotFoundError as exc:
-        raise FileNotFoundError(f"no {what}: {exc} (train one with `{train}`)") from exc
+        raise MissingFileError(f"no {what}: {exc} (train one with `{train}`)") from exc
 
 
 def load_shape_model(model: ShapeSurrogate | str | Path | None) -> ShapeSurrogate:
@@ -140,7 +141,7 @@ def load_transition_model(model: Any, cords: bool = False, pegs: bool = False) -
     return _loaded_or_file(model, TransitionModel,
                            lambda m: TransitionModel.load_or_pretrained(m, device="cpu",
                                                                        cords=cords, pegs=pegs),
-                           "transition model", "dlo train --stage transition"
+                           "transition model", "dlo train transition"
                            + (" --cord-inputs" if cords else " --peg-reach" if pegs else ""))
 
 
@@ -279,7 +280,7 @@ def _sb3(algo: str, shipped: str = "", cords: str = "") -> Callable[[Any, AgentO
             folder = shipped_baseline(shipped or algo, env_id, pegs=pegs)
             if not folder.is_dir():
                 where = f" where {env.unwrapped.max_pegs} pegs are observed" if pegs else ""
-                raise FileNotFoundError(
+                raise MissingFileError(
                     f"no {shipped or algo} trained{where} in {env_id} is shipped ({folder.name}/):"
                     f" train one with `{train_command(AGENTS[shipped or algo], env)}` and run "
                     "it as agent sb3:FOLDER")
@@ -306,7 +307,7 @@ def observation_shape(env: Any) -> tuple[int, ...]:
     """
     space = env.observation_space
     if "observation" not in getattr(space, "spaces", {}):
-        raise ValueError("env must observe the dlo_env Dict (observation, achieved_goal, "
+        raise InputError("env must observe the dlo_env Dict (observation, achieved_goal, "
                          f"desired_goal), got {space}: build the agent on, and give it the "
                          "observations of, the environment without a flattening wrapper")
     return space["observation"].shape
@@ -326,7 +327,7 @@ def _check_observation(name: str, policy: Any, env: Any) -> None:
         slots, rest = divmod(got[0] - want[0], 3) if len(got) == len(want) == 1 else (0, 1)
         where = (f"act where max_pegs={pegs + slots} (a peg suite), or "
                  if not rest and pegs + slots > 0 else "")
-        raise ValueError(f"agent {name!r} was trained on observations of shape {got}, but this "
+        raise InputError(f"agent {name!r} was trained on observations of shape {got}, but this "
                          f"environment observes {want} (max_pegs={pegs}: 3 numbers per peg "
                          f"slot): {where}train one there (dlo baseline "
                          f"{f'--max-pegs {pegs}' if pegs else 'without --max-pegs'})")
@@ -403,7 +404,7 @@ def agent_spec(name: str) -> AgentSpec:
         folder = name[len(SB3_PREFIX):]
         return AgentSpec(name, f"the baseline in {folder}", _sb3(""), extra="rl",
                          defaults={"baseline": folder}, environments=_trained_in(folder))
-    raise ValueError(f"agent name must be one of {', '.join(agent_names())}, got {name!r}")
+    raise InputError(f"agent name must be one of {', '.join(agent_names())}, got {name!r}")
 
 
 def _trained_in(folder: str) -> tuple[str, ...]:
@@ -441,7 +442,7 @@ def build_agent(name: str, env: Any, **options: Any) -> Policy:
     """
     if isinstance(env, str):
         if name == "physics-mpc-true-cord":
-            raise ValueError("physics-mpc-true-cord reads the cord of the environment it acts "
+            raise InputError("physics-mpc-true-cord reads the cord of the environment it acts "
                              "in: give it that environment, not its id")
         import gymnasium as gym
 
@@ -450,22 +451,22 @@ def build_agent(name: str, env: Any, **options: Any) -> Policy:
         with gym.make(env) as made:
             return build_agent(name, made, **options)
     if not hasattr(env, "unwrapped") or not hasattr(env, "observation_space"):
-        raise ValueError(f"env must be a dlo_env environment or its id, got {type(env).__name__}")
+        raise InputError(f"env must be a dlo_env environment or its id, got {type(env).__name__}")
     spec = agent_spec(name)
     known = {f.name for f in fields(AgentOptions)}
     unknown = sorted(set(options) - known)
     if unknown:
-        raise ValueError(f"build_agent options must be some of {sorted(known)}, got {unknown}")
+        raise InputError(f"build_agent options must be some of {sorted(known)}, got {unknown}")
     env_id = getattr(env.unwrapped.spec, "id", None)
     from dlo_env import SURROGATE_OF
 
     twin = {v: k for k, v in SURROGATE_OF.items()}.get(env_id, env_id)  # same spaces, options
     if env_id is not None and twin not in spec.environments:
-        raise ValueError(f"agent {name!r} acts in {', '.join(spec.environments)}, "
+        raise InputError(f"agent {name!r} acts in {', '.join(spec.environments)}, "
                          f"got environment {env_id!r}")
     size = math.prod(observation_shape(env))
     if spec.no_pegs and observes_pegs(env):
-        raise ValueError(f"agent {name!r} does not act where pegs are observed: {spec.no_pegs}")
+        raise InputError(f"agent {name!r} does not act where pegs are observed: {spec.no_pegs}")
     given = {k: v for k, v in options.items() if v is not None}  # None: the default
     policy = spec.build(env, replace(AgentOptions(), **{**spec.defaults, **given}))
     _check_observation(name, policy, env)

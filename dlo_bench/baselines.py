@@ -37,6 +37,7 @@ from dlo_env.checks import (
     positive,
     positive_ints,
 )
+from dlo_env.errors import InputError, MissingFileError
 
 ALGOS = ("ppo", "sac", "sac-her")
 #: The cords a baseline trains on (``BaselineConfig.cords``).
@@ -128,12 +129,12 @@ class BaselineConfig:
 
         if not (isinstance(self.max_pegs, int) and not isinstance(self.max_pegs, bool)
                 and 0 <= self.max_pegs <= MAX_PEGS):
-            raise ValueError(f"max_pegs must be an int from 0 to {MAX_PEGS}, "
-                             f"got {self.max_pegs!r}")
+            raise InputError(f"max_pegs must be an int from 0 to {MAX_PEGS}, "
+                             f"got {self.max_pegs!r}", field="max_pegs")
         if self.algo not in ALGOS:
-            raise ValueError(f"algo must be one of {ALGOS}, got {self.algo!r}")
+            raise InputError(f"algo must be one of {ALGOS}, got {self.algo!r}", field="algo")
         if self.cords not in CORDS:
-            raise ValueError(f"cords must be one of {CORDS}, got {self.cords!r}")
+            raise InputError(f"cords must be one of {CORDS}, got {self.cords!r}", field="cords")
         positive_ints(self, "timesteps", "n_envs", "ppo_n_steps", "ppo_batch_size",
                       "ppo_epochs", "sac_buffer_size", "sac_batch_size", "sac_gradient_steps",
                       "her_n_sampled_goal")
@@ -143,12 +144,12 @@ class BaselineConfig:
                      "True or False")
         non_negative(self, "uncertainty_penalty")
         if self.uncertainty_penalty and not self.surrogate:
-            raise ValueError("uncertainty_penalty needs surrogate=True (the pymunk environment "
-                             "has no ensemble)")
+            raise InputError("uncertainty_penalty needs surrogate=True (the pymunk environment "
+                             "has no ensemble)", field="uncertainty_penalty")
         if self.surrogate and (self.cords != "fixed" or self.max_pegs or self.subprocess):
-            raise ValueError("surrogate needs cords='fixed', max_pegs=0 and subprocess=False: "
+            raise InputError("surrogate needs cords='fixed', max_pegs=0 and subprocess=False: "
                              "the surrogate steps the empty table's default cord in one "
-                             "process")
+                             "process", field="surrogate")
         fractions(self, "gamma")
         fractions(self, "ppo_gae_lambda", closed_low=True)
         non_negative(self, "ppo_ent_coef")
@@ -159,15 +160,17 @@ class BaselineConfig:
             isinstance(n, int) and not isinstance(n, bool) and n >= 1 for n in v),
             "a list of layer sizes >= 1 (e.g. [256, 256]; [] for none)")
         if not self.difficulties or not all(1 <= d <= 5 for d in self.difficulties):
-            raise ValueError(f"difficulties must be a non-empty tuple of ints in 1..5, "
-                             f"got {self.difficulties!r}")
+            raise InputError(f"difficulties must be a non-empty tuple of ints in 1..5, "
+                             f"got {self.difficulties!r}", field="difficulties")
         if self.reward_type not in ("dense", "sparse"):
-            raise ValueError(f"reward_type must be 'dense' or 'sparse', got {self.reward_type!r}")
+            raise InputError(f"reward_type must be 'dense' or 'sparse', got {self.reward_type!r}",
+                             field="reward_type")
         if self.algo == "sac-her" and self.sac_learning_starts <= self.n_envs * EPISODE_STEPS:
             # HER samples goals from finished episodes: learning cannot start before one ends.
-            raise ValueError(
+            raise InputError(
                 f"sac_learning_starts must exceed n_envs * {EPISODE_STEPS} = "
-                f"{self.n_envs * EPISODE_STEPS} for sac-her, got {self.sac_learning_starts}"
+                f"{self.n_envs * EPISODE_STEPS} for sac-her, got {self.sac_learning_starts}",
+                field="sac_learning_starts",
             )
 
     @classmethod
@@ -176,12 +179,12 @@ class BaselineConfig:
         known = {f.name for f in fields(cls)}
         unknown = sorted(set(data) - known)
         if unknown:
-            raise ValueError(f"config has unknown keys {unknown}")
+            raise InputError(f"config has unknown keys {unknown}")
         values = {k: tuple(v) if isinstance(v, list) else v for k, v in data.items()}
         return replace(cls(), **values)
 
 
-class ResumeMismatch(ValueError):
+class ResumeMismatch(InputError):
     """A resumed run was given another config than the interrupted one."""
 
 
@@ -273,7 +276,7 @@ def _surrogate_vec_env(config: BaselineConfig, monitor_dir: str | None, append: 
     from dlo_env import SURROGATE_OF
 
     if config.env_id not in SURROGATE_OF:
-        raise ValueError(f"surrogate: {config.env_id!r} has no learned twin; one of "
+        raise InputError(f"surrogate: {config.env_id!r} has no learned twin; one of "
                          f"{tuple(SURROGATE_OF)}")
     venv = gym.make_vec(SURROGATE_OF[config.env_id], num_envs=config.n_envs,
                         vectorization_mode="vector_entry_point", autoreset_mode="same_step",
@@ -375,10 +378,10 @@ def check_out_folder(out: str | os.PathLike, resume: bool, name: str = "out") ->
     out = Path(out)
     interrupted = (out / "checkpoint.zip").is_file()
     if interrupted and not resume:
-        raise ValueError(f"{name} {str(out)!r} holds an interrupted run (checkpoint.zip): "
+        raise InputError(f"{name} {str(out)!r} holds an interrupted run (checkpoint.zip): "
                          "resume it (--resume, resume=True) or choose another folder")
     if (out / "model.zip").is_file() and not interrupted:
-        raise ValueError(f"{name} {str(out)!r} holds a finished run (model.zip), which "
+        raise InputError(f"{name} {str(out)!r} holds a finished run (model.zip), which "
                          "training would replace: choose another folder")
     return resume and interrupted
 
@@ -507,13 +510,13 @@ def read_baseline_metadata(path: str | os.PathLike) -> dict[str, Any]:
     meta_path = folder / "hyperparameters.json"
     if not meta_path.is_file() or not any((folder / f).is_file()
                                           for f in ("model.zip", POLICY_FILE)):
-        raise FileNotFoundError(
+        raise MissingFileError(
             f"path must be a baseline folder with hyperparameters.json and model.zip or "
             f"{POLICY_FILE} (written by `dlo baseline`), got {str(path)!r}"
         )
     meta = json.loads(meta_path.read_text())
     if meta.get("format_version") != FORMAT_VERSION:
-        raise ValueError(
+        raise InputError(
             f"{meta_path} has format_version {meta.get('format_version')!r}, "
             f"expected {FORMAT_VERSION}"
         )
@@ -544,9 +547,9 @@ def load_baseline(path: str | os.PathLike, device: str = "cpu", algo: str = "",
     folder = p.parent if p.is_file() else p
     config = BaselineConfig.from_dict(read_baseline_metadata(folder)["config"])
     if algo and config.algo != algo:
-        raise ValueError(f"baseline {str(folder)!r} holds a {config.algo} model, not {algo}")
+        raise InputError(f"baseline {str(folder)!r} holds a {config.algo} model, not {algo}")
     if cords and config.cords != cords:
-        raise ValueError(f"baseline {str(folder)!r} was trained with --cords {config.cords}, "
+        raise InputError(f"baseline {str(folder)!r} was trained with --cords {config.cords}, "
                          f"not --cords {cords}")
     # One in-process env is enough to act (HER rebuilds its empty buffer around it).
     acting = replace(config, n_envs=1, subprocess=False, surrogate=False,

@@ -27,6 +27,7 @@ import numpy as np
 
 from dlo_bench.policy_file import POLICY_FILE, load_policy_file, write_policy_file
 from dlo_env.atomic import atomic_path, write_text_atomic
+from dlo_env.errors import InputError, MissingFileError
 
 FORMAT_VERSION = 1
 #: The demonstrations a ``bc`` agent is cloned from, per environment: the oracle of the
@@ -70,17 +71,17 @@ class BCConfig:
 
     def __post_init__(self) -> None:
         if not self.datasets:
-            raise ValueError("datasets must name at least one Minari dataset")
+            raise InputError("datasets must name at least one Minari dataset")
         for name in ("batch_size", "epochs"):
             if not (isinstance(getattr(self, name), int) and getattr(self, name) >= 1):
-                raise ValueError(f"{name} must be an int >= 1, got {getattr(self, name)!r}")
+                raise InputError(f"{name} must be an int >= 1, got {getattr(self, name)!r}")
 
     @classmethod
     def from_dict(cls, data: dict[str, Any]) -> BCConfig:
         """The config of a ``hyperparameters.json`` (lists back to tuples; unknown keys fail)."""
         unknown = sorted(set(data) - {f.name for f in fields(cls)})
         if unknown:
-            raise ValueError(f"config has unknown keys {unknown}")
+            raise InputError(f"config has unknown keys {unknown}")
         return replace(cls(), **{k: tuple(v) if isinstance(v, list) else v
                                  for k, v in data.items()})
 
@@ -113,7 +114,7 @@ def load_demonstrations(config: BCConfig) -> Demonstrations:
             try:
                 dataset = minari.load_dataset(dataset_id)
             except FileNotFoundError as exc:
-                raise FileNotFoundError(
+                raise MissingFileError(
                     f"no Minari dataset {dataset_id!r}; write it with `dlo export-minari`"
                     + (f" --root {config.root}" if config.root else "")) from exc
             env_spec = dataset.spec.env_spec
@@ -125,7 +126,7 @@ def load_demonstrations(config: BCConfig) -> Demonstrations:
                 actions.append(episode.actions)
                 episodes += 1
     if len(specs) != 1:
-        raise ValueError(f"datasets must all come from one environment, got {sorted(specs)}")
+        raise InputError(f"datasets must all come from one environment, got {sorted(specs)}")
     return Demonstrations(env_spec, {k: np.concatenate(v) for k, v in observations.items()},
                           np.concatenate(actions).astype(np.float32), episodes)
 
@@ -208,10 +209,10 @@ def load_bc(path: str | os.PathLike[str], device: str = "cpu", env_id: str | Non
     folder = p.parent if p.is_file() else p
     meta = read_baseline_metadata(folder)
     if meta.get("algo") != "bc":
-        raise ValueError(f"path {str(folder)!r} holds no behaviour-cloning model (algo "
+        raise InputError(f"path {str(folder)!r} holds no behaviour-cloning model (algo "
                          f"{meta.get('algo', meta.get('config', {}).get('algo'))!r})")
     if env_id is not None and meta.get("env_id") != env_id:
-        raise ValueError(f"path {str(folder)!r} holds a policy cloned in {meta.get('env_id')}, "
+        raise InputError(f"path {str(folder)!r} holds a policy cloned in {meta.get('env_id')}, "
                          f"not {env_id}")
     if not (folder / "model.zip").is_file():  # the acting weights alone (what ships)
         import gymnasium as gym

@@ -72,6 +72,7 @@ from dlo_env.atomic import file_digest
 from dlo_env.cord_suites import CORD_SUITES
 from dlo_env.designed_suites import DESIGNED_SUITES
 from dlo_env.envs import ENVIRONMENTS
+from dlo_env.errors import InputError, MissingFileError
 from dlo_env.peg_suites import PEGGED_SUITES
 from dlo_env.tasks import SPLIT_SIZES, SUITES
 from planners.interfaces import Policy, ShapeSurrogate
@@ -143,7 +144,7 @@ class BenchmarkConfig:
         cords_transition_model: Transition model of several cords of the agents marked
             ``cords`` (latent-mpc-adaptive; None: the shipped ``transition-cords.pt``).
         pegs_transition_model: Transition model of the agents of the ``pegs`` section (a
-            model that sees pegs, ``dlo train --stage transition --peg-reach``; None: the
+            model that sees pegs, ``dlo train transition --peg-reach``; None: the
             shipped ``transition-pegs.pt``).
         replan_every: Steps between replans of ``latent-tree-closed``.
         max_seconds: Time budget of one latent-tree plan (None: the planner's default).
@@ -175,53 +176,56 @@ class BenchmarkConfig:
     def __post_init__(self) -> None:
         unknown = [a for a in self.agents if not registered(a)]
         if unknown or not (self.agents or self.cord_agents or self.peg_agents):
-            raise ValueError(f"agents must be a tuple of {tuple(AGENTS)} or sb3:PATH (with "
-                             f"cord_agents and peg_agents, not all empty), got {self.agents!r}")
+            raise InputError(f"agents must be a tuple of {tuple(AGENTS)} or sb3:PATH (with "
+                             f"cord_agents and peg_agents, not all empty), got {self.agents!r}",
+                             field="agents")
         cords_only = [a for a in self.agents if agent_spec(a).cords]
         if cords_only:
-            raise ValueError(f"agents must not name agents of the cords section only "
-                             f"({', '.join(cords_only)}): give them as cord_agents")
+            raise InputError(f"agents must not name agents of the cords section only "
+                             f"({', '.join(cords_only)}): give them as cord_agents", field="agents")
         if any(not registered(a) for a in self.cord_agents):
-            raise ValueError(f"cord_agents must be some of {tuple(AGENTS)}, "
-                             f"got {self.cord_agents!r}")
+            raise InputError(f"cord_agents must be some of {tuple(AGENTS)}, "
+                             f"got {self.cord_agents!r}", field="cord_agents")
         if any(not registered(a) or agent_spec(a).cords for a in self.peg_agents):
-            raise ValueError(f"peg_agents must be some of {PEG_AGENTS}, "
-                             f"got {self.peg_agents!r}")
+            raise InputError(f"peg_agents must be some of {PEG_AGENTS}, "
+                             f"got {self.peg_agents!r}", field="peg_agents")
         bad_envs = [e for e in (*self.envs, *self.cord_envs, *self.peg_envs)
                     if e not in ENVIRONMENTS]
         if bad_envs or not self.envs:
-            raise ValueError(f"envs, cord_envs and peg_envs must be some of "
+            raise InputError(f"envs, cord_envs and peg_envs must be some of "
                              f"{tuple(ENVIRONMENTS)} (envs not empty), got {self.envs!r}, "
-                             f"{self.cord_envs!r} and {self.peg_envs!r}")
+                             f"{self.cord_envs!r} and {self.peg_envs!r}",
+                             field=("envs", "cord_envs", "peg_envs"))
         if any(c not in CORD_SUITES for c in self.cords) or len(set(self.cords)) < len(
                 self.cords):
-            raise ValueError(f"cords must be distinct suites of {tuple(CORD_SUITES)}, "
-                             f"got {self.cords!r}")
+            raise InputError(f"cords must be distinct suites of {tuple(CORD_SUITES)}, "
+                             f"got {self.cords!r}", field="cords")
         if any(p not in PEGGED_SUITES for p in self.pegs) or len(set(self.pegs)) < len(
                 self.pegs):
-            raise ValueError(f"pegs must be distinct suites of {tuple(PEGGED_SUITES)}, "
-                             f"got {self.pegs!r}")
+            raise InputError(f"pegs must be distinct suites of {tuple(PEGGED_SUITES)}, "
+                             f"got {self.pegs!r}", field="pegs")
         if self.difficulties is not None:
             bad = [d for d in self.difficulties if d not in SUITE_OF_DIFFICULTY]
             if bad:
-                raise ValueError(f"difficulties must be some of {tuple(SUITE_OF_DIFFICULTY)} "
-                                 f"(or none: no linear cells), got {self.difficulties!r}")
+                raise InputError(f"difficulties must be some of {tuple(SUITE_OF_DIFFICULTY)} "
+                                 f"(or none: no linear cells), got {self.difficulties!r}",
+                                 field="difficulties")
         ok = [isinstance(t, (int, float)) and not isinstance(t, bool) and math.isfinite(t)
               and t > 0 for t in self.thresholds]
         if not self.thresholds or not all(ok) or len(set(self.thresholds)) < len(ok):
-            raise ValueError(f"thresholds must be distinct numbers > 0 (metres), "
-                             f"got {self.thresholds!r}")
+            raise InputError(f"thresholds must be distinct numbers > 0 (metres; none may repeat), "
+                             f"got {self.thresholds!r}", field="thresholds")
         if any(d not in DESIGNED_SUITES for d in self.designed) or len(
                 set(self.designed)) < len(self.designed):
-            raise ValueError(f"designed must be distinct suites of {tuple(DESIGNED_SUITES)}, "
-                             f"got {self.designed!r}")
+            raise InputError(f"designed must be distinct suites of {tuple(DESIGNED_SUITES)}, "
+                             f"got {self.designed!r}", field="designed")
         if not self.cells():
-            raise ValueError("the benchmark has no cell to run: give difficulties, designed, "
+            raise InputError("the benchmark has no cell to run: give difficulties, designed, "
                              "cord or peg suites (with agents of their sections)")
         size = SPLIT_SIZES["test"]
         if not (isinstance(self.episodes, int) and 1 <= self.episodes <= size):
-            raise ValueError(f"episodes must be an int in 1..{size} (the test split), "
-                             f"got {self.episodes!r}")
+            raise InputError(f"episodes must be an int in 1..{size} (the test split), "
+                             f"got {self.episodes!r}", field="episodes")
 
     def cells(self, agent: str | None = None) -> list[tuple[str, str, float]]:
         """``(env_id, suite, threshold)`` of every cell (of ``agent``'s, when given), in table
@@ -842,7 +846,7 @@ def run_cell(name: str, env_id: str, suite: str | int, config: BenchmarkConfig, 
     if shape_model is None and agent_spec(name).shape_model:
         shape_model, why = load_shape_model(config.model)
         if shape_model is None:
-            raise FileNotFoundError(f"no shape model: {why}")
+            raise MissingFileError(f"no shape model: {why}")
     if not isinstance(suite, str):
         suite = SUITE_OF_DIFFICULTY[suite]
     # The agent is built for the environment the suite's episodes run in (its threshold, its
@@ -851,7 +855,7 @@ def run_cell(name: str, env_id: str, suite: str | int, config: BenchmarkConfig, 
     with gym.make(env_id, **kwargs) as env:
         agent = load_agent(name, config, env, shape_model)
         if agent.policy is None:
-            raise ValueError(f"agent {name!r} is missing in {env_id}: {agent.missing}")
+            raise InputError(f"agent {name!r} is missing in {env_id}: {agent.missing}")
         _warm_up(agent.policy, env)
         t0 = time.perf_counter()
         result = evaluate(agent.policy, env, suite=suite,
@@ -895,7 +899,7 @@ def run_benchmark(config: BenchmarkConfig, out_dir: str | os.PathLike, *,
 
     if part is not None and not (isinstance(part, int) and not isinstance(part, bool)
                                  and part >= 1):
-        raise ValueError(f"part must be an int >= 1 (episodes per part) or None, got {part!r}")
+        raise InputError(f"part must be an int >= 1 (episodes per part) or None, got {part!r}")
     folder = Path(out_dir) / CELLS_DIR
     run_id = run_id or new_run_id()
     # The code that runs, read once before any cell is written: a run writing into a tracked

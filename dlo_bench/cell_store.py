@@ -28,6 +28,7 @@ from typing import Any
 import numpy as np
 
 from dlo_env.atomic import atomic_path
+from dlo_env.errors import InputError
 
 #: A cell's file suffix; ``LEGACY_SUFFIX`` cells (one JSON document) are still read.
 CELL_SUFFIX = ".npz"
@@ -94,22 +95,22 @@ def read_cell(path: str | os.PathLike) -> dict[str, Any]:
     """The dictionary :func:`write_cell` wrote to ``path`` (or an older ``.json`` cell's).
 
     Raises:
-        ValueError: If ``path`` is not a cell file of a known layout.
+        InputError: If ``path`` is not a cell file of a known layout.
     """
     path = Path(path)
     if path.suffix == LEGACY_SUFFIX:
         try:
             return json.loads(path.read_text())
         except json.JSONDecodeError as exc:
-            raise ValueError(f"{path} is not a benchmark cell: {exc}") from None
+            raise InputError(f"{path} is not a benchmark cell: {exc}") from None
     try:
         with np.load(path, allow_pickle=False) as data:
             arrays = {name: data[name] for name in data.files}
         meta = json.loads(arrays.pop("meta").item())
     except (OSError, ValueError, KeyError, zipfile.BadZipFile) as exc:
-        raise ValueError(f"{path} is not a benchmark cell: {exc}") from None
+        raise InputError(f"{path} is not a benchmark cell: {exc}") from None
     if meta.get("format") != FORMAT_VERSION:
-        raise ValueError(f"{path} is a benchmark cell of layout {meta.get('format')}; this "
+        raise InputError(f"{path} is a benchmark cell of layout {meta.get('format')}; this "
                          f"version reads layout {FORMAT_VERSION}")
     cell = dict(meta["rest"])
     for key, table in meta["tables"].items():

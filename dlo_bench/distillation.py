@@ -21,6 +21,7 @@ import numpy as np
 import torch
 
 from dlo_env.checks import positive, positive_ints
+from dlo_env.errors import InputError
 from dlo_env.shapes import error
 from planners.distilled import DistilledConfig, MoveNetwork, features, to_frame
 
@@ -63,7 +64,7 @@ class DistillConfig:
                       "width")
         positive(self, "threshold", "learning_rate")
         if self.grasp not in ("head", "both"):
-            raise ValueError(f"DistillConfig.grasp must be 'head' or 'both', got "
+            raise InputError(f"DistillConfig.grasp must be 'head' or 'both', got "
                              f"{self.grasp!r}")
 
 

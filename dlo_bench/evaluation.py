@@ -18,6 +18,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from dlo_env.errors import InputError
 from dlo_env.progress import progress_bar
 from planners.deprecated import renamed_argument
 from planners.interfaces import EpisodeStats, PlanningPolicy, Policy
@@ -185,7 +186,7 @@ def summarise(records: list[EpisodeRecord], agent: str = "", env_id: str = "") -
         A JSON-ready dict; ``difficulty`` is the common difficulty or ``"mixed"``.
     """
     if not records:
-        raise ValueError("records must not be empty")
+        raise InputError("records must not be empty")
     difficulties = sorted({r.difficulty for r in records})
     return {
         "agent": agent,
@@ -257,7 +258,7 @@ def check_suite(suite: str) -> str:
     """``suite`` if it names a suite of any kind, else a one-line ``ValueError`` listing them."""
     every = suite_names()
     if suite not in every:
-        raise ValueError(f"suite must be one of {', '.join(every)}, got {suite!r}")
+        raise InputError(f"suite must be one of {', '.join(every)}, got {suite!r}")
     return suite
 
 
@@ -267,7 +268,7 @@ def _episode_options(
     if suite is not None:
         made = suite_tasks(suite, split, grasp, limit=episodes)
         if len(made) < episodes:
-            raise ValueError(f"first + episodes must be at most the {len(made)} tasks of "
+            raise InputError(f"first + episodes must be at most the {len(made)} tasks of "
                              f"suite {suite!r} split {split!r}, got {episodes}")
         return [t.options() for t in made]
     return [None if difficulty is None else {"difficulty": difficulty}] * episodes
@@ -375,13 +376,13 @@ def _check_evaluate_arguments(policy: Policy, episodes: int, first: int,
                               difficulty: int | None, suite: str | None) -> None:
     """Refuse ``evaluate``'s arguments that cannot make an evaluation."""
     if not isinstance(policy, Policy):
-        raise ValueError(f"policy must have a predict() method, got {type(policy).__name__}")
+        raise InputError(f"policy must have a predict() method, got {type(policy).__name__}")
     if not (isinstance(episodes, int) and episodes >= 1):
-        raise ValueError(f"episodes must be an int >= 1, got {episodes!r}")
+        raise InputError(f"episodes must be an int >= 1, got {episodes!r}")
     if not (isinstance(first, int) and not isinstance(first, bool) and first >= 0):
-        raise ValueError(f"first must be an int >= 0 (an episode index), got {first!r}")
+        raise InputError(f"first must be an int >= 0 (an episode index), got {first!r}")
     if difficulty is not None and suite is not None:
-        raise ValueError("give difficulty or suite, not both")
+        raise InputError("give difficulty or suite, not both")
 
 
 def _evaluation_env(env: gym.Env | str, env_kwargs: dict[str, Any] | None,
@@ -395,13 +396,13 @@ def _evaluation_env(env: gym.Env | str, env_kwargs: dict[str, Any] | None,
     if isinstance(env, str):
         return gym.make(env, **{**task_env_kwargs(difficulty, suite), **(env_kwargs or {})}), True
     if not isinstance(env, gym.Env):
-        raise ValueError(f"env must be a dlo_env environment or its id, got "
+        raise InputError(f"env must be a dlo_env environment or its id, got "
                          f"{type(env).__name__}")
     if env_kwargs:
-        raise ValueError("env_kwargs apply to an environment made from an id; got an "
+        raise InputError("env_kwargs apply to an environment made from an id; got an "
                          "environment and env_kwargs")
     if getattr(env.spec, "max_episode_steps", None) is None:
-        raise ValueError("env must end its episodes: make it with gym.make (which adds the "
+        raise InputError("env must end its episodes: make it with gym.make (which adds the "
                          "registered TimeLimit) or wrap it in gymnasium.wrappers.TimeLimit")
     return env, False
 

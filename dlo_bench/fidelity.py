@@ -7,6 +7,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from dlo_env.cord import PEG_RADIUS, Cord, CordParams
+from dlo_env.errors import InputError
 from dlo_env.shapes import error
 from dlo_env.tasks import GRASP_ENDS, apply_action
 from planners.interfaces import Plan
@@ -79,7 +80,7 @@ def transition_fidelity(
     params = params if params is not None else CordParams()
     start = as_shape(start, params.n_points, "start")
     if plan.shapes.shape[1] != params.n_points:
-        raise ValueError(f"plan must be for a cord of n_points={params.n_points}, got shapes of "
+        raise InputError(f"plan must be for a cord of n_points={params.n_points}, got shapes of "
                          f"{plan.shapes.shape[1]} points")
     cord = Cord(params, grasp=plan.grasp, pegs=pegs, peg_radius=peg_radius)
     cord.reset(start)

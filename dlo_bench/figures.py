@@ -15,6 +15,7 @@ from typing import Any
 import numpy as np
 
 from dlo_env.atomic import atomic_path
+from dlo_env.errors import InputError
 from dlo_env.rendering import PALETTE
 from dlo_env.shapes import TABLE_HALF
 from planners.interfaces import PlanningPolicy, Policy
@@ -73,7 +74,7 @@ def save_episode_gif(frames: list[Frame], path: str | os.PathLike, size: int = 4
     from PIL import Image, ImageDraw
 
     if not frames:
-        raise ValueError("frames must not be empty")
+        raise InputError("frames must not be empty")
     path = Path(path)
     to_pixels = _view(frames, size)
     width = max(2, size // 120)

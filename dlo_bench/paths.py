@@ -11,6 +11,8 @@ import os
 from importlib import resources
 from pathlib import Path
 
+from dlo_env.errors import InputError
+
 #: Folder every command writes under unless ``--out`` says otherwise (git-ignored).
 RUNS_DIR = Path("runs")
 #: Folder of the shipped Stable-Baselines3 baselines, one ``dlo baseline`` folder per agent.
@@ -31,7 +33,7 @@ def baseline_folder_name(name: str, env_id: str = "dlo_env/DLOEndpoint-v0",
     from dlo_env.envs import ENVIRONMENTS
 
     if env_id not in ENVIRONMENTS:
-        raise ValueError(f"env_id must be one of {tuple(ENVIRONMENTS)}, got {env_id!r}")
+        raise InputError(f"env_id must be one of {tuple(ENVIRONMENTS)}, got {env_id!r}")
     name = f"{name}-pegs" if pegs else name
     return name if env_id == "dlo_env/DLOEndpoint-v0" else f"{name}-{ENVIRONMENTS[env_id][1]}"
 

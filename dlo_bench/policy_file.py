@@ -17,6 +17,7 @@ from pathlib import Path
 from typing import Any
 
 from dlo_env.atomic import atomic_path
+from dlo_env.errors import InputError
 
 #: The file of a folder holding the acting weights.
 POLICY_FILE = "policy.pt"
@@ -53,7 +54,7 @@ def load_policy_file(model: Any, path: str | os.PathLike) -> Any:
     read from ``path``; its critics keep their initial weights, which acting never reads.
 
     Raises:
-        ValueError: If ``path`` is not a weights file, or holds other weights than
+        InputError: If ``path`` is not a weights file, or holds other weights than
             ``model``'s actor (another algorithm or network).
     """
     import torch
@@ -61,11 +62,11 @@ def load_policy_file(model: Any, path: str | os.PathLike) -> Any:
     try:
         state = torch.load(path, map_location=model.device, weights_only=True)
     except Exception as exc:  # torch raises many types for a file that is not its own
-        raise ValueError(f"{path} is not a policy weights file: {exc}") from None
+        raise InputError(f"{path} is not a policy weights file: {exc}") from None
     wanted = acting_weights(model.policy)
     shapes = {k: tuple(v.shape) for k, v in state.items()} if isinstance(state, dict) else {}
     if shapes != {k: tuple(v.shape) for k, v in wanted.items()}:
-        raise ValueError(f"{path} holds the weights of another policy than its "
+        raise InputError(f"{path} holds the weights of another policy than its "
                          "hyperparameters.json describes (other keys or shapes)")
     model.policy.load_state_dict(state, strict=False)
     model.policy.set_training_mode(False)

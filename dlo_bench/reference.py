@@ -29,6 +29,7 @@ import numpy as np
 
 from dlo_env.atomic import write_text_atomic
 from dlo_env.designed_suites import designed_suite_seeds, designed_task
+from dlo_env.errors import InputError
 from planners.physics_mpc import PhysicsMPCConfig
 
 #: The search's budget: twice physics-mpc's samples, more elites and iterations (2.7 times its
@@ -147,17 +148,17 @@ def make_references(suite: str, env_id: str, out: str | Path, *, split: str = "t
     from dlo_env.envs import ENVIRONMENTS
 
     if suite not in DESIGNED_SUITES:
-        raise ValueError(f"suite must be one of {tuple(DESIGNED_SUITES)}, got {suite!r}")
+        raise InputError(f"suite must be one of {tuple(DESIGNED_SUITES)}, got {suite!r}")
     if env_id not in ENVIRONMENTS:
-        raise ValueError(f"env must be one of {tuple(ENVIRONMENTS)}, got {env_id!r}")
+        raise InputError(f"env must be one of {tuple(ENVIRONMENTS)}, got {env_id!r}")
     if not (isinstance(jobs, int) and jobs >= 1):
-        raise ValueError(f"jobs must be an int >= 1, got {jobs!r}")
+        raise InputError(f"jobs must be an int >= 1, got {jobs!r}")
     seeds = [int(s) for s in designed_suite_seeds(suite, split)]
     if limit is not None:
         seeds = seeds[:limit]
     path = reference_file(out, suite, env_id)
     if not searches:
-        raise ValueError("searches must hold at least one PhysicsMPCConfig")
+        raise InputError("searches must hold at least one PhysicsMPCConfig")
     settings = {"searches": [asdict(c) for c in searches], "max_steps": max_steps,
                 "stop": stop}
     data: dict[str, Any] = {"suite": suite, "env_id": env_id, "split": split,
@@ -174,7 +175,7 @@ def make_references(suite: str, env_id: str, out: str | Path, *, split: str = "t
             theirs.get(k) == mine[k] for k in ("max_steps", "stop")) and (
             done == [_config_of(c) for c in mine["searches"][:len(done)]])
         if not ok:
-            raise ValueError(f"out holds {path}, made by another search (settings or split "
+            raise InputError(f"out holds {path}, made by another search (settings or split "
                              "differ): pass another --out, or remove the file to redo it")
         data["tasks"] = old["tasks"]
         for task in data["tasks"]:  # searches added since: not run yet

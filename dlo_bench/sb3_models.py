@@ -21,6 +21,7 @@ from typing import Any
 import gymnasium as gym
 
 from dlo_bench.policy_file import POLICY_FILE, weights_file
+from dlo_env.errors import InputError, MissingFileError
 
 #: SB3 algorithm classes by the package path of their policies; on-policy models of
 #: ``common.policies`` are PPO when they have a clip range, else A2C.
@@ -69,7 +70,7 @@ def _zip_facts(model_file: Path) -> tuple[str, bool]:
         with zipfile.ZipFile(model_file) as archive:
             data = json.loads(archive.read("data"))
     except (OSError, zipfile.BadZipFile, KeyError, json.JSONDecodeError) as exc:
-        raise ValueError(f"{model_file} is not a Stable-Baselines3 model zip: {exc}") from None
+        raise InputError(f"{model_file} is not a Stable-Baselines3 model zip: {exc}") from None
     module = str(data.get("policy_class", {}).get("__module__", ""))
     her = "her" in str(data.get("replay_buffer_class", {}).get("__module__", ""))
     for prefix, algo in _ALGO_BY_MODULE.items():
@@ -77,7 +78,7 @@ def _zip_facts(model_file: Path) -> tuple[str, bool]:
             return algo, her
     if module == "stable_baselines3.common.policies":
         return ("PPO" if "clip_range" in data else "A2C"), her
-    raise ValueError(f"{model_file}: a model of {module or 'an unknown policy'}, which sb3: "
+    raise InputError(f"{model_file}: a model of {module or 'an unknown policy'}, which sb3: "
                      f"does not load (PPO, A2C, SAC, TD3 and TQC do)")
 
 
@@ -106,7 +107,7 @@ def _zoo_facts(folder: Path) -> tuple[Path | None, str | None, float | None]:
     env_id = threshold = None
     normalised = sorted(folder.glob("*/vecnormalize.pkl"))
     if normalised:
-        raise ValueError(f"sb3:PATH: {folder} was trained on normalised observations "
+        raise InputError(f"sb3:PATH: {folder} was trained on normalised observations "
                          f"({normalised[0].name}), which sb3: does not apply: train without "
                          "normalize, or wrap the model so its predict normalises")
     for args_file in sorted(folder.glob("*/args.yml"))[:1]:
@@ -135,7 +136,7 @@ def find_sb3(path: str | os.PathLike) -> SB3Source:
         algo, her = _zip_facts(p)
         return SB3Source(str(path), p, algo, her, "model.zip")
     if not p.is_dir():
-        raise FileNotFoundError(f"sb3:PATH must be an SB3 model.zip, a `dlo baseline` folder "
+        raise MissingFileError(f"sb3:PATH must be an SB3 model.zip, a `dlo baseline` folder "
                                 f"or an rl-zoo3 run folder, got {str(path)!r} (no such file)")
     meta = p / "hyperparameters.json"
     weights = weights_file(p)
@@ -147,7 +148,7 @@ def find_sb3(path: str | os.PathLike) -> SB3Source:
         algo, her = said.split("-")[0].upper(), said == "sac-her"
         if weights.suffix == ".zip" and _zip_facts(weights) != (algo, her):
             algo, her = _zip_facts(weights)
-            raise ValueError(f"{meta} says {said}, but model.zip holds a {algo}"
+            raise InputError(f"{meta} says {said}, but model.zip holds a {algo}"
                              f"{' + HER' if her else ''} model")
         return SB3Source(str(path), weights, algo, her, "dlo baseline",
                          config.get("env_id"), config.get("success_threshold", 0.02), config)
@@ -156,7 +157,7 @@ def find_sb3(path: str | os.PathLike) -> SB3Source:
         return SB3Source(str(path), p / "model.zip", algo, her, "model.zip")
     model, env_id, threshold = _zoo_facts(p)
     if model is None:
-        raise FileNotFoundError(f"sb3:PATH: {str(path)!r} holds no model.zip, best_model.zip "
+        raise MissingFileError(f"sb3:PATH: {str(path)!r} holds no model.zip, best_model.zip "
                                 "or rl-zoo3 ENV.zip")
     algo, her = _zip_facts(model)
     return SB3Source(str(path), model, algo, her, "rl-zoo3", env_id, threshold)
@@ -197,13 +198,13 @@ def _fitted(model: Any, source: SB3Source, env: Any) -> Any:
         ValueError: One line when its spaces are not ``env``'s.
     """
     if model.action_space != env.action_space:
-        raise ValueError(f"sb3:{source.path}: the model's action space is "
+        raise InputError(f"sb3:{source.path}: the model's action space is "
                          f"{model.action_space}, the environment's {env.action_space}")
     if model.observation_space == env.observation_space:
         return model
     if model.observation_space == gym.spaces.flatten_space(env.observation_space):
         return FlatObservationPolicy(model, env.observation_space)
-    raise ValueError(f"sb3:{source.path}: the model observes {model.observation_space}, "
+    raise InputError(f"sb3:{source.path}: the model observes {model.observation_space}, "
                      f"neither the environment's Dict nor its flattened form")
 
 

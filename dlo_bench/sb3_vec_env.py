@@ -23,6 +23,8 @@ import numpy as np
 from gymnasium.vector import AutoresetMode
 from stable_baselines3.common.vec_env.base_vec_env import VecEnv, VecEnvIndices
 
+from dlo_env.errors import InputError
+
 
 class SB3VecEnv(VecEnv):
     """SB3's ``VecEnv`` over a Gymnasium ``VectorEnv`` with same-step autoreset.
@@ -40,7 +42,7 @@ class SB3VecEnv(VecEnv):
     def __init__(self, venv: gym.vector.VectorEnv) -> None:
         mode = getattr(venv, "metadata", {}).get("autoreset_mode")
         if mode != AutoresetMode.SAME_STEP:
-            raise ValueError(f"venv must autoreset in the same step (make it with "
+            raise InputError(f"venv must autoreset in the same step (make it with "
                              f"autoreset_mode='same_step'), got {mode!r}")
         self.venv = venv
         self._actions: np.ndarray | None = None

@@ -21,6 +21,7 @@ from typing import Any
 from dlo_bench.agents import DUAL_ENDPOINT, ENDPOINT
 from dlo_bench.baselines import BaselineConfig
 from dlo_env.atomic import write_text_atomic
+from dlo_env.errors import InputError
 
 #: Folder of the shipped rl-zoo3 hyperparameter files.
 HYPERPARAMS_DIR = Path(__file__).parent / "hyperparams"
@@ -33,7 +34,7 @@ ZOO_ENVS = (ENDPOINT, DUAL_ENDPOINT)
 def hyperparameters_file(zoo_algo: str) -> Path:
     """The shipped file for rl-zoo3's ``--algo zoo_algo`` (``"ppo"`` or ``"sac"``)."""
     if zoo_algo not in ZOO_ALGOS:
-        raise ValueError(f"zoo_algo must be one of {tuple(ZOO_ALGOS)}, got {zoo_algo!r}")
+        raise InputError(f"zoo_algo must be one of {tuple(ZOO_ALGOS)}, got {zoo_algo!r}")
     return HYPERPARAMS_DIR / f"{zoo_algo}.yml"
 
 
@@ -46,7 +47,7 @@ def zoo_hyperparameters(config: BaselineConfig) -> dict[str, Any]:
     tuple its ``info_keywords`` must be.)
     """
     if config.algo == "sac":
-        raise ValueError("config.algo must be 'ppo' or 'sac-her' (the shipped baselines), "
+        raise InputError("config.algo must be 'ppo' or 'sac-her' (the shipped baselines), "
                          "got 'sac'")
     common: dict[str, Any] = {
         "env_wrapper": [{"dlo_bench.baselines.RandomDifficulty":

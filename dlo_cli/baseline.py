@@ -14,6 +14,7 @@ from dlo_cli.flags import (
     positive_int,
     writable_folder,
 )
+from dlo_env.errors import InputError
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
@@ -82,6 +83,15 @@ FLAG_FIELDS = {"algo": "--algo", "env_id": "--env", "difficulties": "--difficult
                "surrogate": "--surrogate"}
 
 
+def field_flags() -> dict[str, str]:
+    """``BaselineConfig`` field -> the flag that sets it: its own flag, else ``--set FIELD``."""
+    from dataclasses import fields
+
+    from dlo_bench.baselines import BaselineConfig
+
+    return {f.name: FLAG_FIELDS.get(f.name, f"--set {f.name}") for f in fields(BaselineConfig)}
+
+
 def _overrides(items: list[str]) -> dict:
     import json
     from dataclasses import fields
@@ -93,11 +103,11 @@ def _overrides(items: list[str]) -> dict:
     for item in items:
         key, sep, text = item.partition("=")
         if not sep:
-            raise ValueError(f"--set takes FIELD=VALUE, got {item!r}")
+            raise InputError(f"--set takes FIELD=VALUE, got {item!r}")
         if key in FLAG_FIELDS:
-            raise ValueError(f"--set {key}: give it with {FLAG_FIELDS[key]}")
+            raise InputError(f"--set {key}: give it with {FLAG_FIELDS[key]}")
         if key not in others:
-            raise ValueError(f"--set {key}: unknown key; the fields --set takes are "
+            raise InputError(f"--set {key}: unknown key; the fields --set takes are "
                              f"{', '.join(others)}")
         try:
             values[key] = json.loads(text)
@@ -133,12 +143,7 @@ def run(args: argparse.Namespace) -> int:
     try:
         config = BaselineConfig.from_dict(settings)
     except TypeError as exc:  # a --set value of the wrong type
-        raise ValueError(f"--set: {exc}") from exc
-    except ValueError as exc:  # "BaselineConfig.FIELD must be ...": the flag that gave FIELD
-        field, _, rest = str(exc).removeprefix("BaselineConfig.").partition(" ")
-        if field not in settings:
-            raise
-        raise ValueError(f"{FLAG_FIELDS.get(field, '--set ' + field)} {rest}") from None
+        raise InputError(f"--set: {exc}") from exc
     # the benchmark's folder names (sac-her-pegs-dual-endpoint...)
     name = baseline_folder_name(config.algo + ("-cords" if config.cords == "train" else "")
                                 + ("-surrogate" if config.surrogate else ""),

@@ -19,6 +19,13 @@ from dlo_cli.flags import (
     positive_int,
     writable_folder,
 )
+from dlo_env.errors import InputError
+
+
+def field_flags() -> dict[str, str]:
+    """``BenchmarkConfig`` field -> the flag that sets it, for the fields named otherwise."""
+    return {"agents": "--agent", "cord_agents": "--agent", "peg_agents": "--agent",
+            "envs": "--env", "difficulties": "--difficulty", "thresholds": "--threshold"}
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
@@ -100,12 +107,12 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     add_model(parser)
     add_transition_model(parser)
     parser.add_argument("--cords-transition-model", default=None, metavar="FILE",
-                        help="transition model of several cords (dlo train --stage transition "
+                        help="transition model of several cords (dlo train transition "
                              "--cord-inputs), file or folder, for latent-mpc-adaptive (None: "
                              "the shipped latent_model/pretrained/transition-cords.pt)")
     parser.add_argument("--pegs-transition-model", default=None, metavar="FILE",
                         help="transition model of the pegs section's agents, file or folder (a "
-                             "model that sees pegs: dlo train --stage transition --peg-reach; "
+                             "model that sees pegs: dlo train transition --peg-reach; "
                              "None: the shipped latent_model/pretrained/transition-pegs.pt)")
     add_planner_flags(parser)
     add_seed(parser, "the planners' sampling (the tasks are the suites')",
@@ -143,7 +150,7 @@ def check_committed(allow_dirty: bool) -> None:
     if allow_dirty or state is None or not state.changed:
         return
     shown = ", ".join(state.changed[:3]) + (", ..." if len(state.changed) > 3 else "")
-    raise ValueError(f"{len(state.changed)} tracked file(s) of {state.root} have uncommitted "
+    raise InputError(f"{len(state.changed)} tracked file(s) of {state.root} have uncommitted "
                      f"changes ({shown}): results record the commit they ran ({state.commit}), "
                      "so commit first, or pass --allow-dirty to run anyway (marked "
                      f"{state.commit}+dirty)")
@@ -191,7 +198,7 @@ def split_agents(names: list[str], cords: bool) -> tuple[tuple[str, ...], tuple[
     cord_agents = tuple(a for a in names if agent_spec(a).cords or a in CORD_AGENTS) if cords \
         else ()
     if not agents and not cord_agents:
-        raise ValueError(f"--agent names only agents of the cords section ({' '.join(names)}), "
+        raise InputError(f"--agent names only agents of the cords section ({' '.join(names)}), "
                          "but no cord suite runs: add --cords SUITE")
     return agents, cord_agents
 
@@ -200,35 +207,20 @@ def run(args: argparse.Namespace) -> int:
     """Run the benchmark, print the table and the speed ratio, write the results."""
     import time
 
-    from dlo_bench.benchmark import HEADLINE_THRESHOLD, BenchmarkConfig
+    from dlo_bench.benchmark import (
+        HEADLINE_THRESHOLD,
+        PEG_AGENTS,
+        QUICK_EPISODES,
+        BenchmarkConfig,
+    )
 
     thresholds = args.threshold
     if thresholds is None:
         thresholds = [HEADLINE_THRESHOLD] if args.quick else list(BenchmarkConfig.thresholds)
-    if len(set(thresholds)) < len(thresholds):
-        raise ValueError(f"--threshold must not repeat a value, got "
-                         f"{' '.join(map(str, thresholds))}")
-    check_committed(args.allow_dirty)  # before anything is built or written
-
-    import torch
-
-    from dlo_bench.benchmark import (
-        QUICK_EPISODES,
-        BenchmarkConfig,
-        new_run_id,
-        run_benchmark,
-        suite_label,
-    )
-    from dlo_bench.benchmark_report import ratio_lines, write_results
-    from dlo_bench.report import threshold_label
-
-    torch.set_num_threads(args.threads)
     designed = section_suites(args)
     cords = section_suites(args, "cords")
     pegs = section_suites(args, "pegs")
     agents, cord_agents = split_agents(args.agent, bool(cords))
-    from dlo_bench.benchmark import PEG_AGENTS
-
     peg_agents = tuple(a for a in agents if a in PEG_AGENTS)
     episodes = args.episodes if args.episodes is not None else (
         QUICK_EPISODES if args.quick else BenchmarkConfig.episodes)
@@ -245,10 +237,19 @@ def run(args: argparse.Namespace) -> int:
         replan_every=args.replan_every, max_seconds=args.max_seconds,
         fidelity=not args.no_fidelity,
     )
+    check_committed(args.allow_dirty)  # before anything is built or written
+
+    import torch
+
+    from dlo_bench.benchmark import new_run_id, run_benchmark, suite_label
+    from dlo_bench.benchmark_report import ratio_lines, write_results
+    from dlo_bench.report import threshold_label
+
+    torch.set_num_threads(args.threads)
     backend = backend_of(args)
     if args.jobs > 1:
         if backend is not None:
-            raise ValueError("--jobs runs the cells in local processes; with --backend ray the "
+            raise InputError("--jobs runs the cells in local processes; with --backend ray the "
                              "cluster's CPUs set how many run at once")
         from dlo_env.dataset.process_backend import ProcessBackend
 

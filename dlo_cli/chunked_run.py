@@ -1,4 +1,5 @@
-"""A chunked collection run with a progress bar, shared by ``dlo collect``'s two kinds."""
+"""A chunked collection run with a progress bar, shared by ``dlo collect shapes`` and
+``dlo collect transitions``."""
 
 from __future__ import annotations
 

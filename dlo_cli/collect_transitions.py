@@ -1,14 +1,67 @@
-"""``dlo collect --kind transitions``: one-move transitions for the transition model.
+"""``dlo collect transitions``: one-move transitions, the transition model's data.
 
 Example:
-    dlo collect --kind transitions --num-transitions 60000 --workers 2 --out runs/transitions.npz
+    dlo collect transitions --num-transitions 60000 --workers 2 --out runs/transitions.npz
 """
 
 from __future__ import annotations
 
 import argparse
 
-from dlo_cli.flags import backend_of, engine_text
+from dlo_cli.collect import add_common_arguments, config_values, share
+from dlo_cli.flags import backend_of, engine_text, number_in, positive_int
+from dlo_env.errors import InputError
+
+#: Flags that set a field of ``TransitionCollectConfig`` of the same name (None: its default).
+CONFIG_FLAGS = ("wide_fraction", "wavy_fraction", "rim_fraction", "randomize", "test_cords",
+                "max_pegs", "grasp_weights", "push_fraction")
+
+
+def _range(text: str) -> tuple[str, tuple[float, float]]:
+    """``NAME=LOW:HIGH``: a cord parameter's range."""
+    name, _, bounds = text.partition("=")
+    low, _, high = bounds.partition(":")
+    try:
+        return name, (float(low), float(high))
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected NAME=LOW:HIGH (e.g. friction=0.2:0.6), "
+                                         f"got {text!r}") from None
+
+
+def add_arguments(parser: argparse.ArgumentParser) -> None:
+    """Flags of ``dlo collect transitions`` (defaults from ``TransitionCollectConfig``)."""
+    from dlo_env.cord import MAX_PEGS
+    from dlo_env.dataset.transitions import TransitionCollectConfig as Config
+
+    parser.add_argument("--num-transitions", type=positive_int, required=True,
+                        help="transitions to collect")
+    add_common_arguments(parser, Config, "of each episode", ", with --rim-fraction at most 1")
+    parser.add_argument("--wide-fraction", type=share, default=None,
+                        help="share of episodes starting from a shape of wide_cord_shape "
+                             f"(several bends, kinks; default {Config.wide_fraction:g}; starts "
+                             "of neither option are the environments' random starts)")
+    parser.add_argument("--wavy-fraction", type=share, default=None,
+                        help="share of episodes starting from a shape of wavy_cord_shape "
+                             "(smooth, bent both ways and several times; default "
+                             f"{Config.wavy_fraction:g}; with --wide-fraction at most 1)")
+    parser.add_argument("--rim-fraction", type=share, default=None,
+                        help="share of moves aimed at the nearest table edge (default "
+                             f"{Config.rim_fraction:g}; with --push-fraction at most 1)")
+    parser.add_argument("--randomize", type=_range, nargs="+", default=None,
+                        metavar="NAME=LOW:HIGH",
+                        help="draw every episode's cord, NAME one of length, "
+                             "bending_stiffness, friction, mass (dlo_env.randomize; each "
+                             "transition records its cord)")
+    parser.add_argument("--test-cords", action="store_true", default=None,
+                        help="every episode's cord is one of the held-out test cords "
+                             "(dlo_env.randomize.TEST_CORDS), to test a model of several "
+                             "cords; not with --randomize")
+    parser.add_argument("--max-pegs", type=number_in(int, 0, MAX_PEGS, expected="an integer "
+                                                     f"from 0 to {MAX_PEGS}"),
+                        default=None, metavar="N",
+                        help="every episode places 0 to N pegs near its start, and its moves "
+                             "run around them (each transition records its pegs; default 0: "
+                             "an empty table)")
 
 
 def run(args: argparse.Namespace) -> int:
@@ -16,46 +69,19 @@ def run(args: argparse.Namespace) -> int:
     import numpy as np
 
     from dlo_cli.chunked_run import run_chunked
-    from dlo_cli.collect import SHAPE_FLAGS, SHARED_FLAGS, TRANSITION_FLAGS, refuse_other_kind
     from dlo_env.dataset.transitions import (
         GRASP_NAMES,
         TransitionCollectConfig,
         collect_transitions,
     )
 
-    if args.num_transitions is None:
-        raise ValueError("--num-transitions is required with --kind transitions")
-    refuse_other_kind(args, SHAPE_FLAGS, "shapes")
-    if args.grasp_weights is not None and sum(args.grasp_weights) <= 0:
-        raise ValueError(f"--grasp-weights must have a positive sum, got {args.grasp_weights}")
-    push = TransitionCollectConfig.push_fraction if args.push_fraction is None \
-        else args.push_fraction
-    rim = TransitionCollectConfig.rim_fraction if args.rim_fraction is None else args.rim_fraction
-    if rim + push > 1:
-        raise ValueError("--rim-fraction and --push-fraction (defaults "
-                         f"{TransitionCollectConfig.rim_fraction:g} and "
-                         f"{TransitionCollectConfig.push_fraction:g}) must have a sum <= 1, got "
-                         f"{rim:g} and {push:g}")
-    if (args.wide_fraction or 0) + (args.wavy_fraction or 0) > 1:
-        raise ValueError("--wide-fraction and --wavy-fraction must have a sum <= 1, got "
-                         f"{args.wide_fraction:g} and {args.wavy_fraction:g}")
-    if args.test_cords and args.randomize:
-        raise ValueError("--test-cords and --randomize are two ways to choose the cords; give "
-                         "one")
-    given = {k: getattr(args, k) for k in (*TRANSITION_FLAGS[1:], *SHARED_FLAGS)
-             if getattr(args, k) is not None}
-    if "randomize" in given:
+    given = config_values(args, CONFIG_FLAGS)
+    if "randomize" in given:  # NAME=LOW:HIGH pairs, as the config's dict
         names = [name for name, _ in given["randomize"]]
         if len(set(names)) < len(names):
-            raise ValueError(f"--randomize names a parameter twice: {' '.join(names)}")
+            raise InputError(f"--randomize names a parameter twice: {' '.join(names)}")
         given["randomize"] = dict(given["randomize"])
-    try:
-        config = TransitionCollectConfig(seed=args.seed, **{
-            k: tuple(v) if isinstance(v, list) else v for k, v in given.items()})
-    except ValueError as exc:
-        if "randomize" not in str(exc):
-            raise
-        raise ValueError(f"--{exc}") from None
+    config = TransitionCollectConfig(seed=args.seed, **given)
     result = run_chunked(
         args, lambda progress: collect_transitions(
             args.out, args.num_transitions, config, workers=args.workers, resume=args.resume,

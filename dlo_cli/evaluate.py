@@ -21,6 +21,7 @@ from dlo_cli.flags import (
     number_in,
     writable_folder,
 )
+from dlo_env.errors import InputError
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
@@ -123,10 +124,10 @@ def run(args: argparse.Namespace) -> int:
     specs = [agent_spec(agent) for agent in args.agent]
     for spec in specs:  # every row's agent must act in --env before the first row runs
         if args.env_id not in spec.environments:
-            raise ValueError(f"--agent {spec.name} acts in {', '.join(spec.environments)}, "
+            raise InputError(f"--agent {spec.name} acts in {', '.join(spec.environments)}, "
                              f"not in --env {args.env_id}")
     if args.suite and args.episodes > SPLIT_SIZES[args.split]:
-        raise ValueError(f"--episodes must be at most the {SPLIT_SIZES[args.split]} tasks of "
+        raise InputError(f"--episodes must be at most the {SPLIT_SIZES[args.split]} tasks of "
                          f"a suite's {args.split} split, got {args.episodes}")
     backend = backend_of(args)
     settings = {k: v for k, v in vars(args).items() if not k.startswith("_")}

@@ -12,6 +12,7 @@ from __future__ import annotations
 import argparse
 
 from dlo_cli.flags import add_env, existing_path, positive_int, writable_folder
+from dlo_env.errors import InputError
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
@@ -33,7 +34,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help="skip the demonstrations (export only --transitions)")
     parser.add_argument("--transitions", default=None, metavar="FILE",
                         type=existing_path("transitions"),
-                        help="also export this `dlo collect --kind transitions` file")
+                        help="also export this `dlo collect transitions` file")
     parser.add_argument("--name", default="transitions",
                         help="dataset name of the transition data: dlo/endpoint/NAME-v0")
 
@@ -51,7 +52,7 @@ def run(args: argparse.Namespace) -> int:
     from dlo_env.progress import progress_bar
 
     if args.no_demonstrations and args.transitions is None:
-        raise ValueError("--no-demonstrations leaves nothing to export; give --transitions FILE")
+        raise InputError("--no-demonstrations leaves nothing to export; give --transitions FILE")
     # Everything that can be refused is, before the first episode is recorded.
     args.env, args.suite = list(dict.fromkeys(args.env)), list(dict.fromkeys(args.suite))
     planned = [] if args.no_demonstrations else [
@@ -59,12 +60,12 @@ def run(args: argparse.Namespace) -> int:
     if args.transitions is not None:
         try:
             check_name(args.name)
-        except ValueError as exc:
-            raise ValueError(f"--name: {exc}") from None
+        except InputError as exc:
+            raise InputError(f"--name: {exc}") from None
         try:
             planned += transitions_ids(args.transitions, args.name)
-        except ValueError as exc:
-            raise ValueError(f"--transitions: {exc}") from None
+        except InputError as exc:
+            raise InputError(f"--transitions: {exc}") from None
     if args.root is not None:
         writable_folder(args.root, "--root")
     check_absent(planned, args.root)

@@ -5,6 +5,7 @@ from __future__ import annotations
 import argparse
 
 from dlo_cli.flags import add_device, add_seed, existing_path, positive_int, writable_folder
+from dlo_env.errors import InputError
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
@@ -58,10 +59,10 @@ def run(args: argparse.Namespace) -> int:
 
     data_path = args.data or recorded("data")
     if not data_path:
-        raise ValueError("--data is required: the model does not record its training data file")
+        raise InputError("--data is required: the model does not record its training data file")
     missing = [p for p in data_path if not os.path.exists(p)]
     if missing and not args.data:
-        raise ValueError(f"--data is required: training data the model records "
+        raise InputError(f"--data is required: training data the model records "
                          f"({', '.join(missing)}) is not here; give those shapes, or the "
                          "shapes it should keep representing")
     train_shapes, _ = load_labelled_shapes(data_path, name="--data")
@@ -75,7 +76,7 @@ def run(args: argparse.Namespace) -> int:
     config = replace(config, **steps)
     out = Path(args.out) if args.out else default_out("finetune")
     if (out / MODEL_FILE).exists():
-        raise ValueError(f"--out {str(out)!r} holds a model ({MODEL_FILE}), which fine-tuning "
+        raise InputError(f"--out {str(out)!r} holds a model ({MODEL_FILE}), which fine-tuning "
                          "would replace: choose another folder")
     writable_folder(out)
     print(f"fine-tuning {args.model} on {len(shapes)} shapes from {args.shapes}; "

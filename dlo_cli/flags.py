@@ -13,6 +13,7 @@ from collections.abc import Callable, Iterable
 from typing import Any
 
 from dlo_bench.evaluation import DEFAULT_EPISODES
+from dlo_env.errors import InputError
 
 #: Largest seed: ``numpy.random.seed``, which Stable-Baselines3 calls, takes 32-bit seeds.
 MAX_SEED = 2**32 - 1
@@ -138,10 +139,10 @@ def writable_folder(path: Any, flag: str = "--out") -> Any:
     from pathlib import Path
 
     if Path(path).exists() and not Path(path).is_dir():
-        raise ValueError(f"{flag} must be a folder, got the file {str(path)!r}")
+        raise InputError(f"{flag} must be a folder, got the file {str(path)!r}")
     reason = _cannot_write_in(Path(path))
     if reason:
-        raise ValueError(f"{flag} must be a folder this user can write, got {str(path)!r} "
+        raise InputError(f"{flag} must be a folder this user can write, got {str(path)!r} "
                          f"({reason})")
     return path
 
@@ -152,10 +153,10 @@ def writable_file(path: Any, flag: str = "--out") -> Any:
     from pathlib import Path
 
     if Path(path).is_dir():
-        raise ValueError(f"{flag} must be a file name, got the folder {str(path)!r}")
+        raise InputError(f"{flag} must be a file name, got the folder {str(path)!r}")
     reason = _cannot_write_in(Path(path).parent)
     if reason:
-        raise ValueError(f"{flag} must be a file in a folder this user can write, got "
+        raise InputError(f"{flag} must be a file in a folder this user can write, got "
                          f"{str(path)!r} ({reason})")
     return path
 
@@ -351,7 +352,7 @@ def backend_of(args: argparse.Namespace) -> Any:
     """The backend the flags of :func:`add_backend` ask for (None: the local process pool)."""
     if args.backend == "local":
         if args.address is not None:
-            raise ValueError("--address needs --backend ray")
+            raise InputError("--address needs --backend ray")
         return None
     from dlo_env.dataset.ray_backend import RayBackend
 

@@ -13,6 +13,7 @@ from gymnasium.envs.registration import register, registry
 
 from dlo_env import goals, randomize
 from dlo_env.cord import Cord, CordParams
+from dlo_env.errors import InputError
 from dlo_env.shapes import (
     COSINE_THRESHOLD,
     TABLE_HALF,
@@ -33,6 +34,7 @@ __all__ = [
     "TABLE_HALF",
     "Cord",
     "CordParams",
+    "InputError",
     "bead_share",
     "direction_free_error",
     "error",

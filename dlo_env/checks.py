@@ -9,14 +9,17 @@ from __future__ import annotations
 from collections.abc import Callable
 from numbers import Integral, Real
 
+from dlo_env.errors import InputError
+
 
 def check_fields(config: object, names: tuple[str, ...], ok: Callable[[object], bool],
                  expected: str) -> None:
-    """Raise ``ValueError`` for the first field of ``names`` whose value fails ``ok``."""
+    """Raise ``InputError`` for the first field of ``names`` whose value fails ``ok``."""
     for name in names:
         value = getattr(config, name)
         if not ok(value):
-            raise ValueError(f"{type(config).__name__}.{name} must be {expected}, got {value!r}")
+            raise InputError(f"{type(config).__name__}.{name} must be {expected}, got {value!r}",
+                             field=name)
 
 
 def _number(value: object) -> bool:

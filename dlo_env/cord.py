@@ -28,6 +28,7 @@ import pymunk
 import pymunk.batch
 
 from dlo_env.checks import fractions, non_negative, positive, positive_ints
+from dlo_env.errors import InputError
 from dlo_env.shapes import TABLE_HALF, at_segment_length, validate_shape
 
 Grasp = Literal["head", "tail", "both", "none"]
@@ -102,7 +103,7 @@ class CordParams:
         non_negative(self, "friction", "bending_stiffness", "bending_damping", "rim_margin")
         fractions(self, "velocity_retention", "joint_error_bias", "max_span")
         if self.n_points < 3:
-            raise ValueError(f"CordParams.n_points must be >= 3, got {self.n_points!r}")
+            raise InputError(f"CordParams.n_points must be >= 3, got {self.n_points!r}")
         positive_ints(self, "substeps", "iterations")
 
     @property
@@ -118,15 +119,15 @@ def check_pegs(pegs: object, name: str = "pegs", radius: float = 0.0) -> np.ndar
     if arr.size == 0:
         return np.zeros((0, 2))
     if arr.ndim != 2 or arr.shape[1] != 2:
-        raise ValueError(f"{name} must be an array of peg centres, shape (k, 2) metres, "
+        raise InputError(f"{name} must be an array of peg centres, shape (k, 2) metres, "
                          f"got shape {arr.shape}")
     if not np.isfinite(arr).all():
         bad = arr[~np.isfinite(arr).all(axis=1)][0]
-        raise ValueError(f"{name} must be finite, got {bad.tolist()}")
+        raise InputError(f"{name} must be finite, got {bad.tolist()}")
     off = (np.abs(arr) + radius >= TABLE_HALF).any(axis=1)
     if off.any():
         less = f" less the radius {radius} m" if radius else ""
-        raise ValueError(f"{name} must lie on the table (|x|, |y| < {TABLE_HALF} m{less}), "
+        raise InputError(f"{name} must lie on the table (|x|, |y| < {TABLE_HALF} m{less}), "
                          f"got {arr[off][0].tolist()}")
     return arr
 
@@ -151,7 +152,7 @@ def check_not_crossing(shape: np.ndarray, pegs: np.ndarray, peg_radius: float, n
     inside a peg; one resting against a peg (closer than ``LINK_RADIUS``, as the simulator
     leaves it) is fine."""
     if len(pegs) and peg_clearance(shape, pegs, peg_radius) < 0:
-        raise ValueError(f"{name} crosses a peg (its centre line passes inside one)")
+        raise InputError(f"{name} crosses a peg (its centre line passes inside one)")
 
 
 def peg_contact(starts: np.ndarray, moves: np.ndarray, pegs: np.ndarray, reach: float
@@ -227,7 +228,7 @@ def reachable_targets(targets: np.ndarray, params: CordParams | None = None, *,
             out[..., 1, :] = np.where(too_far, mid + half_gap, out[..., 1, :])
     if pegs is not None and np.size(pegs):
         if starts is None:
-            raise ValueError("starts must be given with pegs: a move stops where it meets one")
+            raise InputError("starts must be given with pegs: a move stops where it meets one")
         starts = np.asarray(starts, dtype=np.float64)
         share = peg_contact(starts, out - starts, np.asarray(pegs, dtype=np.float64),
                             peg_radius + LINK_RADIUS + PEG_GUARD)
@@ -259,7 +260,7 @@ class Cord:
         if not (isinstance(peg_radius, (int, float, np.floating))
                 and not isinstance(peg_radius, bool) and math.isfinite(peg_radius)
                 and 0 < peg_radius < TABLE_HALF):
-            raise ValueError(f"peg_radius must be a number of metres in (0, {TABLE_HALF}), "
+            raise InputError(f"peg_radius must be a number of metres in (0, {TABLE_HALF}), "
                              f"got {peg_radius!r}")
         self.peg_radius = float(peg_radius)
         self._pegs = check_pegs(pegs, radius=self.peg_radius)
@@ -402,7 +403,7 @@ class Cord:
     @staticmethod
     def _check_grasp(grasp: str) -> None:
         if grasp not in _GRASPS:
-            raise ValueError(f"grasp must be one of {_GRASPS}, got {grasp!r}")
+            raise InputError(f"grasp must be one of {_GRASPS}, got {grasp!r}")
 
     @property
     def grasp(self) -> Grasp:
@@ -505,7 +506,7 @@ class Cord:
                 moves[i] = np.asarray(d, dtype=np.float64).reshape(2)
         if not np.isfinite(moves).all():
             bad = int(np.flatnonzero(~np.isfinite(moves).all(axis=1))[0])
-            raise ValueError(f"{names[bad]} displacement must be finite, got "
+            raise InputError(f"{names[bad]} displacement must be finite, got "
                              f"{moves[bad].tolist()}")
         if not names:
             return names, starts, starts

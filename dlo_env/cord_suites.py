@@ -15,6 +15,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from dlo_env.cord import CordParams
+from dlo_env.errors import InputError
 from dlo_env.randomize import TEST_CORDS, draw_train_cord, test_cord
 from dlo_env.tasks import SPLIT_SIZES, Task, make_task, suite_seeds
 
@@ -45,9 +46,9 @@ class CordTask:
 
 def _check(suite: str, split: str) -> None:
     if suite not in CORD_SUITES:
-        raise ValueError(f"suite must be one of {tuple(CORD_SUITES)}, got {suite!r}")
+        raise InputError(f"suite must be one of {tuple(CORD_SUITES)}, got {suite!r}")
     if split not in SPLIT_SIZES:
-        raise ValueError(f"split must be one of {tuple(SPLIT_SIZES)}, got {split!r}")
+        raise InputError(f"split must be one of {tuple(SPLIT_SIZES)}, got {split!r}")
 
 
 def test_cord_index(index: int) -> int:
@@ -68,7 +69,7 @@ def cord_task(suite: str, split: str, index: int, grasp: str = "head") -> CordTa
     seeds = suite_seeds(f"linear-{CORD_SUITES[suite]}", split)
     if not (isinstance(index, (int, np.integer)) and not isinstance(index, bool)
             and 0 <= index < len(seeds)):
-        raise ValueError(f"index must be an int in 0..{len(seeds) - 1}, got {index!r}")
+        raise InputError(f"index must be an int in 0..{len(seeds) - 1}, got {index!r}")
     seed = int(seeds[index])
     if split == "test":
         cord = test_cord_index(index)
@@ -94,7 +95,7 @@ def load_cord_suite(suite: str, split: str = "test", *, grasp: str = "head",
     count = SPLIT_SIZES[split]
     if limit is not None:
         if not (isinstance(limit, int) and not isinstance(limit, bool) and limit >= 0):
-            raise ValueError(f"limit must be an int >= 0 or None, got {limit!r}")
+            raise InputError(f"limit must be an int >= 0 or None, got {limit!r}")
         count = min(count, limit)
     return [cord_task(suite, split, i, grasp) for i in range(count)]
 

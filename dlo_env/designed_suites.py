@@ -22,6 +22,7 @@ import numpy as np
 
 from dlo_env import goals
 from dlo_env.cord import CordParams
+from dlo_env.errors import InputError
 from dlo_env.tasks import SPLIT_SIZES, random_start
 
 #: Suite -> grasp -> family -> parameter -> (low, high) (ints: the values to choose from).
@@ -90,10 +91,10 @@ def designed_task(suite: str, seed: int, grasp: str = "head",
         ValueError: For an unknown suite or a grasp the suite has no families for.
     """
     if suite not in DESIGNED_SUITES:
-        raise ValueError(f"suite must be one of {tuple(DESIGNED_SUITES)}, got {suite!r}")
+        raise InputError(f"suite must be one of {tuple(DESIGNED_SUITES)}, got {suite!r}")
     families = DESIGNED_SUITES[suite].get(grasp)
     if not families:
-        raise ValueError(f"grasp must be one of {tuple(DESIGNED_SUITES[suite])} for suite "
+        raise InputError(f"grasp must be one of {tuple(DESIGNED_SUITES[suite])} for suite "
                          f"{suite!r}, got {grasp!r}")
     rng = np.random.default_rng(seed)
     start = random_start(int(rng.integers(2**31 - 1)), grasp, params=params)
@@ -115,9 +116,9 @@ def designed_task(suite: str, seed: int, grasp: str = "head",
 def designed_suite_seeds(suite: str, split: str) -> np.ndarray:
     """The fixed seeds of a designed suite's split (train 200, test 50)."""
     if suite not in DESIGNED_SUITES:
-        raise ValueError(f"suite must be one of {tuple(DESIGNED_SUITES)}, got {suite!r}")
+        raise InputError(f"suite must be one of {tuple(DESIGNED_SUITES)}, got {suite!r}")
     if split not in SPLIT_SIZES:
-        raise ValueError(f"split must be one of {tuple(SPLIT_SIZES)}, got {split!r}")
+        raise InputError(f"split must be one of {tuple(SPLIT_SIZES)}, got {split!r}")
     index = list(DESIGNED_SUITES).index(suite)
     return _SEED_BASE + 100_000 * index + _SPLIT_OFFSETS[split] + np.arange(SPLIT_SIZES[split])
 
@@ -129,6 +130,6 @@ def load_designed_suite(suite: str, split: str = "test", *, grasp: str = "head",
     seeds = designed_suite_seeds(suite, split)
     if limit is not None:
         if not (isinstance(limit, int) and limit >= 0):
-            raise ValueError(f"limit must be an int >= 0 or None, got {limit!r}")
+            raise InputError(f"limit must be an int >= 0 or None, got {limit!r}")
         seeds = seeds[:limit]
     return [designed_task(suite, int(s), grasp) for s in seeds]

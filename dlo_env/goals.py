@@ -35,6 +35,7 @@ from collections.abc import Sequence
 import numpy as np
 
 from dlo_env.cord import Cord, CordParams
+from dlo_env.errors import InputError
 from dlo_env.shapes import TABLE_HALF, error, on_table
 from dlo_env.tasks import GRASP_ENDS, REST_SPEED, SPAN_MARGIN
 
@@ -124,7 +125,7 @@ def _resampled(drawing: np.ndarray, n_points: int) -> np.ndarray:
         else:
             low, best = step, points
     if best is None or float(np.linalg.norm(best[-1] - end)) > 0.01 * low:
-        raise ValueError("points must draw a line the cord can follow with its segments: it "
+        raise InputError("points must draw a line the cord can follow with its segments: it "
                          "folds back on itself in less than one segment's length")
     best[-1] = end  # within the bisection's last bit of the end
     return best
@@ -167,35 +168,35 @@ def polyline(
     """
     p = params if params is not None else CordParams()
     if not isinstance(p, CordParams):
-        raise ValueError(f"params must be a CordParams or None, got {type(p).__name__}")
+        raise InputError(f"params must be a CordParams or None, got {type(p).__name__}")
     if grasp not in GRASP_ENDS:
-        raise ValueError(f"grasp must be one of {tuple(GRASP_ENDS)}, got {grasp!r}")
+        raise InputError(f"grasp must be one of {tuple(GRASP_ENDS)}, got {grasp!r}")
     try:
         drawing = np.asarray(points, dtype=np.float64)
     except (TypeError, ValueError):
-        raise ValueError(f"points must be a (k, 2) array of numbers, got {points!r:.60}") from None
+        raise InputError(f"points must be a (k, 2) array of numbers, got {points!r:.60}") from None
     if drawing.ndim != 2 or drawing.shape[1] != 2 or len(drawing) < 2:
-        raise ValueError(f"points must be a (k, 2) polyline with k >= 2, got shape "
+        raise InputError(f"points must be a (k, 2) polyline with k >= 2, got shape "
                          f"{drawing.shape}")
     if not np.isfinite(drawing).all():
-        raise ValueError("points must be finite, got NaN or infinite coordinates")
+        raise InputError("points must be finite, got NaN or infinite coordinates")
     steps = np.linalg.norm(np.diff(drawing, axis=0), axis=1)
     total = float(steps.sum())
     if total <= 1e-12:
-        raise ValueError("points must not all be the same point: the drawing has no length")
+        raise InputError("points must not all be the same point: the drawing has no length")
     drawing = drawing[np.concatenate([[True], steps > 1e-9 * total])]  # repeats add nothing
     try:
         centre = np.asarray(center, dtype=np.float64)
     except (TypeError, ValueError):
         centre = np.full(1, np.nan)
     if centre.shape != (2,) or not np.isfinite(centre).all():
-        raise ValueError(f"center must be two finite numbers (metres), got {center!r}")
+        raise InputError(f"center must be two finite numbers (metres), got {center!r}")
     if not (_real(angle) and np.isfinite(angle)):
-        raise ValueError(f"angle must be a finite number (radians), got {angle!r}")
+        raise InputError(f"angle must be a finite number (radians), got {angle!r}")
     if not (_real(max_change) and max_change > 0):
-        raise ValueError(f"max_change must be a number > 0 (metres), got {max_change!r}")
+        raise InputError(f"max_change must be a number > 0 (metres), got {max_change!r}")
     if not (_integer(rounding) and 0 <= rounding <= 8):
-        raise ValueError(f"rounding must be an int in 0..8, got {rounding!r}")
+        raise InputError(f"rounding must be an int in 0..8, got {rounding!r}")
 
     drawing = _rounded(drawing, rounding)
     shape = _resampled(drawing, p.n_points)
@@ -204,12 +205,12 @@ def polyline(
     shape = shape @ np.array([[c, s], [-s, c]])  # turned counter-clockwise
     shape = shape - 0.5 * (shape.min(axis=0) + shape.max(axis=0)) + centre
     if not on_table(shape, TABLE_HALF - p.rim_margin):
-        raise ValueError(f"center and angle must keep the goal on the table (within "
+        raise InputError(f"center and angle must keep the goal on the table (within "
                          f"{TABLE_HALF - p.rim_margin:g} m of its centre on both axes, where "
                          f"the grippers reach), but it reaches {np.abs(shape).max():.3f} m")
     span = p.max_span * p.length - SPAN_MARGIN
     if grasp == "both" and np.linalg.norm(shape[-1] - shape[0]) >= span:
-        raise ValueError(f"points must keep the ends closer than the grippers' span ({span:.3f} "
+        raise InputError(f"points must keep the ends closer than the grippers' span ({span:.3f} "
                          f"m) for grasp='both', got {np.linalg.norm(shape[-1] - shape[0]):.3f} m")
     shape = shape.astype(np.float32)
     if not relax:
@@ -217,17 +218,17 @@ def polyline(
     cord = Cord(p, grasp=grasp)
     cord.reset(shape)
     if cord.settle(tolerance=REST_SPEED, max_time=RELAX_SECONDS) >= RELAX_SECONDS:
-        raise ValueError(f"points must draw a shape the cord can rest in: it still moves after "
+        raise InputError(f"points must draw a shape the cord can rest in: it still moves after "
                          f"{RELAX_SECONDS:g} s")
     rest = cord.shape
     change = float(error(rest, shape))
     if change > max_change:
-        raise ValueError(f"points must draw a shape the cord can rest in: it relaxes "
+        raise InputError(f"points must draw a shape the cord can rest in: it relaxes "
                          f"{100 * change:.1f} cm from the drawing (max_change "
                          f"{100 * max_change:.1f} cm): bend it less (wider, more rounding) or "
                          f"use a softer cord (params)")
     if not on_table(rest, TABLE_HALF):
-        raise ValueError("center and angle must keep the relaxed goal on the table")
+        raise InputError("center and angle must keep the relaxed goal on the table")
     return rest
 
 
@@ -240,21 +241,21 @@ def letter(name: str, **pose: object) -> np.ndarray:
     """
     key = str(name).upper()
     if key not in LETTERS:
-        raise ValueError(f"name must be one of the letters {', '.join(LETTERS)}, got {name!r}")
+        raise InputError(f"name must be one of the letters {', '.join(LETTERS)}, got {name!r}")
     return polyline(LETTERS[key], **pose)  # type: ignore[arg-type]
 
 
 def arc(span: float = np.pi, **pose: object) -> np.ndarray:
     """A circular arc turning by ``span`` radians (0 < span < 2 pi) as a goal."""
     if not (_real(span) and 0 < span < 2 * np.pi):
-        raise ValueError(f"span must be a number in (0, 2 pi) radians, got {span!r}")
+        raise InputError(f"span must be a number in (0, 2 pi) radians, got {span!r}")
     return polyline(_arc((0.0, 0.0), 1.0, 0.0, float(span), 64), **pose)  # type: ignore[arg-type]
 
 
 def s_curve(amplitude: float = 0.25, **pose: object) -> np.ndarray:
     """One full sine period, ``amplitude`` times its wavelength high, as a goal."""
     if not (_real(amplitude) and 0 < amplitude <= 1):
-        raise ValueError(f"amplitude must be a number in (0, 1], got {amplitude!r}")
+        raise InputError(f"amplitude must be a number in (0, 1], got {amplitude!r}")
     x = np.linspace(0.0, 1.0, 64)
     return polyline(np.stack([x, amplitude * np.sin(2 * np.pi * x)], axis=1),
                     **pose)  # type: ignore[arg-type]
@@ -263,9 +264,9 @@ def s_curve(amplitude: float = 0.25, **pose: object) -> np.ndarray:
 def zigzag(teeth: int = 3, amplitude: float = 0.25, **pose: object) -> np.ndarray:
     """``teeth`` triangular teeth, ``amplitude`` times a tooth's width high, as a goal."""
     if not (_integer(teeth) and 1 <= teeth <= 8):
-        raise ValueError(f"teeth must be an int in 1..8, got {teeth!r}")
+        raise InputError(f"teeth must be an int in 1..8, got {teeth!r}")
     if not (_real(amplitude) and 0 < amplitude <= 2):
-        raise ValueError(f"amplitude must be a number in (0, 2], got {amplitude!r}")
+        raise InputError(f"amplitude must be a number in (0, 2], got {amplitude!r}")
     x = np.arange(2 * teeth + 1) / 2.0
     y = amplitude * (np.arange(2 * teeth + 1) % 2)
     return polyline(np.stack([x, y], axis=1), **pose)  # type: ignore[arg-type]
@@ -274,7 +275,7 @@ def zigzag(teeth: int = 3, amplitude: float = 0.25, **pose: object) -> np.ndarra
 def spiral(turns: float = 1.25, **pose: object) -> np.ndarray:
     """An Archimedean spiral of ``turns`` turns from its centre outwards, as a goal."""
     if not (_real(turns) and 0.25 <= turns <= 3):
-        raise ValueError(f"turns must be a number in [0.25, 3], got {turns!r}")
+        raise InputError(f"turns must be a number in [0.25, 3], got {turns!r}")
     t = np.linspace(0.0, 2 * np.pi * turns, 128)
     radius = 0.3 + t  # a start off the centre: the innermost turn is not sharper than the cord
     return polyline(np.stack([radius * np.cos(t), radius * np.sin(t)], axis=1),

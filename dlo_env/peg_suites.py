@@ -27,6 +27,7 @@ import numpy as np
 
 from dlo_env.atomic import write_text_atomic
 from dlo_env.cord import Cord, peg_clearance
+from dlo_env.errors import InputError
 from dlo_env.shapes import error
 from dlo_env.tasks import (
     SPLIT_SIZES,
@@ -63,9 +64,9 @@ GRASPS = {"head": "endpoint", "both": "dual-endpoint"}
 def peg_suite_seeds(suite: str, split: str) -> np.ndarray:
     """The fixed task seeds of a peg suite's split."""
     if suite not in PEG_SUITES:
-        raise ValueError(f"suite must be one of {tuple(PEG_SUITES)}, got {suite!r}")
+        raise InputError(f"suite must be one of {tuple(PEG_SUITES)}, got {suite!r}")
     if split not in SPLIT_SIZES:
-        raise ValueError(f"split must be one of {tuple(SPLIT_SIZES)}, got {split!r}")
+        raise InputError(f"split must be one of {tuple(SPLIT_SIZES)}, got {split!r}")
     base = _PEG_SEED + 100_000 * PEG_SUITES[suite] + _SPLIT_OFFSETS[split]
     return base + np.arange(SPLIT_SIZES[split])
 
@@ -88,7 +89,7 @@ def load_peg_suite(suite: str, split: str = "test", *, grasp: str = "head",
     seeds = peg_suite_seeds(suite, split)
     if limit is not None:
         if not (isinstance(limit, int) and not isinstance(limit, bool) and limit >= 0):
-            raise ValueError(f"limit must be an int >= 0 or None, got {limit!r}")
+            raise InputError(f"limit must be an int >= 0 or None, got {limit!r}")
         seeds = seeds[:limit]
     return [make_task(int(s), PEG_SUITES[suite], grasp, pegs=peg_count(i))
             for i, s in enumerate(seeds)]
@@ -139,11 +140,11 @@ def find_route_seeds(suite: str, split: str, grasp: str = "head",
 
 def _check_route(suite: str, split: str, grasp: str) -> None:
     if suite not in ROUTE_SUITES:
-        raise ValueError(f"suite must be one of {tuple(ROUTE_SUITES)}, got {suite!r}")
+        raise InputError(f"suite must be one of {tuple(ROUTE_SUITES)}, got {suite!r}")
     if split not in SPLIT_SIZES:
-        raise ValueError(f"split must be one of {tuple(SPLIT_SIZES)}, got {split!r}")
+        raise InputError(f"split must be one of {tuple(SPLIT_SIZES)}, got {split!r}")
     if grasp not in GRASPS:
-        raise ValueError(f"grasp must be one of {tuple(GRASPS)}, got {grasp!r}")
+        raise InputError(f"grasp must be one of {tuple(GRASPS)}, got {grasp!r}")
 
 
 @functools.lru_cache(maxsize=1)
@@ -171,7 +172,7 @@ def load_route_suite(suite: str, split: str = "test", *, grasp: str = "head",
     seeds = route_seeds(suite, split, grasp)
     if limit is not None:
         if not (isinstance(limit, int) and not isinstance(limit, bool) and limit >= 0):
-            raise ValueError(f"limit must be an int >= 0 or None, got {limit!r}")
+            raise InputError(f"limit must be an int >= 0 or None, got {limit!r}")
         seeds = seeds[:limit]
     base = _ROUTE_SEED + 100_000 * ROUTE_SUITES[suite] + _SPLIT_OFFSETS[split]
     return [make_task(s, ROUTE_SUITES[suite], grasp, pegs=peg_count(s - base)) for s in seeds]

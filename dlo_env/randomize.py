@@ -19,6 +19,7 @@ from dataclasses import replace
 import numpy as np
 
 from dlo_env.cord import CordParams
+from dlo_env.errors import InputError
 
 #: Parameter -> (lowest, highest) value a range may reach: the simulator is tested stable there
 #: (at every corner, full-speed actions stretch a segment by under 4 %; a short, stiff, light
@@ -43,7 +44,7 @@ DEFAULT_RANGES: dict[str, tuple[float, float]] = {
 #: Cords held out for testing a model of several cords, inside ``DEFAULT_RANGES`` and away
 #: from the default cord: a cord a third as stiff and one three times as heavy as the default
 #: (the cases users report), and four that change every parameter at once. Training leaves
-#: out the cords near them (:func:`near_test_cords`); ``dlo collect --kind transitions --cords
+#: out the cords near them (:func:`near_test_cords`); ``dlo collect transitions --cords
 #: test`` collects moves of these cords alone.
 TEST_CORDS: tuple[dict[str, float], ...] = (
     {"length": 1.0, "bending_stiffness": 0.0033, "friction": 0.4, "mass": 0.1},
@@ -93,24 +94,25 @@ def check_randomize(randomize: object, name: str = "randomize") -> dict[str, tup
     """``randomize`` as a dict of parameter -> ``(low, high)`` floats, or a one-line
     ``ValueError`` naming what is wrong."""
     if not isinstance(randomize, Mapping):
-        raise ValueError(f"{name} must be a dict of cord parameter -> (low, high), got "
-                         f"{type(randomize).__name__}")
+        raise InputError(f"{name} must be a dict of cord parameter -> (low, high), got "
+                         f"{type(randomize).__name__}", field=name)
     out = {}
     for key, bounds in randomize.items():
         if key not in SUPPORTED:
-            raise ValueError(f"{name} keys must be some of {tuple(SUPPORTED)}, got {key!r}")
+            raise InputError(f"{name} keys must be some of {tuple(SUPPORTED)}, got {key!r}",
+                             field=name)
         try:
             low, high = bounds
         except (TypeError, ValueError):
-            raise ValueError(f"{name}[{key!r}] must be a pair (low, high), got {bounds!r}") \
-                from None
+            raise InputError(f"{name}[{key!r}] must be a pair (low, high), got {bounds!r}",
+                             field=name) from None
         if not (_finite(low) and _finite(high) and low <= high):
-            raise ValueError(f"{name}[{key!r}] must be finite numbers with low <= high, got "
-                             f"{bounds!r}")
+            raise InputError(f"{name}[{key!r}] must be finite numbers with low <= high, got "
+                             f"{bounds!r}", field=name)
         lo, hi = SUPPORTED[key]
         if low < lo or high > hi:
-            raise ValueError(f"{name}[{key!r}] must lie within {lo}..{hi} (where the simulator "
-                             f"is tested stable), got {bounds!r}")
+            raise InputError(f"{name}[{key!r}] must lie within {lo}..{hi} (where the simulator "
+                             f"is tested stable), got {bounds!r}", field=name)
         out[key] = (float(low), float(high))
     return out
 
@@ -121,9 +123,9 @@ def check_params(params: object, base: CordParams, name: str = "options['params'
     explicitly, like the constructor's, is the user's choice: ``SUPPORTED`` bounds only the
     ranges drawn from); else a one-line ``ValueError``."""
     if not isinstance(params, CordParams):
-        raise ValueError(f"{name} must be a dlo_env.CordParams, got {type(params).__name__}")
+        raise InputError(f"{name} must be a dlo_env.CordParams, got {type(params).__name__}")
     if params.n_points != base.n_points:
-        raise ValueError(f"{name} must keep the environment's n_points={base.n_points} (the "
+        raise InputError(f"{name} must keep the environment's n_points={base.n_points} (the "
                          f"observation's size), got {params.n_points}")
     return params
 

@@ -10,6 +10,7 @@ from collections.abc import Sequence
 
 import numpy as np
 
+from dlo_env.errors import InputError
 from dlo_env.shapes import TABLE_HALF
 
 _FLOOR = (60, 60, 60)
@@ -36,7 +37,7 @@ class CordRenderer:
 
     def __init__(self, render_mode: str, size: int = 512, fps: int = 10) -> None:
         if render_mode not in ("rgb_array", "human"):
-            raise ValueError(f"render_mode must be 'rgb_array' or 'human', got {render_mode!r}")
+            raise InputError(f"render_mode must be 'rgb_array' or 'human', got {render_mode!r}")
         try:
             import pygame
         except ImportError as exc:  # pragma: no cover - depends on the installation

@@ -13,6 +13,8 @@ from collections.abc import Callable
 
 import numpy as np
 
+from dlo_env.errors import InputError
+
 #: Half the side of the square table, metres: the table is ``[-TABLE_HALF, TABLE_HALF]^2``.
 TABLE_HALF = 1.0
 #: The paper's cord-like threshold on the cosine of consecutive segment directions.
@@ -42,7 +44,7 @@ def unflatten(shapes: object, n_points: int | None = None, dtype: type = np.floa
 def _points(shapes: object) -> np.ndarray:
     arr = unflatten(shapes)
     if arr.ndim < 2 or arr.shape[-1] != 2:
-        raise ValueError(f"shapes must be (..., n, 2) points or flat (2n,) / (B, 2n), got shape "
+        raise InputError(f"shapes must be (..., n, 2) points or flat (2n,) / (B, 2n), got shape "
                          f"{arr.shape}")
     return arr
 
@@ -105,11 +107,11 @@ def bead_share(a: np.ndarray, goal: np.ndarray,
         tolerance: Metres.
     """
     if isinstance(tolerance, bool) or not (isinstance(tolerance, numbers.Real) and tolerance >= 0):
-        raise ValueError(f"tolerance must be a number >= 0 (metres), got {tolerance!r}")
+        raise InputError(f"tolerance must be a number >= 0 (metres), got {tolerance!r}")
     pts = _points(a)[..., :, None, :]  # (..., n, 1, 2)
     g = _points(goal)
     if g.shape[-2] < 2:
-        raise ValueError(f"goal must have at least 2 points (a polyline), got {g.shape[-2]}")
+        raise InputError(f"goal must have at least 2 points (a polyline), got {g.shape[-2]}")
     g = g[..., None, :, :]  # (..., 1, m, 2)
     start, seg = g[..., :-1, :], np.diff(g, axis=-2)  # (..., 1, m-1, 2)
     length2 = np.maximum((seg * seg).sum(axis=-1), 1e-18)
@@ -155,7 +157,7 @@ def is_cord_like(shapes: np.ndarray, threshold: float = COSINE_THRESHOLD) -> np.
         A bool for one shape, a bool array ``(B,)`` for a batch.
     """
     if not -1.0 <= threshold <= 1.0:
-        raise ValueError(f"threshold must be in [-1, 1], got {threshold!r}")
+        raise InputError(f"threshold must be in [-1, 1], got {threshold!r}")
     ok = (turning_cosines(shapes) >= threshold).all(axis=-1)
     return bool(ok) if np.ndim(ok) == 0 else ok
 
@@ -195,12 +197,12 @@ def as_points(
     if arr.shape == (2 * n_points,):
         arr = arr.reshape(n_points, 2)
     if arr.shape != (n_points, 2):
-        raise ValueError(
+        raise InputError(
             f"{name} must have shape ({n_points}, 2) or ({2 * n_points},){context}, "
             f"got {arr.shape}"
         )
     if not np.isfinite(arr).all():
-        raise ValueError(f"{name} must be finite, got NaN or infinite coordinates")
+        raise InputError(f"{name} must be finite, got NaN or infinite coordinates")
     return arr
 
 
@@ -227,7 +229,7 @@ def validate_shape(
     """
     arr = as_points(shape, n_points, name, dtype=np.float64)
     if not on_table(arr):
-        raise ValueError(
+        raise InputError(
             f"{name} must lie on the table [-{TABLE_HALF}, {TABLE_HALF}]^2 m, "
             f"got coordinates up to {np.abs(arr).max():.3f} m"
         )
@@ -235,7 +237,7 @@ def validate_shape(
     seg = segment_lengths(arr)
     worst = float(np.abs(seg / rest - 1.0).max())
     if worst > tolerance:
-        raise ValueError(
+        raise InputError(
             f"{name} must be a cord of length {length} m: every segment within "
             f"{tolerance:.0%} of {rest:.4f} m, got segments from {seg.min():.4f} to "
             f"{seg.max():.4f} m"
@@ -363,7 +365,7 @@ def random_cord_shapes(
 def _check_threshold(threshold: float) -> None:
     """The cord-like filter's least cosine must be in ``[-1, 1)``."""
     if not -1.0 <= threshold < 1.0:
-        raise ValueError(f"threshold must be in [-1, 1), got {threshold!r}")
+        raise InputError(f"threshold must be in [-1, 1), got {threshold!r}")
 
 
 def _first_placed(rng: np.random.Generator, turns: Callable[[], np.ndarray], segment: float,
@@ -420,7 +422,7 @@ def wide_cord_shape(
     """
     _check_threshold(threshold)
     if not kinks >= 0:
-        raise ValueError(f"kinks must be a number >= 0, got {kinks!r}")
+        raise InputError(f"kinks must be a number >= 0, got {kinks!r}")
     segment = length / (n_points - 1)
     joints = n_points - 2
     s = (np.arange(joints) + 0.5) / joints
@@ -473,7 +475,7 @@ def wavy_cord_shape(
     _check_threshold(threshold)
     if isinstance(max_modes, bool) or not (isinstance(max_modes, (int, np.integer))
                                            and max_modes >= 1):
-        raise ValueError(f"max_modes must be an int >= 1, got {max_modes!r}")
+        raise InputError(f"max_modes must be an int >= 1, got {max_modes!r}")
     segment = length / (n_points - 1)
     s = (np.arange(n_points - 2) + 0.5) / (n_points - 2)
 
@@ -522,7 +524,7 @@ def analytic_shape(
         float32 ``(n_points, 2)``.
     """
     if kind not in ANALYTIC_KINDS:
-        raise ValueError(f"kind must be one of {ANALYTIC_KINDS}, got {kind!r}")
+        raise InputError(f"kind must be one of {ANALYTIC_KINDS}, got {kind!r}")
     segment = length / (n_points - 1)
     s = (np.arange(n_points - 2) + 0.5) / (n_points - 2)  # joint positions, 0..1
     kmax = max_curvature

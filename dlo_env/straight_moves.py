@@ -4,7 +4,7 @@ The wrapper's action is the displacement of each held end in metres (head dx, dy
 dx, dy when both are held). A step carries it out exactly as tasks and the transition data do:
 :func:`dlo_env.tasks.split_move` actions through the environment's own ``step``, then zero
 actions until the cord is at rest (at most ``MAX_SETTLE_ACTIONS``), so a step of this wrapper is
-one transition of ``dlo collect --kind transitions``. The environment's time limit still counts
+one transition of ``dlo collect transitions``. The environment's time limit still counts
 its own steps.
 
 Example:
@@ -19,6 +19,7 @@ from typing import Any
 import gymnasium as gym
 import numpy as np
 
+from dlo_env.errors import InputError
 from dlo_env.tasks import MAX_SETTLE_ACTIONS, at_rest, split_move
 
 
@@ -32,7 +33,7 @@ class StraightMoves(gym.Wrapper, gym.utils.RecordConstructorArgs):
 
     def __init__(self, env: gym.Env, max_move: float = 0.5) -> None:
         if not (isinstance(max_move, (int, float)) and max_move > 0):
-            raise ValueError(f"max_move must be a number > 0 (metres), got {max_move!r}")
+            raise InputError(f"max_move must be a number > 0 (metres), got {max_move!r}")
         gym.utils.RecordConstructorArgs.__init__(self, max_move=max_move)
         super().__init__(env)
         self.max_move = float(max_move)
@@ -47,7 +48,7 @@ class StraightMoves(gym.Wrapper, gym.utils.RecordConstructorArgs):
         """
         move = np.asarray(action, dtype=np.float64)
         if move.shape != self.action_space.shape or not np.isfinite(move).all():
-            raise ValueError(f"action must be a finite array of shape "
+            raise InputError(f"action must be a finite array of shape "
                              f"{self.action_space.shape}, got {move.tolist()}")
         base = self.env.unwrapped
         zero = np.zeros(self.action_space.shape, dtype=np.float32)

@@ -37,6 +37,7 @@ from dlo_env.cord import (
     peg_clearance,
 )
 from dlo_env.dataset.npz_file import open_npz
+from dlo_env.errors import InputError
 from dlo_env.shapes import (
     TABLE_HALF,
     error,
@@ -103,7 +104,7 @@ _SPLIT_OFFSETS = {"train": 0, "test": 50_000}
 def action_dim(grasp: str) -> int:
     """Length of an action for a grasp: two components (dx, dy) per held end."""
     if grasp not in GRASP_ENDS:
-        raise ValueError(f"grasp must be one of {tuple(GRASP_ENDS)}, got {grasp!r}")
+        raise InputError(f"grasp must be one of {tuple(GRASP_ENDS)}, got {grasp!r}")
     return 2 * len(GRASP_ENDS[grasp])
 
 
@@ -144,31 +145,31 @@ class Task:
         if not (isinstance(self.peg_radius, (float, int, np.floating))
                 and not isinstance(self.peg_radius, bool)
                 and 0 < self.peg_radius < TABLE_HALF):
-            raise ValueError(f"Task.peg_radius must be a number of metres in (0, {TABLE_HALF}), "
+            raise InputError(f"Task.peg_radius must be a number of metres in (0, {TABLE_HALF}), "
                              f"got {self.peg_radius!r}")
         object.__setattr__(self, "peg_radius", float(self.peg_radius))
         for name in ("start", "goal", "reference_actions", "moves"):
             object.__setattr__(self, name, np.asarray(getattr(self, name), dtype=np.float32))
         if self.start.ndim != 2 or self.start.shape[1] != 2 or self.goal.shape != self.start.shape:
-            raise ValueError(
+            raise InputError(
                 "Task.start and Task.goal must both have shape (n, 2), got "
                 f"{self.start.shape} and {self.goal.shape}"
             )
         check_difficulty(self.difficulty, name="Task.difficulty")
         actions = self.reference_actions
         if actions.ndim != 2 or actions.shape[1] != dim:
-            raise ValueError(
+            raise InputError(
                 f"Task.reference_actions must have shape (T, {dim}) for grasp {self.grasp!r}, "
                 f"got {actions.shape}"
             )
         if not (np.isfinite(actions).all() and (np.abs(actions) <= 1.0).all()):
-            raise ValueError("Task.reference_actions must be finite and within [-1, 1]")
+            raise InputError("Task.reference_actions must be finite and within [-1, 1]")
         if self.moves.shape != (self.difficulty, dim):
-            raise ValueError(
+            raise InputError(
                 f"Task.moves must have shape ({self.difficulty}, {dim}), got {self.moves.shape}"
             )
         if not (isinstance(self.max_step, (float, int)) and self.max_step > 0):
-            raise ValueError(f"Task.max_step must be a number > 0, got {self.max_step!r}")
+            raise InputError(f"Task.max_step must be a number > 0, got {self.max_step!r}")
         object.__setattr__(self, "difficulty", int(self.difficulty))
         object.__setattr__(self, "seed", int(self.seed))
         object.__setattr__(self, "max_step", float(self.max_step))
@@ -194,7 +195,7 @@ def check_difficulty(difficulty: object, name: str = "difficulty") -> int:
     """Return ``difficulty`` as an int, or raise ``ValueError`` unless it is an int in 1-10."""
     ok = isinstance(difficulty, (int, np.integer)) and not isinstance(difficulty, bool)
     if not ok or not 1 <= int(difficulty) <= MAX_DIFFICULTY:
-        raise ValueError(f"{name} must be an int from 1 to {MAX_DIFFICULTY}, got {difficulty!r}")
+        raise InputError(f"{name} must be an int from 1 to {MAX_DIFFICULTY}, got {difficulty!r}")
     return int(difficulty)
 
 
@@ -339,7 +340,7 @@ def draw_pegs(rng: np.random.Generator, count: int, shape: np.ndarray,
             continue
         pegs.append(centre)
     if len(pegs) < count:
-        raise ValueError(f"could not place {count} pegs near the cord (each {PEG_CLEARANCE} to "
+        raise InputError(f"could not place {count} pegs near the cord (each {PEG_CLEARANCE} to "
                          f"{PEG_NEAR} m from it, {PEG_GAP} m apart): ask for fewer pegs")
     return np.asarray(pegs, dtype=np.float32).reshape(-1, 2)
 
@@ -401,11 +402,11 @@ def make_task(
     difficulty = check_difficulty(difficulty)
     dim = action_dim(grasp)
     if not max_step > 0:
-        raise ValueError(f"max_step must be > 0, got {max_step!r}")
+        raise InputError(f"max_step must be > 0, got {max_step!r}")
     count = 0
     if isinstance(pegs, (int, np.integer)) and not isinstance(pegs, bool):
         if pegs < 0:
-            raise ValueError(f"pegs must be a count >= 0 or (k, 2) centres, got {pegs!r}")
+            raise InputError(f"pegs must be a count >= 0 or (k, 2) centres, got {pegs!r}")
         count, fixed = int(pegs), None
     else:  # float32, as the task stores them: the replay sees the very same pegs
         fixed = check_pegs(pegs).astype(np.float32)
@@ -429,7 +430,7 @@ def make_task(
         for _ in range(difficulty):
             move = _random_move(rng, cord.gripper_positions(), cord)
             if move is None:
-                raise ValueError("start: no straight move of a grasped end stays on the table")
+                raise InputError("start: no straight move of a grasped end stays on the table")
             steps = split_move(move, max_step)
             for action in steps:
                 apply_action(cord, action, max_step)
@@ -464,16 +465,16 @@ def difficulty_max_steps(difficulty: int) -> int:
 def suite_max_steps(name: str) -> int:
     """The episode length for a named suite's tasks (``difficulty_max_steps`` of its K)."""
     if name not in SUITES:
-        raise ValueError(f"suite name must be one of {tuple(SUITES)}, got {name!r}")
+        raise InputError(f"suite name must be one of {tuple(SUITES)}, got {name!r}")
     return difficulty_max_steps(SUITES[name])
 
 
 def suite_seeds(name: str, split: str) -> np.ndarray:
     """The fixed task seeds of a named suite's split."""
     if name not in SUITES:
-        raise ValueError(f"suite name must be one of {tuple(SUITES)}, got {name!r}")
+        raise InputError(f"suite name must be one of {tuple(SUITES)}, got {name!r}")
     if split not in SPLIT_SIZES:
-        raise ValueError(f"split must be one of {tuple(SPLIT_SIZES)}, got {split!r}")
+        raise InputError(f"split must be one of {tuple(SPLIT_SIZES)}, got {split!r}")
     base = 100_000 * SUITES[name] + _SPLIT_OFFSETS[split]
     return base + np.arange(SPLIT_SIZES[split])
 
@@ -495,7 +496,7 @@ def load_suite(
     seeds = suite_seeds(name, split)
     if limit is not None:
         if not (isinstance(limit, int) and limit >= 0):
-            raise ValueError(f"limit must be an int >= 0 or None, got {limit!r}")
+            raise InputError(f"limit must be an int >= 0 or None, got {limit!r}")
         seeds = seeds[:limit]
     return [make_task(int(s), SUITES[name], grasp) for s in seeds]
 
@@ -506,9 +507,9 @@ def save_tasks(path: str | os.PathLike, tasks: list[Task]) -> None:
     All tasks must share the grasp and the number of points.
     """
     if not tasks or not all(isinstance(t, Task) for t in tasks):
-        raise ValueError("tasks must be a non-empty list of Task")
+        raise InputError("tasks must be a non-empty list of Task")
     if len({(t.grasp, t.start.shape) for t in tasks}) != 1:
-        raise ValueError("tasks must all have the same grasp and number of points")
+        raise InputError("tasks must all have the same grasp and number of points")
     arrays = {
         "format_version": np.array(FORMAT_VERSION),
         "start": np.stack([t.start for t in tasks]),
@@ -537,11 +538,11 @@ def load_tasks(path: str | os.PathLike) -> list[Task]:
     with data:
         missing = [k for k in keys if k not in data.files]
         if missing:
-            raise ValueError(f"path {str(path)!r} is not a dlo task file: missing {missing}")
+            raise InputError(f"path {str(path)!r} is not a dlo task file: missing {missing}")
         arrays = {k: data[k] for k in keys}
         version = int(arrays["format_version"])
         if version not in (1, FORMAT_VERSION):
-            raise ValueError(
+            raise InputError(
                 f"path {str(path)!r} has task format version {version}, this dlo reads "
                 f"versions 1 to {FORMAT_VERSION}"
             )
@@ -549,7 +550,7 @@ def load_tasks(path: str | os.PathLike) -> list[Task]:
         if version >= 2:
             missing = [k for k in peg_keys if k not in data.files]
             if missing:
-                raise ValueError(f"path {str(path)!r} is not a dlo task file: missing {missing}")
+                raise InputError(f"path {str(path)!r} is not a dlo task file: missing {missing}")
             arrays.update({k: data[k] for k in peg_keys})
     counts, difficulty = arrays["action_counts"], arrays["difficulty"]
     action_ends = np.concatenate([[0], np.cumsum(counts)])
@@ -557,7 +558,7 @@ def load_tasks(path: str | os.PathLike) -> list[Task]:
     if action_ends[-1] != len(arrays["reference_actions"]) or move_ends[-1] != len(
         arrays["moves"]
     ):
-        raise ValueError(f"path {str(path)!r} is corrupt: action or move counts do not add up")
+        raise InputError(f"path {str(path)!r} is corrupt: action or move counts do not add up")
     grasp = str(arrays["grasp"])
     size = len(counts)
     peg_counts = arrays.get("peg_counts", np.zeros(size, dtype=np.int64))
@@ -565,7 +566,7 @@ def load_tasks(path: str | os.PathLike) -> list[Task]:
     pegs = arrays.get("pegs", np.zeros((0, 2), dtype=np.float32))
     radius = arrays.get("peg_radius", np.full(size, PEG_RADIUS))
     if peg_ends[-1] != len(pegs) or len(peg_counts) != size or len(radius) != size:
-        raise ValueError(f"path {str(path)!r} is corrupt: peg counts do not add up")
+        raise InputError(f"path {str(path)!r} is corrupt: peg counts do not add up")
     return [
         Task(
             start=arrays["start"][i],

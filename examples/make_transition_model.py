@@ -1,9 +1,9 @@
 """Make the shipped transition model from scratch: the data, the ensemble, its mean network.
 
 One command runs the whole documented recipe, each step through the ``dlo`` command line:
-collect the training files and the held-out file (``dlo collect --kind transitions``; a file
+collect the training files and the held-out file (``dlo collect transitions``; a file
 already there is reused when its settings are the recipe's), then the trainings of
-``TRAININGS`` in order (``dlo train --stage transition``): the ensemble, the same ensemble
+``TRAININGS`` in order (``dlo train transition``): the ensemble, the same ensemble
 fine-tuned on one more file, then on two more, then on one more, once more on one more
 (half of its starts from ``wavy_cord_shape``), once more on one more (half of its moves
 aimed at the rim), and once more on one more (wavy starts, both ends held, moves that push
@@ -174,7 +174,7 @@ def main(argv: list[str] | None = None) -> None:
         if path.exists():
             print(f"{path}: there, {scaled(count)} transitions as the recipe says", flush=True)
         else:
-            dlo("collect", "--kind", "transitions", "--num-transitions", scaled(count),
+            dlo("collect", "transitions", "--num-transitions", scaled(count),
                 *flags(settings), "--workers", args.workers, "--out", path, "--resume")
     heldout, out = files[-1], short(out)
     for folder, used, settings in TRAININGS:
@@ -182,7 +182,7 @@ def main(argv: list[str] | None = None) -> None:
         for key in ("teacher", "init"):  # an earlier training's model
             if key in settings:
                 settings[key] = out / settings[key] / "transition.pt"
-        dlo("train", "--stage", "transition", *flags(settings), "--data", *files[:used],
+        dlo("train", "transition", *flags(settings), "--data", *files[:used],
             "--heldout", heldout, "--threads", args.threads, "--out", out / folder)
     shipped = out / SHIPPED
     print(f"the model: {shipped / 'transition.pt'}; to ship it: cp {shipped}/transition.pt "

@@ -23,6 +23,8 @@ import torch
 from torch import nn
 from torch.nn import functional as F
 
+from dlo_env.errors import InputError
+
 #: Width of the convolutions along the chain (points on either side seen by one layer: 1).
 KERNEL = 3
 
@@ -161,6 +163,6 @@ class EnsembleChainNet(nn.Module):
         return self.first_from(0, members)
 
     def with_inputs(self, at: int, count: int) -> EnsembleChainNet:
-        raise ValueError("a chain network does not grow new inputs (--contact-reach, "
+        raise InputError("a chain network does not grow new inputs (--contact-reach, "
                          "--cord-inputs or --peg-reach with --init of a model without them "
                          "needs an MLP model)")

@@ -9,6 +9,7 @@ from typing import Any
 import torch
 
 from dlo_env.atomic import atomic_path
+from dlo_env.errors import InputError, MissingFileError
 
 #: Marks a file as a dlo shape-model checkpoint.
 FORMAT = "dlo-shape-model"
@@ -44,22 +45,22 @@ def load_checkpoint(path: str | os.PathLike, name: str = "path", *, kind: str = 
     """
     path = Path(path)
     if not path.is_file():
-        raise FileNotFoundError(f"{name}: no checkpoint file at {str(path)!r}")
+        raise MissingFileError(f"{name}: no checkpoint file at {str(path)!r}")
     try:
         data = torch.load(path, map_location="cpu", weights_only=True)
     except Exception as exc:  # torch raises many types for corrupt or foreign files
         text = str(exc).splitlines()[0] if str(exc) else ""
         if "weights_only" in str(exc):  # torch's advice to unpickle the file: never taken here
             text = "not a file of tensors and plain data (torch.load with weights_only=True)"
-        raise ValueError(
+        raise InputError(
             f"{name}: {str(path)!r} is not a readable torch checkpoint "
             f"({type(exc).__name__}: {text})"
         ) from exc
     if not isinstance(data, dict) or data.get("format") != kind:
-        raise ValueError(f"{name}: {str(path)!r} is not a {kind} checkpoint")
+        raise InputError(f"{name}: {str(path)!r} is not a {kind} checkpoint")
     found = data.get("format_version")
     if found != version:
-        raise ValueError(
+        raise InputError(
             f"{name}: {str(path)!r} has checkpoint format version {found!r}; "
             f"this version of latent_model reads version {version}"
         )

@@ -11,6 +11,7 @@ from dataclasses import dataclass, fields
 from typing import Any
 
 from dlo_env.checks import positive_ints
+from dlo_env.errors import InputError
 
 REPRESENTATIONS = ("canonical", "world")
 OUTPUTS = ("points", "angles")
@@ -57,25 +58,25 @@ class ModelConfig:
 
     def __post_init__(self) -> None:
         if self.representation not in REPRESENTATIONS:
-            raise ValueError(
+            raise InputError(
                 f"representation must be one of {REPRESENTATIONS}, got {self.representation!r}"
             )
         if self.output is None:  # the best measured output for the representation
             object.__setattr__(
                 self, "output", "angles" if self.representation == "canonical" else "points")
         if self.output not in OUTPUTS:
-            raise ValueError(f"output must be one of {OUTPUTS}, got {self.output!r}")
+            raise InputError(f"output must be one of {OUTPUTS}, got {self.output!r}")
         if self.output == "angles" and self.representation != "canonical":
-            raise ValueError("output='angles' needs representation='canonical' (the pose is "
+            raise InputError("output='angles' needs representation='canonical' (the pose is "
                              f"applied analytically), got representation={self.representation!r}")
         for name in ("n_points", "latent_dim", "width", "depth"):
             value = getattr(self, name)
             if not isinstance(value, int) or value < 1:
-                raise ValueError(f"ModelConfig.{name} must be a positive int, got {value!r}")
+                raise InputError(f"ModelConfig.{name} must be a positive int, got {value!r}")
         if self.n_points < 3:
-            raise ValueError(f"ModelConfig.n_points must be >= 3, got {self.n_points!r}")
+            raise InputError(f"ModelConfig.n_points must be >= 3, got {self.n_points!r}")
         if not self.cord_length > 0:
-            raise ValueError(f"ModelConfig.cord_length must be > 0, got {self.cord_length!r}")
+            raise InputError(f"ModelConfig.cord_length must be > 0, got {self.cord_length!r}")
 
     @property
     def pose_dim(self) -> int:
@@ -144,14 +145,14 @@ class TrainConfig:
     def __post_init__(self) -> None:
         positive_ints(self, "batch_size", "d_steps", "encoder_batch_size", "eval_every")
         if not 0.0 <= self.spacing_weight <= 1.0:
-            raise ValueError(
+            raise InputError(
                 f"TrainConfig.spacing_weight must be in [0, 1], got {self.spacing_weight!r}"
             )
         if self.lr_schedule not in LR_SCHEDULES:
-            raise ValueError(f"TrainConfig.lr_schedule must be one of {LR_SCHEDULES}, "
+            raise InputError(f"TrainConfig.lr_schedule must be one of {LR_SCHEDULES}, "
                              f"got {self.lr_schedule!r}")
         if not 0.0 <= self.encoder_fraction < 1.0:
-            raise ValueError(
+            raise InputError(
                 f"TrainConfig.encoder_fraction must be in [0, 1), got {self.encoder_fraction!r}"
             )
 
@@ -168,7 +169,7 @@ def config_from_dict(cls: type, values: dict[str, Any], name: str = "config") ->
     known = {f.name for f in fields(cls)}
     unknown = sorted(set(values) - known)
     if unknown:
-        raise ValueError(
+        raise InputError(
             f"{name} has unknown fields {unknown}; expected a subset of {sorted(known)}"
         )
     return cls(**values)

@@ -25,6 +25,7 @@ import numpy as np
 import torch
 
 from dlo_env.cord import CordParams
+from dlo_env.errors import InputError
 from dlo_env.shapes import TABLE_HALF
 from latent_model.inextensible import DAMPING, ITERATIONS, MAX_MOVE, make_inextensible
 from latent_model.move_frame import GRASP_CODES, from_frame
@@ -106,12 +107,12 @@ class CordDynamics:
                  params: CordParams | None = None, inextensible_iterations: int = ITERATIONS
                  ) -> None:
         if not isinstance(model, TransitionModel):
-            raise ValueError(f"model must be a latent_model.TransitionModel, got "
+            raise InputError(f"model must be a latent_model.TransitionModel, got "
                              f"{type(model).__name__}")
         if grasp not in _HELD:
-            raise ValueError(f"grasp must be one of {tuple(_HELD)}, got {grasp!r}")
+            raise InputError(f"grasp must be one of {tuple(_HELD)}, got {grasp!r}")
         if model.config.peg_reach:
-            raise ValueError("model: a model that sees pegs needs the pegs of every move; "
+            raise InputError("model: a model that sees pegs needs the pegs of every move; "
                              "CordDynamics steps the empty table (give a model without "
                              "peg_reach)")
         self.model = model
@@ -176,9 +177,9 @@ class CordDynamics:
         """
         b = len(shapes)
         if shapes.dim() != 3 or shapes.shape[-1] != 2:
-            raise ValueError(f"shapes must have shape (B, n, 2), got {tuple(shapes.shape)}")
+            raise InputError(f"shapes must have shape (B, n, 2), got {tuple(shapes.shape)}")
         if tuple(displacement.shape) != (b, self.action_width):
-            raise ValueError(f"displacement must have shape ({b}, {self.action_width}) for "
+            raise InputError(f"displacement must have shape ({b}, {self.action_width}) for "
                              f"grasp={self.grasp!r}, got {tuple(displacement.shape)}")
         moves = self.reachable(shapes, displacement)
         grasp = torch.full((b,), self._code, dtype=torch.int64, device=shapes.device)

@@ -9,6 +9,7 @@ from pathlib import Path
 import numpy as np
 
 from dlo_env.dataset.npz_file import open_npz
+from dlo_env.errors import InputError, MissingFileError
 
 
 def load_shapes(path: str | os.PathLike, name: str = "path") -> np.ndarray:
@@ -24,33 +25,33 @@ def load_shapes(path: str | os.PathLike, name: str = "path") -> np.ndarray:
     """
     path = Path(path)
     if not path.is_file():
-        raise FileNotFoundError(f"{name}: no dataset file at {str(path)!r}")
+        raise MissingFileError(f"{name}: no dataset file at {str(path)!r}")
     archive = open_npz(path, f"{name}: {str(path)!r}")
     try:
         with archive as data:
             files = set(data.files)
             if "metadata" not in files:  # a plain shape array, e.g. shapes to fine-tune on
                 if "shapes" not in files:
-                    raise ValueError(
+                    raise InputError(
                         f"{name}: {str(path)!r} has no 'shapes' array (found {sorted(files)})"
                     )
                 shapes = data["shapes"]
     except (OSError, EOFError, zipfile.BadZipFile) as exc:
-        raise ValueError(f"{name}: {str(path)!r} is not a readable .npz file ({exc})") from exc
+        raise InputError(f"{name}: {str(path)!r} is not a readable .npz file ({exc})") from exc
     if "metadata" in files:  # written by `dlo collect`: its loader checks the format
         from dlo_env.dataset.shape_file import load_shapes as collector_load
 
         try:
             shapes = collector_load(path).shapes
         except ValueError as exc:
-            raise ValueError(f"{name}: {exc}") from exc
+            raise InputError(f"{name}: {exc}") from exc
     shapes = np.asarray(shapes, dtype=np.float32)
     if shapes.ndim != 3 or shapes.shape[-1] != 2 or len(shapes) == 0:
-        raise ValueError(
+        raise InputError(
             f"{name}: 'shapes' must have shape (N, n, 2) with N > 0, got {shapes.shape}"
         )
     if not np.isfinite(shapes).all():
-        raise ValueError(f"{name}: 'shapes' holds NaN or infinite coordinates")
+        raise InputError(f"{name}: 'shapes' holds NaN or infinite coordinates")
     return shapes
 
 
@@ -84,7 +85,7 @@ def load_labelled_shapes(paths: str | os.PathLike | list, name: str = "path"
                 groups[-1] = (grasp == GRASP_NAMES.index("both")).astype(np.int64)
     points = {s.shape[1] for s in shapes}
     if len(points) > 1:
-        raise ValueError(f"{name}: the files hold shapes of different point counts "
+        raise InputError(f"{name}: the files hold shapes of different point counts "
                          f"{sorted(points)}")
     joined = shapes[0] if len(shapes) == 1 else np.concatenate(shapes)
     labelled = None if any(g is None for g in groups) else np.concatenate(groups)
@@ -100,7 +101,7 @@ def split_heldout(
     another seed is the honest measure; this split is a fallback.
     """
     if not 0.0 < fraction < 1.0:
-        raise ValueError(f"fraction must be in (0, 1), got {fraction!r}")
+        raise InputError(f"fraction must be in (0, 1), got {fraction!r}")
     order = np.random.default_rng(seed).permutation(len(shapes))
     cut = max(1, int(round(fraction * len(shapes))))
     return shapes[order[cut:]], shapes[order[:cut]]
@@ -116,9 +117,9 @@ def evaluation_subsets(
     evaluation draws its reference and inversion sets with this function instead.
     """
     if any(not isinstance(k, (int, np.integer)) or k < 0 for k in sizes):
-        raise ValueError(f"sizes must be non-negative ints, got {sizes!r}")
+        raise InputError(f"sizes must be non-negative ints, got {sizes!r}")
     if sum(sizes) > len(shapes):
-        raise ValueError(f"the held-out set must hold at least {sum(sizes)} shapes "
+        raise InputError(f"the held-out set must hold at least {sum(sizes)} shapes "
                          f"(sizes {tuple(sizes)}), got {len(shapes)}")
     order = np.random.default_rng(seed).permutation(len(shapes))
     bounds = np.cumsum((0, *sizes))

@@ -12,6 +12,7 @@ from dataclasses import asdict, dataclass, field
 import numpy as np
 import torch
 
+from dlo_env.errors import InputError
 from dlo_env.shapes import TABLE_HALF, is_cord_like, shape_from_headings
 from latent_model import metrics
 from latent_model.dataset import SHAPE_GROUPS, evaluation_subsets
@@ -167,7 +168,7 @@ def quality_report(
     if groups is not None:
         groups = np.asarray(groups)
         if groups.shape != (len(heldout),):
-            raise ValueError(f"groups must have shape ({len(heldout)},), got {groups.shape}")
+            raise InputError(f"groups must have shape ({len(heldout)},), got {groups.shape}")
         ref_groups, target_groups = evaluation_subsets(groups, sizes, seed)
         broken = metrics.grouped_quality(generated, reference, torch.from_numpy(ref_groups))
         for g, (cov, mmd, nna) in broken.items():

@@ -14,6 +14,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from dlo_env.cord import Cord
+from dlo_env.errors import InputError
 from dlo_env.shapes import is_cord_like, validate_shape
 from latent_model.config import TrainConfig
 from latent_model.evaluation import QualityReport, quality_report
@@ -47,11 +48,11 @@ class FinetuneConfig:
 
     def __post_init__(self) -> None:
         if self.variants_per_shape < 1 or self.record_every < 1:
-            raise ValueError("variants_per_shape and record_every must be >= 1")
+            raise InputError("variants_per_shape and record_every must be >= 1")
         if not 0.0 < self.new_fraction < 1.0:
-            raise ValueError(f"new_fraction must be in (0, 1), got {self.new_fraction!r}")
+            raise InputError(f"new_fraction must be in (0, 1), got {self.new_fraction!r}")
         if not self.max_move > 0:
-            raise ValueError(f"max_move must be > 0, got {self.max_move!r}")
+            raise InputError(f"max_move must be > 0, got {self.max_move!r}")
 
 
 def deformed_variants(
@@ -166,7 +167,7 @@ def finetune(
 
     config = config or FinetuneConfig()
     if model.discriminator is None:
-        raise ValueError("model has no discriminator saved; additional training needs one")
+        raise InputError("model has no discriminator saved; additional training needs one")
     shapes = np.asarray(shapes, dtype=np.float32)
     if shapes.ndim == 2:
         shapes = shapes[None]

@@ -26,6 +26,7 @@ from dataclasses import dataclass
 
 import torch
 
+from dlo_env.errors import InputError
 from latent_model.pose import canonicalise
 
 #: A shape counts as represented when its reconstruction is this close (mean per point), m.
@@ -66,7 +67,7 @@ def pairwise_error(a: torch.Tensor, b: torch.Tensor, chunk: int = 64) -> torch.T
 def _prepare(shapes: torch.Tensor, aligned: bool) -> torch.Tensor:
     shapes = torch.as_tensor(shapes, dtype=torch.float32)
     if shapes.ndim != 3 or shapes.shape[-1] != 2:
-        raise ValueError(f"shapes must have shape (B, n, 2), got {tuple(shapes.shape)}")
+        raise InputError(f"shapes must have shape (B, n, 2), got {tuple(shapes.shape)}")
     return canonicalise(shapes) if aligned else shapes
 
 
@@ -116,7 +117,7 @@ def grouped_quality(
     gen, ref = _prepare(generated, aligned), _prepare(reference, aligned)
     groups = torch.as_tensor(groups, dtype=torch.long)
     if groups.shape != (ref.shape[0],):
-        raise ValueError(f"groups must have shape ({ref.shape[0]},), got {tuple(groups.shape)}")
+        raise InputError(f"groups must have shape ({ref.shape[0]},), got {tuple(groups.shape)}")
     d = pairwise_error(ref, gen)  # (R, G)
     nearest = d.argmin(dim=0)  # each generated shape's nearest reference
     covered = torch.zeros(ref.shape[0], dtype=torch.bool)

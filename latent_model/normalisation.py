@@ -6,6 +6,8 @@ from dataclasses import dataclass
 
 import torch
 
+from dlo_env.errors import InputError
+
 #: Cord lengths per network unit of the canonical representation (see ``normalisation_for``).
 CANONICAL_SCALE = 0.525
 
@@ -29,7 +31,7 @@ class Normalisation:
 
     def __post_init__(self) -> None:
         if not self.scale > 0:
-            raise ValueError(f"Normalisation.scale must be > 0, got {self.scale!r}")
+            raise InputError(f"Normalisation.scale must be > 0, got {self.scale!r}")
 
     def _offset(self, like: torch.Tensor) -> torch.Tensor:
         return torch.tensor([self.offset_x, self.offset_y], dtype=like.dtype, device=like.device)

@@ -13,6 +13,7 @@ import numpy as np
 import torch
 
 from dlo_env.cord import CordParams
+from dlo_env.errors import InputError
 from dlo_env.shapes import TABLE_HALF, unflatten
 from latent_model import pose
 from latent_model.checkpoint import FORMAT, FORMAT_VERSION, load_checkpoint, save_atomic
@@ -35,7 +36,7 @@ def resolve_device(device: str | torch.device = "auto") -> torch.device:
     try:
         return torch.device(device)
     except (RuntimeError, TypeError) as exc:
-        raise ValueError(
+        raise InputError(
             f"device must be 'auto', 'cpu', 'cuda' or 'cuda:N', got {device!r}"
         ) from exc
 
@@ -134,12 +135,12 @@ class ShapeModel:
         if single:
             arr = arr[None]
         if arr.ndim != 3 or arr.shape[1:] != (n, 2):
-            raise ValueError(
+            raise InputError(
                 f"{name} must have shape ({n}, 2), ({2 * n},), (B, {n}, 2) or (B, {2 * n}), "
                 f"got {np.shape(shapes)}"
             )
         if not np.isfinite(arr).all():
-            raise ValueError(f"{name} must be finite, got NaN or infinite coordinates")
+            raise InputError(f"{name} must be finite, got NaN or infinite coordinates")
         return torch.from_numpy(arr).to(self.device), single
 
     def _latents_in(self, z: Any, name: str = "z") -> tuple[torch.Tensor, bool]:
@@ -148,12 +149,12 @@ class ShapeModel:
         if single:
             arr = arr[None]
         if arr.ndim != 2 or arr.shape[1] != self.latent_dim:
-            raise ValueError(
+            raise InputError(
                 f"{name} must have shape ({self.latent_dim},) or (B, {self.latent_dim}), "
                 f"got {np.shape(z)}"
             )
         if not np.isfinite(arr).all():
-            raise ValueError(f"{name} must be finite, got NaN or infinite values")
+            raise InputError(f"{name} must be finite, got NaN or infinite values")
         return torch.from_numpy(arr).to(self.device), single
 
     @staticmethod
@@ -204,7 +205,7 @@ class ShapeModel:
         table with a 5 cm margin (like ``dlo_env.shapes.random_cord_shape``).
         """
         if not isinstance(n, (int, np.integer)) or n < 0:
-            raise ValueError(f"n must be a non-negative int, got {n!r}")
+            raise InputError(f"n must be a non-negative int, got {n!r}")
         gen = torch.Generator().manual_seed(int(seed) if seed is not None else
                                             int(np.random.SeedSequence().entropy % 2**63))
         k = self.config.latent_dim
@@ -264,7 +265,7 @@ class ShapeModel:
         ``torch.inference_mode()``.
         """
         if restarts < 1 or steps < 0:
-            raise ValueError(f"restarts must be >= 1 and steps >= 0, got {restarts}, {steps}")
+            raise InputError(f"restarts must be >= 1 and steps >= 0, got {restarts}, {steps}")
         x, single = self._shapes_in(shapes)
         with torch.no_grad():
             guess = self.encode_torch(x)  # (B, L)
@@ -326,7 +327,7 @@ class ShapeModel:
                 discriminator = Discriminator(config)
                 discriminator.load_state_dict(data["discriminator"])
         except (KeyError, TypeError, RuntimeError, ValueError) as exc:
-            raise ValueError(
+            raise InputError(
                 f"{name}: the checkpoint's contents do not fit a ShapeModel: {exc}"
             ) from exc
         return cls(config, norm, generator, encoder, discriminator, device, data.get("info"))

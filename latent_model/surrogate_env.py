@@ -31,6 +31,7 @@ from dlo_env.envs.goal_api import (
     goal_spaces,
     option_difficulty,
 )
+from dlo_env.errors import InputError
 from dlo_env.shapes import (
     BEAD_TOLERANCE,
     SUCCESS_METRICS,
@@ -106,7 +107,7 @@ def load_model(model: TransitionModel | str | None, device: str | torch.device
         return model
     if model is not None and not isinstance(model, (str, bytes)) and not hasattr(
             model, "__fspath__"):
-        raise ValueError(f"model must be a TransitionModel, a file path or None (the shipped "
+        raise InputError(f"model must be a TransitionModel, a file path or None (the shipped "
                          f"model), got {type(model).__name__}")
     loaded = TransitionModel.load_or_pretrained(model, device=device)
     loaded.requires_grad_(False)
@@ -354,10 +355,10 @@ class SurrogateCords:
         """The ``count`` tasks of a reset's ``options`` (see the environments' Reset Options)."""
         difficulty = option_difficulty(options, OPTIONS, difficulty)
         if "pegs" in options and len(np.asarray(options["pegs"]).reshape(-1)):
-            raise ValueError("options['pegs']: the surrogate environments model the empty "
+            raise InputError("options['pegs']: the surrogate environments model the empty "
                              "table (no pegs); use the pymunk environment for pegs")
         if "params" in options and options["params"] != self.params:
-            raise ValueError(f"options['params']: this surrogate's model predicts one cord "
+            raise InputError(f"options['params']: this surrogate's model predicts one cord "
                              f"({self.params}); make the environment with params=... and a "
                              f"model of that cord")
         if "task" in options:
@@ -380,7 +381,7 @@ class SurrogateCords:
         single = arr.ndim == 1 or (arr.ndim == 2 and arr.shape == (p.n_points, 2))
         rows = arr[None] if single else arr
         if not single and len(rows) != count:
-            raise ValueError(f"options['{name}'] must be one shape or one per environment "
+            raise InputError(f"options['{name}'] must be one shape or one per environment "
                              f"({count}), got {len(rows)}")
         shapes = self._checked(rows, f"options['{name}']")
         return np.broadcast_to(shapes, (count,) + shapes.shape[1:]).astype(np.float32)
@@ -394,7 +395,7 @@ class SurrogateCords:
         if self.grasp == "both":
             span = np.linalg.norm(shapes[:, -1] - shapes[:, 0], axis=-1)
             if (span >= p.max_span * p.length).any():
-                raise ValueError(f"{name} must have its head and tail closer than "
+                raise InputError(f"{name} must have its head and tail closer than "
                                  f"max_span * length = {p.max_span * p.length:.3f} m when both "
                                  f"ends are held, got {span.max():.3f} m")
         return shapes.astype(np.float32)
@@ -402,12 +403,12 @@ class SurrogateCords:
     def _given_tasks(self, tasks: Any, count: int) -> TaskBatch:
         tasks = [tasks] if isinstance(tasks, Task) else list(tasks)
         if len(tasks) not in (1, count):
-            raise ValueError(f"options['task'] must be one Task or one per environment "
+            raise InputError(f"options['task'] must be one Task or one per environment "
                              f"({count}), got {len(tasks)}")
         for task in tasks:
             check_task(task, self.grasp, self.max_step)
             if len(task.pegs):
-                raise ValueError("options['task'] has pegs: the surrogate environments model "
+                raise InputError("options['task'] has pegs: the surrogate environments model "
                                  "the empty table")
         tasks = tasks * count if len(tasks) == 1 else tasks
         k = max(t.difficulty for t in tasks)
@@ -438,14 +439,14 @@ class _SurrogateArgs:
                         judge_at_rest=judge_at_rest, max_pegs=max_pegs, render_mode=render_mode,
                         render_modes=self.metadata["render_modes"])
         if max_pegs:
-            raise ValueError(f"max_pegs must be 0: the surrogate environments model the empty "
+            raise InputError(f"max_pegs must be 0: the surrogate environments model the empty "
                              f"table, got {max_pegs!r}")
         if not (isinstance(uncertainty_penalty, (int, float)) and not isinstance(
                 uncertainty_penalty, bool) and 0 <= uncertainty_penalty < float("inf")):
-            raise ValueError(f"uncertainty_penalty must be a finite number >= 0, got "
+            raise InputError(f"uncertainty_penalty must be a finite number >= 0, got "
                              f"{uncertainty_penalty!r}")
         if not isinstance(merge_runs, (bool, np.bool_)):
-            raise ValueError(f"merge_runs must be True or False, got {merge_runs!r}")
+            raise InputError(f"merge_runs must be True or False, got {merge_runs!r}")
         self.cords = SurrogateCords(count, self.grasp, model, device, params, max_step,
                                     merge_runs)
         self.params = self.cords.params
@@ -457,7 +458,7 @@ class _SurrogateArgs:
         self.judge_at_rest = bool(judge_at_rest)
         if isinstance(difficulty, (tuple, list)):
             if not difficulty:
-                raise ValueError("difficulty must be an int from 1 to 10 or a non-empty tuple "
+                raise InputError("difficulty must be an int from 1 to 10 or a non-empty tuple "
                                  "of them, got ()")
             self.difficulty = tuple(check_difficulty(k) for k in difficulty)
         else:
@@ -539,9 +540,9 @@ class _SurrogateArgs:
 def _check_actions(actions: Any, shape: tuple[int, ...]) -> np.ndarray:
     a = np.asarray(actions, dtype=np.float64)  # clipped before float32: 1e39 is finite
     if a.shape != shape:
-        raise ValueError(f"action must have shape {shape}, got {a.shape}")
+        raise InputError(f"action must have shape {shape}, got {a.shape}")
     if not np.isfinite(a).all():
-        raise ValueError("action must be finite, got NaN or infinite values")
+        raise InputError("action must be finite, got NaN or infinite values")
     return np.clip(a, -1.0, 1.0)
 
 
@@ -602,14 +603,14 @@ class SurrogateCordVectorEnv(_SurrogateArgs, GoalReward, VectorEnv):
                  render_mode: str | None = None) -> None:
         if not (isinstance(num_envs, (int, np.integer)) and not isinstance(num_envs, bool)
                 and num_envs >= 1):
-            raise ValueError(f"num_envs must be an int >= 1, got {num_envs!r}")
+            raise InputError(f"num_envs must be an int >= 1, got {num_envs!r}")
         if not (isinstance(max_episode_steps, (int, np.integer)) and not isinstance(
                 max_episode_steps, bool) and max_episode_steps >= 1):
-            raise ValueError(f"max_episode_steps must be an int >= 1, got {max_episode_steps!r}")
+            raise InputError(f"max_episode_steps must be an int >= 1, got {max_episode_steps!r}")
         mode = autoreset_mode.value if isinstance(autoreset_mode, AutoresetMode) else (
             autoreset_mode)
         if mode not in _AUTORESET:
-            raise ValueError(f"autoreset_mode must be one of {tuple(_AUTORESET)}, got "
+            raise InputError(f"autoreset_mode must be one of {tuple(_AUTORESET)}, got "
                              f"{autoreset_mode!r}")
         self._setup(int(num_envs), model=model, device=device, params=params,
                     max_step=max_step, reward_type=reward_type,
@@ -662,7 +663,7 @@ class SurrogateCordVectorEnv(_SurrogateArgs, GoalReward, VectorEnv):
         and ``task`` may be one for every environment or a sequence of ``num_envs``.
         """
         if isinstance(seed, (list, tuple)):
-            raise ValueError("seed must be an int or None: the surrogate's cords draw from one "
+            raise InputError("seed must be an int or None: the surrogate's cords draw from one "
                              "generator")
         super().reset(seed=seed)
         if seed is not None:
@@ -674,10 +675,10 @@ class SurrogateCordVectorEnv(_SurrogateArgs, GoalReward, VectorEnv):
         else:
             mask = np.asarray(mask)
             if mask.shape != (self.num_envs,) or mask.dtype != np.bool_ or not mask.any():
-                raise ValueError(f"options['reset_mask'] must be a bool array of shape "
+                raise InputError(f"options['reset_mask'] must be a bool array of shape "
                                  f"({self.num_envs},) with a True, got {mask!r}")
             if not self._started and not mask.all():
-                raise ValueError("options['reset_mask']: the first reset starts every "
+                raise InputError("options['reset_mask']: the first reset starts every "
                                  "environment")
             index = np.flatnonzero(mask)
         tasks = self.cords.tasks_from_options(options, len(index), self.np_random,

@@ -20,6 +20,7 @@ import numpy as np
 import torch
 
 from dlo_env.atomic import atomic_path
+from dlo_env.errors import InputError
 from dlo_env.shapes import TABLE_HALF
 from latent_model import losses, metrics, pose
 from latent_model.checkpoint import FORMAT, FORMAT_VERSION, load_checkpoint, save_atomic
@@ -259,7 +260,7 @@ class Trainer:
             if key == "train_config":  # runs from before lr_schedule existed used a constant rate
                 saved.setdefault("lr_schedule", "constant")
             if saved != current:
-                raise ValueError(
+                raise InputError(
                     f"the checkpoint was written with a different {key}: {saved} "
                     f"(now {current}); use another --out folder or the same settings"
                 )
@@ -514,15 +515,15 @@ def train(
         The trained model (also saved to ``out_dir/model.pt``).
     """
     if stage not in STAGES:
-        raise ValueError(f"stage must be one of {STAGES}, got {stage!r}")
+        raise InputError(f"stage must be one of {STAGES}, got {stage!r}")
     if not minutes > 0:
-        raise ValueError(f"minutes must be > 0, got {minutes!r}")
+        raise InputError(f"minutes must be > 0, got {minutes!r}")
     mc, tc = model_config or ModelConfig(), train_config or TrainConfig()
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     ckpt_path = out / CHECKPOINT_FILE
     if stage == "encoder" and not ckpt_path.exists():
-        raise ValueError(
+        raise InputError(
             f"stage 'encoder' needs a trained GAN: no {CHECKPOINT_FILE} in {str(out)!r}"
         )
     trainer = Trainer(train_shapes, heldout_shapes, mc, tc, device, seed)

@@ -17,6 +17,7 @@ import numpy as np
 
 from dlo_env.atomic import atomic_path
 from dlo_env.dataset.transitions import GRASP_NAMES, TransitionDataset
+from dlo_env.errors import InputError
 from dlo_env.shapes import error
 from latent_model.transition_model import TransitionModel
 from latent_model.transition_training import chain_starts
@@ -48,11 +49,11 @@ def mean_interval(errors: np.ndarray, groups: np.ndarray | None = None, level: f
         level: Coverage of the interval, in (0, 1).
     """
     if not 0.0 < level < 1.0:
-        raise ValueError(f"level must be in (0, 1), got {level!r}")
+        raise InputError(f"level must be in (0, 1), got {level!r}")
     e = np.asarray(errors, dtype=np.float64)
     labels = np.arange(len(e)) if groups is None else np.asarray(groups)
     if labels.shape != e.shape:
-        raise ValueError(f"groups must have shape {e.shape}, got {labels.shape}")
+        raise InputError(f"groups must have shape {e.shape}, got {labels.shape}")
     _, which = np.unique(labels, return_inverse=True)
     sums = np.bincount(which, weights=e)
     counts = np.bincount(which).astype(np.float64)

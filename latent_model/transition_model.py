@@ -40,6 +40,7 @@ from dlo_env.cord import (
     reachable_targets,
 )
 from dlo_env.dataset.transitions import PARAM_COLUMNS
+from dlo_env.errors import InputError
 from dlo_env.shapes import TABLE_HALF, unflatten
 from dlo_env.tasks import DEFAULT_MAX_STEP
 from latent_model.chain_network import EnsembleChainNet
@@ -75,7 +76,7 @@ def pretrained_file(cords: bool = False, pegs: bool = False) -> str:
     """The name of a shipped model in ``pretrained/``: the default cord's on the empty table,
     the model of several cords (``cords``) or the one that sees pegs (``pegs``)."""
     if cords and pegs:
-        raise ValueError("no shipped transition model is both of several cords and of pegs: "
+        raise InputError("no shipped transition model is both of several cords and of pegs: "
                          "give cords=True or pegs=True, or a model file")
     return CORDS_MODEL_FILE if cords else PEGS_MODEL_FILE if pegs else MODEL_FILE
 #: Predictions per network call in ``predict`` (keeps activations in cache).
@@ -109,15 +110,15 @@ def check_config_keys(config: dict[str, Any], name: str, checkpoint: bool = Fals
     ``RETIRED_CONFIG``'s; ``checkpoint``: a training checkpoint's."""
     what, fix = (("training checkpoint", "give another --out or delete it") if checkpoint
                  else ("transition model file",
-                       "train it again with dlo train --stage transition"))
+                       "train it again with dlo train transition"))
     missing = [k for k in REQUIRED_CONFIG if k not in config]
     if missing:
-        raise ValueError(f"{name}: a {what} from before {', '.join(missing)} existed, which "
+        raise InputError(f"{name}: a {what} from before {', '.join(missing)} existed, which "
                          f"this version no longer reads: {fix}")
     retired = [f"{k}={config[k]!r}" for k, v in RETIRED_CONFIG.items()
                if config.get(k, v) != v]
     if retired:
-        raise ValueError(f"{name}: a {what} with {', '.join(retired)}, which this version no "
+        raise InputError(f"{name}: a {what} with {', '.join(retired)}, which this version no "
                          f"longer supports: {fix}")
 
 
@@ -157,7 +158,7 @@ def recorded_cord(config: dict[str, Any], info: dict[str, Any] | None) -> dict[s
 def _required_grasp(grasp: str | None) -> str:
     """``grasp``, which is required (a default of None keeps ``displacement`` third)."""
     if grasp is None:
-        raise ValueError(f"grasp is required: one of {tuple(GRASP_CODES)}")
+        raise InputError(f"grasp is required: one of {tuple(GRASP_CODES)}")
     return grasp
 
 
@@ -194,7 +195,7 @@ def padded_pegs(pegs: Any, count: int) -> np.ndarray:
         arr = np.broadcast_to(check_pegs(arr, "pegs").astype(np.float32)[None],
                               (count,) + arr.shape)
     if arr.ndim != 3 or arr.shape[0] != count or arr.shape[2] != 2:
-        raise ValueError(f"pegs must have shape (m, 2) or ({count}, m, 2), got {np.shape(pegs)}")
+        raise InputError(f"pegs must have shape (m, 2) or ({count}, m, 2), got {np.shape(pegs)}")
     return np.array(arr, dtype=np.float32)  # a writable copy (torch takes it as it is)
 
 
@@ -274,18 +275,18 @@ class TransitionModelConfig:
         non_negative(self, "peg_reach")
         positive(self, "peg_radius")
         if not math.isfinite(self.peg_reach):
-            raise ValueError(f"TransitionModelConfig.peg_reach must be finite, got "
+            raise InputError(f"TransitionModelConfig.peg_reach must be finite, got "
                              f"{self.peg_reach!r}")
         if self.architecture not in ARCHITECTURES:
-            raise ValueError(f"TransitionModelConfig.architecture must be one of "
+            raise InputError(f"TransitionModelConfig.architecture must be one of "
                              f"{ARCHITECTURES}, got {self.architecture!r}")
         positive(self, "cord_length", "max_step", "move_scale", "output_scale", "rim_reach")
         non_negative(self, "contact_reach")
         if not math.isfinite(self.contact_reach):
-            raise ValueError(f"TransitionModelConfig.contact_reach must be finite, got "
+            raise InputError(f"TransitionModelConfig.contact_reach must be finite, got "
                              f"{self.contact_reach!r}")
         if self.mean_by_grasp and not self.mean_network:
-            raise ValueError("TransitionModelConfig.mean_by_grasp needs mean_network=True "
+            raise InputError("TransitionModelConfig.mean_by_grasp needs mean_network=True "
                              "(it splits the mean network by grasp)")
 
     @property
@@ -372,7 +373,7 @@ class EnsembleMLP(nn.Module):
         what this one does whatever they hold (their first-layer weights are zero)."""
         inputs = self.weights[0].shape[1]
         if not (0 <= at <= inputs and count >= 0):
-            raise ValueError(f"at must be in 0..{inputs} and count >= 0, got {at}, {count}")
+            raise InputError(f"at must be in 0..{inputs} and count >= 0, got {at}, {count}")
         w = self.weights[0].detach()
         grown = EnsembleMLP(self.members, inputs + count, w.shape[-1], len(self.weights) - 1,
                             self.weights[-1].shape[-1]).to(w.device)
@@ -417,7 +418,7 @@ class GraspRoutedMLP(nn.Module):
     def __init__(self, routes: EnsembleMLP) -> None:
         super().__init__()
         if routes.members != 2:
-            raise ValueError(f"routes must be 2 networks, got {routes.members}")
+            raise InputError(f"routes must be 2 networks, got {routes.members}")
         self.routes = routes
         self.outputs = routes.weights[-1].shape[-1]
 
@@ -430,7 +431,7 @@ class GraspRoutedMLP(nn.Module):
         """``(B, inputs)`` or ``(1, B, inputs)`` -> ``(1, B, outputs)``."""
         if x.dim() == 3:
             if x.shape[0] != 1:
-                raise ValueError(f"a grasp-routed mean network is one network, got inputs for "
+                raise InputError(f"a grasp-routed mean network is one network, got inputs for "
                                  f"{x.shape[0]}")
             x = x[0]
         both = x[:, -1] > 0.5
@@ -481,7 +482,7 @@ class TransitionModel(nn.Module):
         ``cord_inputs``) its stiffness, friction and mass too."""
         own = self.cord_params
         if (params.n_points, params.length) != (own.n_points, own.length):
-            raise ValueError(
+            raise InputError(
                 f"the transition model was trained for a cord of {own.n_points} points "
                 f"and {own.length} m, but the environment's cord has {params.n_points} "
                 f"points and {params.length} m: train a model for this cord")
@@ -491,7 +492,7 @@ class TransitionModel(nn.Module):
                   f"{getattr(params, k)!r}" for k in PARAM_COLUMNS
                   if not math.isclose(getattr(params, k), getattr(own, k), rel_tol=1e-9)]
         if differ:
-            raise ValueError(f"the transition model was trained for one cord, with "
+            raise InputError(f"the transition model was trained for one cord, with "
                              f"{', '.join(differ)}: train a model for this cord, or one of "
                              "several cords (--cord-inputs)")
 
@@ -543,7 +544,7 @@ class TransitionModel(nn.Module):
         e, n = net.members, self.config.n_points
         per_member = shapes.dim() == 4
         if per_member and members is not None:
-            raise ValueError("members applies to shapes shared by the members (B, n, 2), not to "
+            raise InputError("members applies to shapes shared by the members (B, n, 2), not to "
                              "one start per member")
         if per_member:
             b = shapes.shape[1]
@@ -661,24 +662,24 @@ class TransitionModel(nn.Module):
             other = [k for k, v in asdict(params).items() if k not in PARAM_COLUMNS
                      and k != "length" and v != getattr(self.cord_params, k)]
             if other:
-                raise ValueError(f"params may differ from the model's cord only in "
+                raise InputError(f"params may differ from the model's cord only in "
                                  f"{PARAM_COLUMNS}, got other {', '.join(other)}")
             rows = np.array([getattr(params, k) for k in PARAM_COLUMNS], dtype=np.float64)
         else:
             try:
                 rows = np.asarray(params, dtype=np.float64)
             except (TypeError, ValueError):
-                raise ValueError(f"params must be None, a CordParams, or rows of "
+                raise InputError(f"params must be None, a CordParams, or rows of "
                                  f"{PARAM_COLUMNS}, got {type(params).__name__}") from None
         cols = len(PARAM_COLUMNS)
         if rows.ndim == 1:
             rows = np.tile(rows, (count, 1)) if rows.shape == (cols,) else rows[None]
         if rows.shape != (count, cols) or not (np.isfinite(rows).all() and (rows > 0).all()):
-            raise ValueError(f"params must be None, a CordParams, or positive finite rows of "
+            raise InputError(f"params must be None, a CordParams, or positive finite rows of "
                              f"{PARAM_COLUMNS}, shape ({cols},) or ({count}, {cols}), got "
                              f"shape {np.shape(params)}")
         if not self.config.cord_inputs and not np.allclose(rows, own, rtol=1e-5):
-            raise ValueError("params: this model was trained for one cord "
+            raise InputError("params: this model was trained for one cord "
                              f"({dict(zip(PARAM_COLUMNS, own.tolist()))}) and does not see "
                              "others (TransitionModelConfig.cord_inputs); give None")
         return rows
@@ -706,7 +707,7 @@ class TransitionModel(nn.Module):
         ``grasp``; ``peg_radius`` None: ``config.peg_radius``)."""
         grasp = _required_grasp(grasp)
         if displacement is None:
-            raise ValueError("displacement is required")
+            raise InputError("displacement is required")
         pegs = None if pegs is None else padded_pegs(pegs, len(shapes)).astype(np.float64)
         peg_radius = self.config.peg_radius if peg_radius is None else float(peg_radius)
         if params is not None and grasp == "both":  # only the span, of two ends, is the cord's
@@ -768,32 +769,32 @@ class TransitionModel(nn.Module):
     def _inputs(self, shapes: Any, grasp: Any, displacement: Any
                 ) -> tuple[np.ndarray, np.ndarray, bool]:
         if grasp not in GRASP_CODES:
-            raise ValueError(f"grasp must be one of {tuple(GRASP_CODES)}, got {grasp!r}")
+            raise InputError(f"grasp must be one of {tuple(GRASP_CODES)}, got {grasp!r}")
         n = self.config.n_points
         # flat shapes, as observations hold them, too
         try:
             arr = np.ascontiguousarray(unflatten(shapes, n, dtype=np.float32))
         except (TypeError, ValueError) as exc:
-            raise ValueError(f"shapes must be numbers of shape ({n}, 2), ({2 * n},), (B, {n}, 2) "
+            raise InputError(f"shapes must be numbers of shape ({n}, 2), ({2 * n},), (B, {n}, 2) "
                              f"or (B, {2 * n}): {exc}") from None
         single = arr.ndim == 2
         arr = arr[None] if single else arr
         if arr.ndim != 3 or arr.shape[1:] != (n, 2):
-            raise ValueError(f"shapes must have shape ({n}, 2), ({2 * n},), (B, {n}, 2) or "
+            raise InputError(f"shapes must have shape ({n}, 2), ({2 * n},), (B, {n}, 2) or "
                              f"(B, {2 * n}), got {np.shape(shapes)}")
         width = 4 if grasp == "both" else 2
         try:
             d = np.ascontiguousarray(displacement, dtype=np.float32)
         except (TypeError, ValueError) as exc:
-            raise ValueError(f"displacement must be numbers of shape ({width},) or "
+            raise InputError(f"displacement must be numbers of shape ({width},) or "
                              f"(B, {width}): {exc}") from None
         d = d[None] if d.ndim == 1 else d
         if d.shape != (len(arr), width):
             want = f"({width},) or ({len(arr)}, {width})" if not single else f"({width},)"
-            raise ValueError(f"displacement must have shape {want} for grasp={grasp!r} "
+            raise InputError(f"displacement must have shape {want} for grasp={grasp!r} "
                              f"and {len(arr)} shape(s), got {np.shape(displacement)}")
         if not (np.isfinite(arr).all() and np.isfinite(d).all()):
-            raise ValueError("shapes and displacement must be finite, got NaN or infinite values")
+            raise InputError("shapes and displacement must be finite, got NaN or infinite values")
         return arr, d, single
 
     @renamed_argument("end", "grasp")
@@ -841,7 +842,7 @@ class TransitionModel(nn.Module):
         """
         grasp = _required_grasp(grasp)
         if displacement is None:
-            raise ValueError("displacement is required: (2,)/(B, 2) for one end, (4,)/(B, 4) "
+            raise InputError("displacement is required: (2,)/(B, 2) for one end, (4,)/(B, 4) "
                              "for both")
         arr, d, single = self._inputs(shapes, grasp, displacement)
         members = self._members_argument(members, return_std)
@@ -870,11 +871,11 @@ class TransitionModel(nn.Module):
         total = self.config.members
         if members is not None and not (isinstance(members, Integral) and not isinstance(
                 members, bool) and 1 <= members <= total):
-            raise ValueError(f"members must be an int in 1..{total} or None, got {members!r}")
+            raise InputError(f"members must be an int in 1..{total} or None, got {members!r}")
         if members is not None:
             members = int(members)
         if return_std and (members == 1 or (members is None and total == 1)):
-            raise ValueError("return_std needs members >= 2 (one network has no spread), "
+            raise InputError("return_std needs members >= 2 (one network has no spread), "
                              f"got members={members or total}")
         return members
 
@@ -951,7 +952,7 @@ class TransitionModel(nn.Module):
                                                 for k, v in data["mean_net"].items()})
         except (KeyError, TypeError, RuntimeError, ValueError) as exc:
             detail = " ".join(str(exc).split())  # torch's messages span several lines
-            raise ValueError(f"{name}: the checkpoint's contents do not fit a TransitionModel: "
+            raise InputError(f"{name}: the checkpoint's contents do not fit a TransitionModel: "
                              f"{detail}") from exc
         model.device = resolve_device(device)
         return model.to(model.device).eval()

@@ -41,6 +41,7 @@ from dlo_env.dataset.transitions import (
     TransitionDataset,
     split_transitions,
 )
+from dlo_env.errors import InputError
 from dlo_env.randomize import near_test_cords
 from latent_model.checkpoint import load_checkpoint, save_atomic
 from latent_model.config import LR_SCHEDULES, config_from_dict
@@ -113,20 +114,20 @@ class TransitionTrainConfig:
         positive_ints(self, "steps", "batch_size", "eval_every")
         non_negative(self, "teacher_weight", "miss_weight", "miss_margin")
         if not (isinstance(self.teacher_moves, int) and self.teacher_moves >= 0):
-            raise ValueError("TransitionTrainConfig.teacher_moves must be an int >= 0, "
+            raise InputError("TransitionTrainConfig.teacher_moves must be an int >= 0, "
                              f"got {self.teacher_moves!r}")
         if self.teacher_moves and not self.teacher:
-            raise ValueError("TransitionTrainConfig.teacher_moves: moves labelled by a teacher "
+            raise InputError("TransitionTrainConfig.teacher_moves: moves labelled by a teacher "
                              "need one (teacher, --teacher)")
         if self.init and self.teacher:
-            raise ValueError("TransitionTrainConfig: give init (fine-tune the ensemble) or "
+            raise InputError("TransitionTrainConfig: give init (fine-tune the ensemble) or "
                              "teacher (distil a mean network), not both")
         positive(self, "lr")
         if self.lr_schedule not in LR_SCHEDULES:
-            raise ValueError(f"TransitionTrainConfig.lr_schedule must be one of {LR_SCHEDULES}, "
+            raise InputError(f"TransitionTrainConfig.lr_schedule must be one of {LR_SCHEDULES}, "
                              f"got {self.lr_schedule!r}")
         if not 0.0 < self.validation_fraction < 1.0:
-            raise ValueError("TransitionTrainConfig.validation_fraction must be in (0, 1), "
+            raise InputError("TransitionTrainConfig.validation_fraction must be in (0, 1), "
                              f"got {self.validation_fraction!r}")
 
 
@@ -293,7 +294,7 @@ def _distil_from(teacher_path: str, mc: TransitionModelConfig
     tcfg = teacher.config
     for field in ("n_points", *CORD_FIELDS, "max_step"):
         if getattr(tcfg, field) != getattr(mc, field):
-            raise ValueError(f"teacher {teacher_path!r} was trained for {field}="
+            raise InputError(f"teacher {teacher_path!r} was trained for {field}="
                              f"{getattr(tcfg, field)!r}, the data has {getattr(mc, field)!r}")
     return teacher, replace(tcfg, mean_network=True, mean_by_grasp=mc.mean_by_grasp)
 
@@ -305,7 +306,7 @@ def _output_folder(out: str | os.PathLike[str], resume: bool) -> tuple[Path, Pat
     out.mkdir(parents=True, exist_ok=True)
     checkpoint = out / CHECKPOINT_FILE
     if checkpoint.exists() and not resume:
-        raise ValueError(f"out {str(out)!r} holds a training checkpoint; pass resume=True "
+        raise InputError(f"out {str(out)!r} holds a training checkpoint; pass resume=True "
                          "(--resume) to continue it, or choose another folder")
     return out, checkpoint
 
@@ -324,7 +325,7 @@ def _training_data(data: TransitionDataset, tc: TransitionTrainConfig,
     left_out = near_test_cords(data.params, PARAM_COLUMNS) if conditioned \
         else np.zeros(len(data), dtype=bool)
     if left_out.all():
-        raise ValueError("data holds only cords near the held-out test cords "
+        raise InputError("data holds only cords near the held-out test cords "
                          "(dlo_env.randomize.TEST_CORDS): nothing to train on")
     if left_out.any():
         data = data.subset(~left_out)
@@ -334,7 +335,7 @@ def _training_data(data: TransitionDataset, tc: TransitionTrainConfig,
                                   "max_step": float(data.metadata.get("collect", {}).get(
                                       "max_step", mc.max_step))})
     if mc.mean_network and not tc.teacher:
-        raise ValueError("model_config.mean_network: a mean network is made by distilling a "
+        raise InputError("model_config.mean_network: a mean network is made by distilling a "
                          "trained ensemble (TransitionTrainConfig.teacher, --teacher), not "
                          "trained with it")
     collected = data.metadata.get("collect", {})
@@ -346,7 +347,7 @@ def _training_data(data: TransitionDataset, tc: TransitionTrainConfig,
 def _check_pegs(data: TransitionDataset, mc: TransitionModelConfig) -> None:
     """Transitions around pegs need a model that sees them."""
     if len(data) and data.peg_count.any() and not mc.peg_reach:
-        raise ValueError("data holds transitions around pegs (collected with max_pegs); a "
+        raise InputError("data holds transitions around pegs (collected with max_pegs); a "
                          "model without peg_reach (--peg-reach) does not see pegs: give it one, "
                          "or use data of an empty table")
 
@@ -389,7 +390,7 @@ def _grown_network(start: TransitionModel, mc: TransitionModelConfig, init: str
     differ = [f"{k}={v!r} (this run {getattr(mc, k)!r})" for k, v in asdict(grown).items()
               if getattr(mc, k) != v]
     if differ:
-        raise ValueError(f"init {init!r} is a model of another architecture or cord: "
+        raise InputError(f"init {init!r} is a model of another architecture or cord: "
                          f"{', '.join(differ)}")
     net = start.net
     if grow_contact:
@@ -472,13 +473,13 @@ def _resume(run: _Run, checkpoint: Path, tc: TransitionTrainConfig,
     if saved_tc != tc or saved_mc != mc:
         differ = [f"{k}={a!r} (now {b!r})" for old, new in ((saved_tc, tc), (saved_mc, mc))
                   for (k, a), b in zip(asdict(old).items(), asdict(new).values()) if a != b]
-        raise ValueError(f"resume: {checkpoint} was written with other settings: "
+        raise InputError(f"resume: {checkpoint} was written with other settings: "
                          f"{', '.join(differ)}; use the same settings or another --out")
     if saved.get("teacher_ensemble", run.teacher_ensemble) != run.teacher_ensemble:
-        raise ValueError(f"resume: {checkpoint} distils another ensemble than teacher "
+        raise InputError(f"resume: {checkpoint} distils another ensemble than teacher "
                          f"{tc.teacher!r} holds now; use that teacher or another --out")
     if saved.get("init_fingerprint", run.init_fingerprint) != run.init_fingerprint:
-        raise ValueError(f"resume: {checkpoint} fine-tunes another model than init "
+        raise InputError(f"resume: {checkpoint} fine-tunes another model than init "
                          f"{tc.init!r} holds now; use that model or another --out")
     run.trained.load_state_dict(saved["net"])
     run.optimiser.load_state_dict(saved["optimiser"])
@@ -694,7 +695,7 @@ def config_from_json(values: dict[str, Any]) -> TransitionTrainConfig:
     """A training config from JSON values (unknown keys are an error naming them; retired
     ones must have had no effect)."""
     if values.get("chain_weight", 0.0) != 0.0:
-        raise ValueError(f"train_config has chain_weight={values['chain_weight']!r}: the chain "
+        raise InputError(f"train_config has chain_weight={values['chain_weight']!r}: the chain "
                          "loss is retired")
     return config_from_dict(TransitionTrainConfig,
                             {k: v for k, v in values.items() if k not in RETIRED_TRAIN},

@@ -25,6 +25,7 @@ import numpy as np
 
 from dlo_env.checks import positive_ints
 from dlo_env.dataset.transitions import PARAM_COLUMNS
+from dlo_env.errors import InputError
 from dlo_env.randomize import DEFAULT_RANGES, check_randomize
 from dlo_env.shapes import cord_length, error
 from planners.latent_mpc import LatentMPCConfig, LatentMPCPolicy
@@ -36,8 +37,8 @@ class AdaptConfig:
 
     Attributes:
         ranges: Parameter -> (low, high) searched (the others stay the default cord's). None:
-            the ranges the model's training data was drawn from (``dlo collect --randomize``),
-            else ``dlo_env.randomize.DEFAULT_RANGES``.
+            the ranges the model's training data was drawn from (``dlo collect transitions
+            --randomize``), else ``dlo_env.randomize.DEFAULT_RANGES``.
         candidates: Cords scored per round.
         rounds: Rounds after the first, each around the best cord so far with half the spread.
         min_moves: Moves seen before the first fit (before it: the default cord, with the
@@ -57,15 +58,15 @@ class AdaptConfig:
     def __post_init__(self) -> None:
         positive_ints(self, "candidates", "min_moves")
         if not (isinstance(self.rounds, int) and self.rounds >= 0):
-            raise ValueError(f"AdaptConfig.rounds must be an int >= 0, got {self.rounds!r}")
+            raise InputError(f"AdaptConfig.rounds must be an int >= 0, got {self.rounds!r}")
         if self.ranges is not None:
             check_randomize(self.ranges, "AdaptConfig.ranges")
 
 
 def trained_ranges(info: Mapping[str, Any]) -> dict[str, tuple[float, float]]:
     """The parameter ranges a transition model's training data were drawn from (``dlo collect
-    --randomize``), the union over its files (``info["sources"]``, else ``info["data"]``);
-    empty when none was randomised."""
+    transitions --randomize``), the union over its files (``info["sources"]``, else
+    ``info["data"]``); empty when none was randomised."""
     sources = info.get("sources") or [{"collect": info.get("data") or {}}]
     out: dict[str, tuple[float, float]] = {}
     for source in sources:
@@ -107,8 +108,8 @@ class AdaptiveLatentMPCPolicy(LatentMPCPolicy):
                  config: LatentMPCConfig | None = None, *, success_metric: str = "error",
                  adapt: AdaptConfig | None = None) -> None:
         if not getattr(model.config, "cord_inputs", False):
-            raise ValueError("model must be a transition model conditioned on the cord "
-                             "(TransitionModelConfig.cord_inputs; dlo train --stage transition "
+            raise InputError("model must be a transition model conditioned on the cord "
+                             "(TransitionModelConfig.cord_inputs; dlo train transition "
                              "--cord-inputs)")
         self.adapt = adapt if adapt is not None else AdaptConfig()
         self.default_row = np.array([getattr(model.cord_params, k) for k in PARAM_COLUMNS])
@@ -129,7 +130,7 @@ class AdaptiveLatentMPCPolicy(LatentMPCPolicy):
         """Build the policy for a ``dlo_env`` environment (the cord's parameters are not read:
         they are what the policy fits)."""
         if model is None:
-            raise ValueError("model is required: a transition model of several cords "
+            raise InputError("model is required: a transition model of several cords "
                              "(TransitionModel.load_pretrained(cords=True) is the shipped one)")
         base = getattr(env, "unwrapped", env)
         policy = cls(model, grasp=base.grasp, success_threshold=base.success_threshold,

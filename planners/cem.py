@@ -18,6 +18,7 @@ import numpy as np
 
 from dlo_env.checks import fractions, non_negative, non_negative_ints, positive, positive_ints
 from dlo_env.cord import CordParams
+from dlo_env.errors import InputError
 from dlo_env.shapes import SUCCESS_METRICS
 from dlo_env.tasks import GRASP_ENDS, split_move
 from planners.episodes import EpisodicPolicy
@@ -73,13 +74,13 @@ class CEMConfig:
         non_negative(self, "focus")
         fractions(self, "stop_fraction", closed_low=True)
         if not (isinstance(self.far_grasps, tuple) and set(self.far_grasps) <= set(GRASP_ENDS)):
-            raise ValueError(f"{name}.far_grasps must be a tuple of {tuple(GRASP_ENDS)}, "
+            raise InputError(f"{name}.far_grasps must be a tuple of {tuple(GRASP_ENDS)}, "
                              f"got {self.far_grasps!r}")
         if self.min_std > self.init_std:
-            raise ValueError(f"{name}.min_std must be <= init_std ({self.init_std}), "
+            raise InputError(f"{name}.min_std must be <= init_std ({self.init_std}), "
                              f"got {self.min_std}")
         if self.elites > self.samples:
-            raise ValueError(f"{name}.elites must be <= samples ({self.samples}), "
+            raise InputError(f"{name}.elites must be <= samples ({self.samples}), "
                              f"got {self.elites}")
 
 
@@ -117,14 +118,14 @@ class CEMPolicy(EpisodicPolicy):
                  success_threshold: float, config: CEMConfig, *,
                  success_metric: str = "error") -> None:
         if success_metric not in SUCCESS_METRICS:
-            raise ValueError(f"success_metric must be one of {tuple(SUCCESS_METRICS)}, got "
+            raise InputError(f"success_metric must be one of {tuple(SUCCESS_METRICS)}, got "
                              f"{success_metric!r}")
         self.success_metric = success_metric
         self._distance = SUCCESS_METRICS[success_metric]
         if grasp not in GRASP_ENDS:
-            raise ValueError(f"grasp must be one of {tuple(GRASP_ENDS)}, got {grasp!r}")
+            raise InputError(f"grasp must be one of {tuple(GRASP_ENDS)}, got {grasp!r}")
         if not max_step > 0:
-            raise ValueError(f"max_step must be > 0, got {max_step!r}")
+            raise InputError(f"max_step must be > 0, got {max_step!r}")
         self.params = params if params is not None else CordParams()
         self.grasp = grasp
         self.ends = GRASP_ENDS[grasp]
@@ -140,7 +141,7 @@ class CEMPolicy(EpisodicPolicy):
         threshold = float(getattr(base, "success_threshold", self.success_threshold))
         metric = getattr(base, "success_metric", self.success_metric)
         if abs(threshold - self.success_threshold) > 1e-12 or metric != self.success_metric:
-            raise ValueError(
+            raise InputError(
                 f"the policy was built for success_threshold={self.success_threshold} m and "
                 f"success_metric={self.success_metric!r}, but the environment has "
                 f"success_threshold={threshold} m and success_metric={metric!r}: build it with "

@@ -9,6 +9,8 @@ import warnings
 from collections.abc import Callable
 from typing import Any, TypeVar
 
+from dlo_env.errors import InputError
+
 T = TypeVar("T")
 F = TypeVar("F", bound=Callable[..., Any])
 
@@ -28,7 +30,7 @@ def renamed_argument(old: str, new: str, name: str | None = None) -> Callable[[F
         def wrapper(*args: Any, **kwargs: Any) -> Any:
             if old in kwargs:
                 if new in kwargs or (position is not None and len(args) > position):
-                    raise ValueError(f"give {label}({new}=...) ({old} is its deprecated name), "
+                    raise InputError(f"give {label}({new}=...) ({old} is its deprecated name), "
                                      "not both")
                 warnings.warn(f"{label}({old}=...) is deprecated: use {new}=...",
                               DeprecationWarning, stacklevel=2)

@@ -21,6 +21,7 @@ import torch
 from torch import nn
 
 from dlo_env.cord import CordParams
+from dlo_env.errors import InputError
 from dlo_env.tasks import DEFAULT_MAX_STEP, GRASP_ENDS
 from planners.cem import CEMPolicy
 from planners.latent_mpc import LatentMPCConfig
@@ -157,10 +158,10 @@ class DistilledPolicy(CEMPolicy):
         base = getattr(env, "unwrapped", env)
         c = network.config
         if base.grasp != c.grasp:
-            raise ValueError(f"the network moves grasp {c.grasp!r}, the environment holds "
+            raise InputError(f"the network moves grasp {c.grasp!r}, the environment holds "
                              f"{base.grasp!r}: distil one there")
         if base.params.n_points != c.n_points or abs(base.max_step - c.max_step) > 1e-12:
-            raise ValueError("the network was distilled for another cord or max_step")
+            raise InputError("the network was distilled for another cord or max_step")
         return cls(network, base.success_threshold, base.params,
                    success_metric=base.success_metric)
 

@@ -42,6 +42,7 @@ from typing import Any
 import numpy as np
 
 from dlo_env.cord import CordParams
+from dlo_env.errors import InputError
 from dlo_env.shapes import error
 from planners.interfaces import Observation
 from planners.observation import CordObservation, read_observation, split_batch
@@ -79,7 +80,7 @@ def _starts(episode_start: Any, size: int) -> np.ndarray:
     if starts.size == 1:
         return np.repeat(starts, size)
     if starts.size != size:
-        raise ValueError(f"episode_start must hold one flag per environment ({size}), got "
+        raise InputError(f"episode_start must hold one flag per environment ({size}), got "
                          f"{starts.size}")
     return starts
 
@@ -162,7 +163,7 @@ class EpisodicPolicy:
             env_id, size = self.built_for
             got = np.asarray(observation["observation"]).size
             if got != size:
-                raise ValueError(
+                raise InputError(
                     f"observation['observation'] has {got} numbers, but this policy was built "
                     f"for {env_id}, which observes {size}: build the agent with the "
                     "environment it acts in (a suite's: gym.make(id, "

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from dlo_env.errors import InputError
 from planners.interfaces import ShapeSurrogate
 from planners.observation import as_shape
 from planners.surrogate import Surrogate
@@ -33,7 +34,7 @@ def interpolate(
         Shapes ``(steps, n, 2)`` float32, and the latents if ``return_latents``.
     """
     if not isinstance(steps, (int, np.integer)) or steps < 2:
-        raise ValueError(f"steps must be an int >= 2, got {steps!r}")
+        raise InputError(f"steps must be an int >= 2, got {steps!r}")
     surrogate = Surrogate(model)
     n = surrogate.n_points
     pair = np.stack([as_shape(start, n, "start"), as_shape(goal, n, "goal")])

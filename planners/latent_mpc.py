@@ -17,6 +17,7 @@ from typing import Any
 import numpy as np
 
 from dlo_env.checks import non_negative, non_negative_ints, positive_ints
+from dlo_env.errors import InputError
 from planners.cem import CEMConfig, CEMPolicy
 from planners.observation import CordObservation
 
@@ -70,7 +71,7 @@ class LatentMPCConfig(CEMConfig):
         if self.members is not None:
             positive_ints(self, "members")
         if self.spread_weight > 0 and self.members == 1:
-            raise ValueError("LatentMPCConfig.spread_weight > 0 needs members >= 2 (the spread "
+            raise InputError("LatentMPCConfig.spread_weight > 0 needs members >= 2 (the spread "
                              "of one member is zero), got members=1")
 
 
@@ -95,7 +96,7 @@ class LatentMPCPolicy(CEMPolicy):
         config = config if config is not None else LatentMPCConfig()
         total = model.config.members
         if config.members is not None and config.members > total:
-            raise ValueError(f"LatentMPCConfig.members must be <= the model's {total} members, "
+            raise InputError(f"LatentMPCConfig.members must be <= the model's {total} members, "
                              f"got {config.members}")
         super().__init__(model.cord_params, grasp, model.config.max_step, success_threshold,
                          config, success_metric=success_metric)
@@ -124,11 +125,11 @@ class LatentMPCPolicy(CEMPolicy):
         base = getattr(env, "unwrapped", env)
         self.model.check_env_cord(base.params)
         if abs(base.max_step - self.max_step) > 1e-12:
-            raise ValueError(
+            raise InputError(
                 f"the transition model was trained with max_step={self.max_step} m, but the "
                 f"environment has max_step={base.max_step} m")
         if base.grasp != self.grasp:
-            raise ValueError(f"the policy moves grasp {self.grasp!r} but the environment holds "
+            raise InputError(f"the policy moves grasp {self.grasp!r} but the environment holds "
                              f"{base.grasp!r}")
         self._check_threshold(base)
 

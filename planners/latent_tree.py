@@ -24,6 +24,7 @@ from typing import Any, Protocol
 
 import numpy as np
 
+from dlo_env.errors import InputError
 from dlo_env.shapes import (
     COSINE_THRESHOLD,
     error,
@@ -130,42 +131,42 @@ class TreeConfig:
         for name in positive:
             value = getattr(self, name)
             if not (isinstance(value, (int, float)) and value > 0):
-                raise ValueError(f"TreeConfig.{name} must be a number > 0, got {value!r}")
+                raise InputError(f"TreeConfig.{name} must be a number > 0, got {value!r}")
         for name in ("edge_points", "connect_attempts", "batch_size", "max_nodes",
                      "max_edge_points", "move_samples"):
             value = getattr(self, name)
             if not (isinstance(value, int) and value >= 1):
-                raise ValueError(f"TreeConfig.{name} must be an int >= 1, got {value!r}")
+                raise InputError(f"TreeConfig.{name} must be an int >= 1, got {value!r}")
         if self.max_edge_points < self.edge_points:
-            raise ValueError(
+            raise InputError(
                 f"TreeConfig.max_edge_points must be >= edge_points ({self.edge_points}), "
                 f"got {self.max_edge_points}"
             )
         if not 0.0 <= self.goal_bias <= 1.0:
-            raise ValueError(f"TreeConfig.goal_bias must be in [0, 1], got {self.goal_bias!r}")
+            raise InputError(f"TreeConfig.goal_bias must be in [0, 1], got {self.goal_bias!r}")
         if self.follow_ratio is not None and not self.follow_ratio > 0:
-            raise ValueError(
+            raise InputError(
                 f"TreeConfig.follow_ratio must be > 0 or None, got {self.follow_ratio!r}"
             )
         if not self.straightness_ratio >= 0:
-            raise ValueError(
+            raise InputError(
                 f"TreeConfig.straightness_ratio must be >= 0, got {self.straightness_ratio!r}"
             )
         if not self.follow_slack >= 0:
-            raise ValueError(f"TreeConfig.follow_slack must be >= 0, got {self.follow_slack!r}")
+            raise InputError(f"TreeConfig.follow_slack must be >= 0, got {self.follow_slack!r}")
         if self.max_stretch is not None and not self.max_stretch > 0:
-            raise ValueError(
+            raise InputError(
                 f"TreeConfig.max_stretch must be > 0 or None, got {self.max_stretch!r}"
             )
         for name in ("invert_steps", "invert_restarts"):
             value = getattr(self, name)
             if value is not None and not (isinstance(value, int) and value >= 0):
-                raise ValueError(f"TreeConfig.{name} must be None or an int >= 0, got {value!r}")
+                raise InputError(f"TreeConfig.{name} must be None or an int >= 0, got {value!r}")
         if self.grasp not in ENDS:
-            raise ValueError(f"TreeConfig.grasp must be one of {tuple(ENDS)}, got "
+            raise InputError(f"TreeConfig.grasp must be one of {tuple(ENDS)}, got "
                              f"{self.grasp!r}")
         if self.edges not in EDGES:
-            raise ValueError(f"TreeConfig.edges must be one of {EDGES}, got {self.edges!r}")
+            raise InputError(f"TreeConfig.edges must be one of {EDGES}, got {self.edges!r}")
 
 
 #: The kinodynamic tree of the ``latent-tree-kino`` agent: straight-move edges predicted by the
@@ -282,7 +283,7 @@ class LatentTreePlanner:
         known = {f.name for f in fields(TreeConfig)}
         unknown = sorted(set(overrides) - known)
         if unknown:
-            raise ValueError(f"unknown LatentTreePlanner parameters {unknown}; expected some of "
+            raise InputError(f"unknown LatentTreePlanner parameters {unknown}; expected some of "
                              f"{sorted(known)}")
         self.config = replace(config if config is not None else TreeConfig(), **overrides)
         self.surrogate = Surrogate(model)
@@ -295,10 +296,10 @@ class LatentTreePlanner:
         self.pegs: np.ndarray | None = None
         if self.config.edges == "moves":
             if transition_model is None:
-                raise ValueError('edges="moves" needs a transition_model (a '
+                raise InputError('edges="moves" needs a transition_model (a '
                                  'latent_model.TransitionModel)')
             if transition_model.config.n_points != self.n_points:
-                raise ValueError(f"transition_model must be for {self.n_points} points, got "
+                raise InputError(f"transition_model must be for {self.n_points} points, got "
                                  f"{transition_model.config.n_points}")
 
     @property
@@ -615,7 +616,7 @@ class _LatentEdges:
             latent_dim = planner.surrogate.latent_dim
             z_goal = np.asarray(goal_latent, dtype=np.float32).reshape(-1)
             if z_goal.shape != (latent_dim,):
-                raise ValueError(f"goal_latent must have shape ({latent_dim},), "
+                raise InputError(f"goal_latent must have shape ({latent_dim},), "
                                  f"got {np.shape(goal_latent)}")
             z, inv_err, inv_ok = planner.invert(start[None])
             z_start = z[0]

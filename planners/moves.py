@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from dlo_env.errors import InputError
 from dlo_env.shapes import TABLE_HALF
 from dlo_env.tasks import split_move
 
@@ -32,7 +33,7 @@ def actions_by_move(
         length ``<= 1``.
     """
     if not max_step > 0:
-        raise ValueError(f"max_step must be > 0, got {max_step!r}")
+        raise InputError(f"max_step must be > 0, got {max_step!r}")
     lim = TABLE_HALF - EDGE_MARGIN
     here = np.asarray(end, dtype=np.float64).reshape(-1)
     width = here.size

@@ -14,6 +14,7 @@ from typing import Any
 
 import numpy as np
 
+from dlo_env.errors import InputError
 from dlo_env.shapes import as_points
 
 
@@ -53,7 +54,7 @@ def _check_dict(observation: Any) -> None:
         observation
     ):
         got = sorted(observation) if isinstance(observation, dict) else type(observation).__name__
-        raise ValueError(
+        raise InputError(
             "observation must be a dict with 'achieved_goal' and 'desired_goal' (a dlo_env goal "
             f"environment's observation), got {got}"
         )
@@ -77,7 +78,7 @@ def split_batch(observation: Any) -> tuple[list[dict[str, np.ndarray]], bool]:
     size = arrays["achieved_goal"].shape[0]
     for key, value in arrays.items():
         if value.ndim < 2 or value.shape[0] != size:
-            raise ValueError(
+            raise InputError(
                 f"observation[{key!r}] must have the batch's leading axis of {size} (as "
                 f"observation['achieved_goal']), got shape {value.shape}"
             )
@@ -96,13 +97,13 @@ def read_observation(observation: Any, n_points: int) -> CordObservation:
     achieved = np.asarray(observation["achieved_goal"], dtype=np.float32)
     desired = np.asarray(observation["desired_goal"], dtype=np.float32)
     if achieved.ndim == 2 and achieved.shape[0] != 1:
-        raise ValueError(
+        raise InputError(
             f"observation must hold one environment (batch of 1), got a batch of "
             f"{achieved.shape[0]}: split it with planners.observation.split_batch"
         )
     flat = achieved.reshape(-1)
     if flat.size != 2 * n_points:
-        raise ValueError(
+        raise InputError(
             f"observation['achieved_goal'] has {flat.size} numbers, but the model's cord has "
             f"n_points={n_points} ({2 * n_points} numbers): the model and the environment "
             "must be made for the same cord"

@@ -17,6 +17,7 @@ from typing import Any
 
 import numpy as np
 
+from dlo_env.errors import InputError
 from planners.episodes import _starts
 from planners.interfaces import Policy
 from planners.observation import split_batch
@@ -33,7 +34,7 @@ class PerEnvPolicy:
         self.policies = list(policies)
         if not self.policies or not all(isinstance(p, Policy) for p in self.policies):
             kinds = ", ".join(sorted({type(p).__name__ for p in self.policies})) or "none"
-            raise ValueError("policies must be a non-empty list of policies with predict(), "
+            raise InputError("policies must be a non-empty list of policies with predict(), "
                              f"got {kinds}")
 
     def predict(self, observation: Any, state: Any = None, episode_start: Any = None,
@@ -42,7 +43,7 @@ class PerEnvPolicy:
         unbatched observation is one environment: for a list of one policy)."""
         rows, batched = split_batch(observation)
         if len(rows) != len(self.policies):
-            raise ValueError(f"observation must hold one row per policy ({len(self.policies)}),"
+            raise InputError(f"observation must hold one row per policy ({len(self.policies)}),"
                              f" got {len(rows)}")
         starts = _starts(episode_start, len(rows))
         actions = [np.asarray(policy.predict(row, None, starts[i:i + 1], deterministic)[0],

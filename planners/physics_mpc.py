@@ -18,6 +18,7 @@ import numpy as np
 
 from dlo_env.checks import non_negative_ints, positive_ints
 from dlo_env.cord import PEG_RADIUS, Cord, CordParams
+from dlo_env.errors import InputError
 from dlo_env.shapes import cord_length, onto_table, segment_lengths, shape_from_headings
 from planners.cem import CEMConfig, CEMPolicy
 from planners.observation import CordObservation
@@ -131,7 +132,7 @@ class PhysicsMPCPolicy(CEMPolicy):
         base = getattr(env, "unwrapped", env)
         if (base.params, base.cord.grasp, base.max_step, base.peg_radius) != (
                 self.params, self.grasp, self.max_step, self._cord.peg_radius):
-            raise ValueError(
+            raise InputError(
                 f"the physics planner was made for grasp {self.grasp!r}, max_step "
                 f"{self.max_step} m, peg_radius {self._cord.peg_radius} m and {self.params}, "
                 f"but the environment has grasp {base.cord.grasp!r}, max_step "
@@ -208,7 +209,7 @@ class TrueCordPhysicsMPCPolicy(PhysicsMPCPolicy):
     def check_env(self, env: object) -> None:
         """Raise ``ValueError`` unless ``env`` is the environment this policy reads."""
         if getattr(env, "unwrapped", env) is not self._env:
-            raise ValueError("TrueCordPhysicsMPCPolicy reads the cord of the environment it "
+            raise InputError("TrueCordPhysicsMPCPolicy reads the cord of the environment it "
                              "was made for: build it with TrueCordPhysicsMPCPolicy(env)")
         self._check_threshold(self._env)
 
@@ -219,7 +220,7 @@ class TrueCordPhysicsMPCPolicy(PhysicsMPCPolicy):
 
     def _copies(self, size: int) -> list:
         if size > 1:
-            raise ValueError("TrueCordPhysicsMPCPolicy reads the cord of the one environment "
+            raise InputError("TrueCordPhysicsMPCPolicy reads the cord of the one environment "
                              f"it was made for: it takes a batch of 1, got {size} observations; "
                              "in a vector env give each environment its own with "
                              "planners.PerEnvPolicy")

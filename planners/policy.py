@@ -30,6 +30,7 @@ from typing import Any
 
 import numpy as np
 
+from dlo_env.errors import InputError
 from dlo_env.shapes import error
 from planners.episodes import EpisodicPolicy
 from planners.interfaces import EpisodeStats, Plan, ShapeSurrogate
@@ -132,30 +133,30 @@ class PlannerPolicy(EpisodicPolicy):
         if planner is None:
             planner = LatentTreePlanner(model)
         if planner.n_points != n:
-            raise ValueError(
+            raise InputError(
                 f"planner must plan for the model's n_points={n}, got a planner for "
                 f"n_points={planner.n_points}"
             )
         if replan_every is not None and not (isinstance(replan_every, int) and replan_every >= 1):
-            raise ValueError(f"replan_every must be None or an int >= 1, got {replan_every!r}")
+            raise InputError(f"replan_every must be None or an int >= 1, got {replan_every!r}")
         if not max_step > 0:
-            raise ValueError(f"max_step must be > 0, got {max_step!r}")
+            raise InputError(f"max_step must be > 0, got {max_step!r}")
         if patience is not None and not (isinstance(patience, int) and patience >= 1):
-            raise ValueError(f"patience must be None or an int >= 1, got {patience!r}")
+            raise InputError(f"patience must be None or an int >= 1, got {patience!r}")
         if not min_progress >= 0:
-            raise ValueError(f"min_progress must be >= 0, got {min_progress!r}")
+            raise InputError(f"min_progress must be >= 0, got {min_progress!r}")
         if moves_per_plan is not None and not (isinstance(moves_per_plan, int)
                                                and moves_per_plan >= 1):
-            raise ValueError(f"moves_per_plan must be None or an int >= 1, got "
+            raise InputError(f"moves_per_plan must be None or an int >= 1, got "
                              f"{moves_per_plan!r}")
         self.moves_per_plan = moves_per_plan
         self.partial_plans = bool(partial_plans)
         self.wait_for_corner = bool(wait_for_corner)
         if not (isinstance(settle_steps, int) and settle_steps >= 0):
-            raise ValueError(f"settle_steps must be an int >= 0, got {settle_steps!r}")
+            raise InputError(f"settle_steps must be an int >= 0, got {settle_steps!r}")
         self.settle_steps = settle_steps
         if not replan_tolerance >= 0:
-            raise ValueError(f"replan_tolerance must be >= 0, got {replan_tolerance!r}")
+            raise InputError(f"replan_tolerance must be >= 0, got {replan_tolerance!r}")
         self.replan_tolerance = float(replan_tolerance)
         self.patience = patience
         self.min_progress = float(min_progress)
@@ -172,13 +173,13 @@ class PlannerPolicy(EpisodicPolicy):
         params = getattr(base, "params", None)
         n = getattr(params, "n_points", None)
         if n is not None and n != self.n_points:
-            raise ValueError(
+            raise InputError(
                 f"model has n_points={self.n_points} but the environment's cord has "
                 f"n_points={n}: use a model trained for this cord"
             )
         step = getattr(base, "max_step", None)
         if step is not None and abs(float(step) - self.max_step) > 1e-12:
-            raise ValueError(
+            raise InputError(
                 f"policy max_step={self.max_step} m differs from the environment's "
                 f"max_step={step} m: pass max_step=env.unwrapped.max_step"
             )
@@ -187,12 +188,12 @@ class PlannerPolicy(EpisodicPolicy):
             transition.check_env_cord(params)
         if transition is not None and step is not None and abs(
                 float(step) - transition.config.max_step) > 1e-12:
-            raise ValueError(
+            raise InputError(
                 f"the transition model was trained with max_step={transition.config.max_step} "
                 f"m, but the environment has max_step={step} m")
         grasp = getattr(getattr(base, "cord", None), "grasp", "head")
         if grasp != self.planner.config.grasp:
-            raise ValueError(
+            raise InputError(
                 f"the planner moves the {self.planner.config.grasp!r} end but the environment "
                 f"holds {grasp!r}"
             )

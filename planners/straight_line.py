@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from dlo_env.errors import InputError
 from dlo_env.tasks import GRASP_ENDS, split_move
 from planners.episodes import EpisodicPolicy
 from planners.moves import actions_through
@@ -30,9 +31,9 @@ class StraightLinePolicy(EpisodicPolicy):
 
     def __init__(self, max_step: float = 0.02, grasp: str = "head") -> None:
         if not max_step > 0:
-            raise ValueError(f"max_step must be > 0, got {max_step!r}")
+            raise InputError(f"max_step must be > 0, got {max_step!r}")
         if grasp not in GRASP_ENDS:
-            raise ValueError(f"grasp must be one of {tuple(GRASP_ENDS)}, got {grasp!r}")
+            raise InputError(f"grasp must be one of {tuple(GRASP_ENDS)}, got {grasp!r}")
         self.max_step = float(max_step)
         self.grasp = grasp
         self.reset()

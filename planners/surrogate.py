@@ -15,6 +15,7 @@ from typing import Any
 
 import numpy as np
 
+from dlo_env.errors import InputError
 from planners.interfaces import ShapeSurrogate
 
 
@@ -29,7 +30,7 @@ def model_n_points(model: ShapeSurrogate) -> int:
     """Number of points of the shapes ``model`` decodes; ``ValueError`` if it does not say."""
     n = getattr(model, "n_points", None)
     if not isinstance(n, (int, np.integer)) or n < 3:
-        raise ValueError(
+        raise InputError(
             f"model must have an int attribute n_points >= 3 (a latent_model.ShapeModel), "
             f"got {type(model).__name__} with n_points={n!r}"
         )
@@ -40,7 +41,7 @@ def model_latent_dim(model: ShapeSurrogate) -> int:
     """Dimension of the latents ``model`` decodes; ``ValueError`` if it does not say."""
     d = getattr(model, "latent_dim", None)
     if not isinstance(d, (int, np.integer)) or d < 1:
-        raise ValueError(
+        raise InputError(
             f"model must have an int attribute latent_dim >= 1 (a latent_model.ShapeModel), "
             f"got {type(model).__name__} with latent_dim={d!r}"
         )
@@ -70,7 +71,7 @@ class Surrogate:
     def __init__(self, model: ShapeSurrogate) -> None:
         for method in ("decode", "invert"):
             if not callable(getattr(model, method, None)):
-                raise ValueError(
+                raise InputError(
                     f"model must have a {method}() method (a latent_model.ShapeModel), got "
                     f"{type(model).__name__}"
                 )

@@ -23,6 +23,7 @@ from typing import Any
 import numpy as np
 
 from dlo_env.atomic import write_text_atomic
+from dlo_env.errors import InputError
 
 #: ``progress(done, rejected)`` receives increments of finished and rejected items.
 Progress = Callable[[int, int], None]
@@ -155,30 +156,30 @@ def _check_resumable(job: ChunkJob, parts: Path) -> None:
         return
     saved = json.loads(manifest.read_text())
     if saved.get("kind", job.kind) != job.kind:
-        raise ValueError(f"resume: {parts} holds {saved.get('kind')} chunks, not {job.kind}; "
+        raise InputError(f"resume: {parts} holds {saved.get('kind')} chunks, not {job.kind}; "
                          "choose another --out or delete the folder")
     if saved.get("format_version") != job.format_version:
-        raise ValueError(f"resume: {parts} was written by another format version "
+        raise InputError(f"resume: {parts} was written by another format version "
                          f"({saved.get('format_version')!r}); delete it to start again")
     old, new = {**job.defaults, **saved.get("collect", {})}, job.settings
     differ = sorted(k for k in set(old) | set(new) if old.get(k) != new.get(k))
     if differ:
         detail = ", ".join(f"{k}: {old.get(k)!r} -> {new.get(k)!r}" for k in differ)
-        raise ValueError(f"resume: the settings differ from the interrupted run in {parts} "
+        raise InputError(f"resume: the settings differ from the interrupted run in {parts} "
                          f"({detail}); use the same settings or delete the folder")
 
 
 def check_out(out: str | os.PathLike[str], *, resume: bool, workers: object) -> Path:
     """Validate an output file name and the leftovers of an earlier run; returns ``out``."""
     if not isinstance(workers, (int, np.integer)) or workers < 1:
-        raise ValueError(f"workers must be an integer >= 1, got {workers!r}")
+        raise InputError(f"workers must be an integer >= 1, got {workers!r}")
     out = Path(out)
     if out.suffix != ".npz":
-        raise ValueError(f"out must be a .npz file name, got {str(out)!r}")
+        raise InputError(f"out must be a .npz file name, got {str(out)!r}")
     if out.exists():
-        raise ValueError(f"out {str(out)!r} already exists; delete it or choose another file")
+        raise InputError(f"out {str(out)!r} already exists; delete it or choose another file")
     if parts_dir(out).exists() and not resume:
-        raise ValueError(f"an interrupted run left {str(parts_dir(out))!r}; continue it with "
+        raise InputError(f"an interrupted run left {str(parts_dir(out))!r}; continue it with "
                          "--resume (resume=True in Python), or delete the folder")
     return out
 

@@ -46,6 +46,7 @@ from dlo_env.dataset.shape_file import (
     load_shapes,
     save_shapes,
 )
+from dlo_env.errors import InputError
 from dlo_env.shapes import (
     COSINE_THRESHOLD,
     TABLE_HALF,
@@ -95,33 +96,39 @@ class CollectConfig:
 
     def __post_init__(self) -> None:
         if not isinstance(self.seed, (int, np.integer)) or self.seed < 0:
-            raise ValueError(f"seed must be an integer >= 0, got {self.seed!r}")
+            raise InputError(f"seed must be an integer >= 0, got {self.seed!r}", field="seed")
         if not -1.0 <= self.cosine_threshold <= 1.0:
-            raise ValueError(f"cosine_threshold must be in [-1, 1], got {self.cosine_threshold!r}")
+            raise InputError(f"cosine_threshold must be in [-1, 1], got {self.cosine_threshold!r}",
+                             field="cosine_threshold")
         for name in ("record_every", "moves_per_start", "chunk_size"):
             value = getattr(self, name)
             if not isinstance(value, (int, np.integer)) or value < 1:
-                raise ValueError(f"{name} must be an integer >= 1, got {value!r}")
+                raise InputError(f"{name} must be an integer >= 1, got {value!r}", field=name)
         if not 0.0 < self.max_stretch < 1.0:
-            raise ValueError(f"max_stretch must be in (0, 1), got {self.max_stretch!r}")
+            raise InputError(f"max_stretch must be in (0, 1), got {self.max_stretch!r}",
+                             field="max_stretch")
         if not 0.0 < self.min_move <= self.max_move:
-            raise ValueError(
+            raise InputError(
                 f"min_move and max_move must satisfy 0 < min_move <= max_move, "
-                f"got {self.min_move!r} and {self.max_move!r}"
+                f"got {self.min_move!r} and {self.max_move!r}",
+                field=("min_move", "max_move"),
             )
         weights = np.asarray(self.grasp_weights, dtype=np.float64)
         if weights.shape != (3,) or (weights < 0).any() or weights[:2].sum() <= 0:
-            raise ValueError(
+            raise InputError(
                 "grasp_weights must be 3 non-negative weights (head, tail, both) with head or "
-                f"tail > 0, got {self.grasp_weights!r}"
+                f"tail > 0, got {self.grasp_weights!r}",
+                field="grasp_weights",
             )
         if not 0.0 <= self.push_fraction <= 1.0:
-            raise ValueError(f"push_fraction must be in [0, 1], got {self.push_fraction!r}")
+            raise InputError(f"push_fraction must be in [0, 1], got {self.push_fraction!r}",
+                             field="push_fraction")
         if not 0.0 < self.both_span <= 1.0:
-            raise ValueError(f"both_span must be in (0, 1], got {self.both_span!r}")
+            raise InputError(f"both_span must be in (0, 1], got {self.both_span!r}",
+                             field="both_span")
         if not 0.0 <= self.start_margin < 0.5 * TABLE_HALF:
-            raise ValueError(f"start_margin must be in [0, {0.5 * TABLE_HALF}), "
-                             f"got {self.start_margin!r}")
+            raise InputError(f"start_margin must be in [0, {0.5 * TABLE_HALF}), "
+                             f"got {self.start_margin!r}", field="start_margin")
 
     def to_json(self) -> dict[str, Any]:
         """The configuration as JSON-compatible values (tuples become lists)."""
@@ -183,7 +190,7 @@ def collect_chunk(
     of a larger one.
     """
     if num_shapes < 1:
-        raise ValueError(f"num_shapes must be >= 1, got {num_shapes!r}")
+        raise InputError(f"num_shapes must be >= 1, got {num_shapes!r}")
     rng = chunk_rng(config.seed, index)
     p = config.cord
     weights = np.asarray(config.grasp_weights, dtype=np.float64)
@@ -361,7 +368,7 @@ def collect(
     """
     config = config if config is not None else CollectConfig()
     if not isinstance(num_shapes, (int, np.integer)) or num_shapes < 1:
-        raise ValueError(f"num_shapes must be an integer >= 1, got {num_shapes!r}")
+        raise InputError(f"num_shapes must be an integer >= 1, got {num_shapes!r}")
     out = check_out(out, resume=resume, workers=workers)
     started = time.perf_counter()
     plan = chunk_plan(int(num_shapes), config.chunk_size)

@@ -9,6 +9,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from dlo_env.errors import InputError
 from dlo_env.shapes import TABLE_HALF, turning_cosines
 
 #: Edges of the turning-angle histogram, degrees (the paper's filter allows up to 75.5 deg).
@@ -27,7 +28,7 @@ def grid_coverage(shapes: np.ndarray, cells: int = 10, half: float = TABLE_HALF)
         The share in ``[0, 1]``.
     """
     if cells < 1:
-        raise ValueError(f"cells must be >= 1, got {cells!r}")
+        raise InputError(f"cells must be >= 1, got {cells!r}")
     points = np.asarray(shapes, dtype=np.float64).reshape(-1, 2)
     idx = np.floor((points + half) / (2.0 * half) * cells).astype(np.int64)
     idx = idx[((idx >= 0) & (idx < cells)).all(axis=1)]
@@ -61,7 +62,7 @@ def distinct_count(shapes: np.ndarray, resolution: float = 0.01) -> int:
     recorded twice) once; shapes a few millimetres apart can still land in different cells.
     """
     if not resolution > 0:
-        raise ValueError(f"resolution must be > 0, got {resolution!r}")
+        raise InputError(f"resolution must be > 0, got {resolution!r}")
     arr = np.asarray(shapes, dtype=np.float64)
     if len(arr) == 0:
         return 0

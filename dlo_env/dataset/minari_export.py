@@ -7,7 +7,7 @@ environment's spec recorded, so ``minari.load_dataset(id).recover_environment()`
 environment again in any process (the spec names its entry point). Episode ``i`` is the
 ``i``-th train task of the suite; it ends on success, as the environment does.
 
-:func:`export_transitions` turns a ``dlo collect --kind transitions`` file into one dataset
+:func:`export_transitions` turns a ``dlo collect transitions`` file into one dataset
 per environment: the head-held episodes for ``DLOEndpoint-v0``, the two-handed ones for
 ``DLODualEndpoint-v0`` (tail-held episodes have no environment and are left out). A step is one
 straight move: the recorded spec wraps the environment in
@@ -43,6 +43,7 @@ import numpy as np
 from dlo_env.cord import MAX_PEGS, PEG_RADIUS, CordParams
 from dlo_env.dataset.transitions import GRASP_NAMES, load_transitions
 from dlo_env.envs import ENVIRONMENTS
+from dlo_env.errors import InputError
 from dlo_env.shapes import error
 from dlo_env.straight_moves import StraightMoves
 from dlo_env.tasks import SUITES, load_suite, suite_max_steps
@@ -80,9 +81,9 @@ class ExportedDataset:
 def demonstrations_id(env_id: str, suite: str, version: int = 0) -> str:
     """Minari id of the oracle demonstrations of ``suite`` in ``env_id``."""
     if env_id not in ENVIRONMENTS:
-        raise ValueError(f"env_id must be one of {tuple(ENVIRONMENTS)}, got {env_id!r}")
+        raise InputError(f"env_id must be one of {tuple(ENVIRONMENTS)}, got {env_id!r}")
     if suite not in SUITES:
-        raise ValueError(f"suite must be one of {tuple(SUITES)}, got {suite!r}")
+        raise InputError(f"suite must be one of {tuple(SUITES)}, got {suite!r}")
     return f"{NAMESPACE}/{ENVIRONMENTS[env_id][1]}/{suite}-oracle-v{version}"
 
 
@@ -214,7 +215,7 @@ def check_absent(dataset_ids: Iterable[str], root: str | os.PathLike[str] | None
         existing = set(minari.list_local_datasets())
     for dataset_id in dataset_ids:
         if dataset_id in existing:
-            raise ValueError(f"dataset {dataset_id!r} already exists; delete it (`minari delete "
+            raise InputError(f"dataset {dataset_id!r} already exists; delete it (`minari delete "
                              f"{dataset_id}`) or choose another root")
 
 
@@ -222,7 +223,7 @@ def check_name(name: object) -> str:
     """``name`` if it can be a dataset name inside a Minari id, else a one-line ``ValueError``."""
     if not isinstance(name, str) or not NAME_PATTERN.fullmatch(name) or re.search(
             r"-v\d+$", name):
-        raise ValueError("name must be letters, digits, '_' and inner '-' (not ending in "
+        raise InputError("name must be letters, digits, '_' and inner '-' (not ending in "
                          f"-vN: Minari adds the version), got {name!r}")
     return name
 
@@ -230,7 +231,7 @@ def check_name(name: object) -> str:
 def transitions_id(env_id: str, name: str = "transitions", version: int = 0) -> str:
     """Minari id of the transition data of ``env_id`` exported under ``name``."""
     if env_id not in ENVIRONMENTS:
-        raise ValueError(f"env_id must be one of {tuple(ENVIRONMENTS)}, got {env_id!r}")
+        raise InputError(f"env_id must be one of {tuple(ENVIRONMENTS)}, got {env_id!r}")
     return f"{NAMESPACE}/{ENVIRONMENTS[env_id][1]}/{check_name(name)}-v{version}"
 
 
@@ -254,13 +255,13 @@ def _default_cord_transitions(path: str | os.PathLike[str]) -> Any:
     """The transition file at ``path``, refused unless collected on the default cord."""
     data = load_transitions(path)
     if len(data) and (data.params != data.params[0]).any():
-        raise ValueError(f"path {str(path)!r} holds transitions of several cords (collected "
+        raise InputError(f"path {str(path)!r} holds transitions of several cords (collected "
                          "with --randomize); only default-cord transitions are exported")
     if data.one_cord(f"path {str(path)!r}") != CordParams():
-        raise ValueError(f"path {str(path)!r} was collected on another cord than the "
+        raise InputError(f"path {str(path)!r} was collected on another cord than the "
                          "environments' default; only default-cord transitions are exported")
     if data.pegs.shape[1] > MAX_PEGS:
-        raise ValueError(f"path {str(path)!r} has {data.pegs.shape[1]} peg slots, more than an "
+        raise InputError(f"path {str(path)!r} has {data.pegs.shape[1]} peg slots, more than an "
                          f"environment observes ({MAX_PEGS})")
     return data
 
@@ -275,7 +276,7 @@ def export_transitions(
     """Write the head-held and the two-handed episodes of a transition file as datasets.
 
     Args:
-        path: A file written by ``dlo collect --kind transitions``.
+        path: A file written by ``dlo collect transitions``.
         name: Dataset name inside the ids (``dlo/endpoint/NAME-v0``).
         root: Minari dataset root (None: Minari's own).
         progress: ``progress(moves, 0)`` after every episode.
@@ -317,7 +318,7 @@ def export_transitions(
         env_spec = env.spec
         env.close()
         if worst > REPLAY_TOLERANCE:
-            raise ValueError(f"path {str(path)!r}: replaying its {grasp} moves gives shapes up "
+            raise InputError(f"path {str(path)!r}: replaying its {grasp} moves gives shapes up "
                              f"to {worst:.4f} m from the recorded ones (tolerance "
                              f"{REPLAY_TOLERANCE} m): collected with another simulator version?")
         replayed.append((dataset_id, grasp, buffers, env_spec, worst))
@@ -329,7 +330,7 @@ def export_transitions(
                        "(StraightMoves wrapper: action = displacement of the held end(s), "
                        "metres), goal = the shape after the last move; termination flags as the "
                        "environment reports.")
-        _write(dataset_id, buffers, env_spec, "dlo collect --kind transitions", description,
+        _write(dataset_id, buffers, env_spec, "dlo collect transitions", description,
                root)
         written.append(_summary(dataset_id, buffers, worst))
     return written

@@ -17,6 +17,7 @@ from typing import Any
 import numpy as np
 
 from dlo_env.atomic import atomic_path
+from dlo_env.errors import InputError, MissingFileError
 
 #: array name -> (dtype, dims); a dim is an int (fixed) or a symbol shared across arrays.
 ArraySpec = dict[str, tuple[np.dtype, tuple[object, ...]]]
@@ -37,12 +38,12 @@ def check_arrays(spec: ArraySpec, arrays: dict[str, Any]) -> dict[str, int]:
         arr = arrays[name]
         if not isinstance(arr, np.ndarray) or arr.dtype != dtype or arr.ndim != len(dims):
             got = f"{arr.dtype} {arr.shape}" if isinstance(arr, np.ndarray) else type(arr).__name__
-            raise ValueError(f"{name} must be a {dtype} array of shape {_dims(dims)}, got {got}")
+            raise InputError(f"{name} must be a {dtype} array of shape {_dims(dims)}, got {got}")
         for dim, size in zip(dims, arr.shape):
             ok = size == dim if isinstance(dim, int) else sizes.setdefault(str(dim), size) == size
             if not ok:
                 known = ", ".join(f"{k}={v}" for k, v in sizes.items()) or "none yet"
-                raise ValueError(f"{name} must have shape {_dims(dims)} consistent with the "
+                raise InputError(f"{name} must have shape {_dims(dims)} consistent with the "
                                  f"other arrays ({known}), got {arr.shape}")
     return sizes
 
@@ -77,12 +78,12 @@ def open_npz(path: str | os.PathLike[str], where: str,
     try:
         loaded = np.load(path, allow_pickle=False)
     except ValueError as exc:  # neither a zip nor an .npy: numpy would have to unpickle it
-        raise ValueError(f"{where} is not a readable .npz {what} (corrupt, or not written by "
+        raise InputError(f"{where} is not a readable .npz {what} (corrupt, or not written by "
                          "numpy)") from exc
     except (OSError, EOFError, zipfile.BadZipFile) as exc:
-        raise ValueError(f"{where} is not a readable .npz {what} ({exc})") from exc
+        raise InputError(f"{where} is not a readable .npz {what} ({exc})") from exc
     if not isinstance(loaded, np.lib.npyio.NpzFile):
-        raise ValueError(f"{where} is not a {what}: it holds one array, not an .npz archive")
+        raise InputError(f"{where} is not a {what}: it holds one array, not an .npz archive")
     return loaded
 
 
@@ -109,32 +110,32 @@ def load_npz(path: str | os.PathLike[str], *, format_name: str,
     """
     path = Path(path)
     if not path.is_file():
-        raise FileNotFoundError(f"no {what} at {str(path)!r}; {missing_hint}")
+        raise MissingFileError(f"no {what} at {str(path)!r}; {missing_hint}")
     where = repr(str(path))
     loaded = open_npz(path, where, what)
     try:
         with loaded as npz:
             present = set(npz.files)
             if "metadata" not in present:
-                raise ValueError(f"{where} is not a {what}: no 'metadata' array")
+                raise InputError(f"{where} is not a {what}: no 'metadata' array")
             meta = json.loads(str(npz["metadata"][()]))
             if not isinstance(meta, dict) or meta.get("format") != format_name:
-                raise ValueError(f"{where} is not a {what}: metadata 'format' is not "
+                raise InputError(f"{where} is not a {what}: metadata 'format' is not "
                                  f"{format_name!r}")
             version = meta.get("format_version")
             readable = (format_version,) if isinstance(format_version, int) else format_version
             if version not in readable:
                 shown = " or ".join(map(str, readable))
-                raise ValueError(f"{where} has format_version {version!r}; this version of dlo "
+                raise InputError(f"{where} has format_version {version!r}; this version of dlo "
                                  f"reads format_version {shown} (collect it again)")
             missing = [name for name in names if name not in present]
             if missing:
-                raise ValueError(f"{where} lacks the array(s) {', '.join(missing)}")
+                raise InputError(f"{where} lacks the array(s) {', '.join(missing)}")
             arrays = {name: npz[name] for name in (*names, *optional) if name in present}
     except (OSError, zipfile.BadZipFile, json.JSONDecodeError, EOFError) as exc:
-        raise ValueError(f"{where} is not a readable .npz {what}: {exc}") from exc
+        raise InputError(f"{where} is not a readable .npz {what}: {exc}") from exc
     except ValueError as exc:
         if str(path) in str(exc):
             raise
-        raise ValueError(f"{where} is not a readable .npz {what}: {exc}") from exc
+        raise InputError(f"{where} is not a readable .npz {what}: {exc}") from exc
     return arrays, meta

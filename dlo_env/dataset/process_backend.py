@@ -19,6 +19,8 @@ from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
 from dataclasses import dataclass
 from typing import Any
 
+from dlo_env.errors import InputError
+
 #: Seconds between a worker's checks that its parent is alive.
 PARENT_CHECK_SECONDS = 1.0
 
@@ -50,7 +52,7 @@ class ProcessBackend:
     def __post_init__(self) -> None:
         if not (isinstance(self.workers, int) and not isinstance(self.workers, bool)
                 and self.workers >= 1):
-            raise ValueError(f"workers must be an int >= 1, got {self.workers!r}")
+            raise InputError(f"workers must be an int >= 1, got {self.workers!r}")
 
     def map(self, function: Callable[..., Any], calls: list[tuple[Any, ...]]
             ) -> Iterator[tuple[int, Any]]:

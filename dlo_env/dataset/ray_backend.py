@@ -27,6 +27,7 @@ from pathlib import Path
 from typing import Any
 
 from dlo_env.atomic import atomic_path
+from dlo_env.errors import InputError
 
 try:
     import fcntl
@@ -52,10 +53,10 @@ class RayBackend:
 
     def __post_init__(self) -> None:
         if not (isinstance(self.max_retries, int) and self.max_retries >= 0):
-            raise ValueError(f"max_retries must be an int >= 0, got {self.max_retries!r}")
+            raise InputError(f"max_retries must be an int >= 0, got {self.max_retries!r}")
         if self.num_cpus is not None and not (isinstance(self.num_cpus, int)
                                               and self.num_cpus >= 1):
-            raise ValueError(f"num_cpus must be an int >= 1 or None, got {self.num_cpus!r}")
+            raise InputError(f"num_cpus must be an int >= 1 or None, got {self.num_cpus!r}")
 
     def map(self, function: Callable[..., Any], calls: list[tuple[Any, ...]]
             ) -> Iterator[tuple[int, Any]]:

@@ -37,6 +37,7 @@ from typing import Any
 import numpy as np
 
 from dlo_env.dataset.npz_file import check_arrays, load_npz, save_npz
+from dlo_env.errors import InputError
 
 #: Name stored in every file's metadata, so other ``.npz`` files are recognised as such.
 FORMAT_NAME = "dlo-shapes"
@@ -91,12 +92,12 @@ class ShapeDataset:
         if len(self.shape_transition) and (
             self.shape_transition.min() < 0 or self.shape_transition.max() >= t
         ):
-            raise ValueError(f"shape_transition must index the {t} transitions, got values "
+            raise InputError(f"shape_transition must index the {t} transitions, got values "
                              f"from {self.shape_transition.min()} to {self.shape_transition.max()}")
         if t and (self.transition_grasp.min() < 0 or self.transition_grasp.max() > 2):
-            raise ValueError("transition_grasp must hold codes 0 (head), 1 (tail), 2 (both)")
+            raise InputError("transition_grasp must hold codes 0 (head), 1 (tail), 2 (both)")
         if not isinstance(self.metadata, dict):
-            raise ValueError(f"metadata must be a dict, got {type(self.metadata).__name__}")
+            raise InputError(f"metadata must be a dict, got {type(self.metadata).__name__}")
 
     @property
     def num_shapes(self) -> int:
@@ -120,7 +121,7 @@ class ShapeDataset:
         shape_mask = np.asarray(shape_mask, dtype=bool)
         transition_mask = np.asarray(transition_mask, dtype=bool)
         if not transition_mask[self.shape_transition[shape_mask]].all():
-            raise ValueError("shape_mask keeps shapes whose transitions transition_mask drops")
+            raise InputError("shape_mask keeps shapes whose transitions transition_mask drops")
         renumber = np.cumsum(transition_mask) - 1
         arrays = {name: arr[transition_mask] for name, arr in self.arrays().items()
                   if name.startswith("transition_")}
@@ -160,11 +161,11 @@ def load_shapes(path: str | os.PathLike[str]) -> ShapeDataset:
     arrays, meta = load_npz(
         path, format_name=FORMAT_NAME, format_version=FORMAT_VERSION, names=ARRAY_NAMES,
         what="shape dataset",
-        missing_hint=f"make one with `dlo collect --num-shapes N --out {Path(path).name}`")
+        missing_hint=f"make one with `dlo collect shapes --num-shapes N --out {Path(path).name}`")
     try:
         return ShapeDataset(**arrays, metadata=meta)
     except ValueError as exc:
-        raise ValueError(f"{str(path)!r}: {exc}") from exc
+        raise InputError(f"{str(path)!r}: {exc}") from exc
 
 
 def split(
@@ -185,10 +186,10 @@ def split(
         ``(train, validation)``.
     """
     if not 0.0 < validation_fraction < 1.0:
-        raise ValueError(f"validation_fraction must be in (0, 1), got {validation_fraction!r}")
+        raise InputError(f"validation_fraction must be in (0, 1), got {validation_fraction!r}")
     episodes, per_move = np.unique(dataset.transition_episode, return_inverse=True)
     if len(episodes) < 2:
-        raise ValueError(f"dataset must hold at least 2 episodes to split, got {len(episodes)}")
+        raise InputError(f"dataset must hold at least 2 episodes to split, got {len(episodes)}")
     shape_episode = per_move[dataset.shape_transition]
     counts = np.bincount(shape_episode, minlength=len(episodes))
     order = np.random.default_rng(seed).permutation(len(episodes))

@@ -73,6 +73,7 @@ from dlo_env.dataset.chunks import (
     run_chunks,
 )
 from dlo_env.dataset.npz_file import check_arrays, load_npz, save_npz
+from dlo_env.errors import InputError
 from dlo_env.randomize import TEST_CORDS, check_randomize, draw_params, test_cord
 from dlo_env.shapes import TABLE_HALF, random_cord_shape, wavy_cord_shape, wide_cord_shape
 from dlo_env.tasks import (
@@ -174,33 +175,37 @@ class TransitionCollectConfig:
     def __post_init__(self) -> None:
         if not (isinstance(self.max_pegs, (int, np.integer)) and not isinstance(self.max_pegs, bool)
                 and 0 <= self.max_pegs <= MAX_PEGS):
-            raise ValueError(f"max_pegs must be an int from 0 to {MAX_PEGS}, got "
-                             f"{self.max_pegs!r}")
+            raise InputError(f"max_pegs must be an int from 0 to {MAX_PEGS}, got "
+                             f"{self.max_pegs!r}", field="max_pegs")
         positive(self, "peg_radius")
         ranges = check_randomize(self.randomize)
         if self.test_cords and ranges:
-            raise ValueError("test_cords and randomize are two ways to choose the cords; give "
-                             "one")
+            raise InputError("test_cords and randomize are two ways to choose the cords; give "
+                             "one", field=("test_cords", "randomize"))
         object.__setattr__(self, "randomize", {k: list(v) for k, v in ranges.items()})
         if not isinstance(self.seed, (int, np.integer)) or self.seed < 0:
-            raise ValueError(f"seed must be an integer >= 0, got {self.seed!r}")
+            raise InputError(f"seed must be an integer >= 0, got {self.seed!r}", field="seed")
         positive_ints(self, "moves_per_episode", "chunk_size")
         weights = np.asarray(self.grasp_weights, dtype=np.float64)
         if weights.shape != (3,) or not np.isfinite(weights).all() or (weights < 0).any() \
                 or weights.sum() <= 0:
-            raise ValueError("grasp_weights must be 3 non-negative weights (head, tail, both) "
-                             f"with a positive sum, got {self.grasp_weights!r}")
+            raise InputError("grasp_weights must be 3 non-negative weights (head, tail, both) "
+                             f"with a positive sum, got {self.grasp_weights!r}",
+                             field="grasp_weights")
         if not 0.0 < self.min_move <= self.max_move:
-            raise ValueError("min_move and max_move must satisfy 0 < min_move <= max_move, "
-                             f"got {self.min_move!r} and {self.max_move!r}")
+            raise InputError("min_move and max_move must satisfy 0 < min_move <= max_move, "
+                             f"got {self.min_move!r} and {self.max_move!r}",
+                             field=("min_move", "max_move"))
         aims = (self.push_fraction, self.rim_fraction)
         if min(aims) < 0 or sum(aims) > 1:
-            raise ValueError("push_fraction and rim_fraction must be >= 0 with a sum <= 1, "
-                             f"got {self.push_fraction!r} and {self.rim_fraction!r}")
+            raise InputError("push_fraction and rim_fraction must be >= 0 with a sum <= 1, "
+                             f"got {self.push_fraction!r} and {self.rim_fraction!r}",
+                             field=("push_fraction", "rim_fraction"))
         fractions(self, "log_fraction", "wide_fraction", "wavy_fraction", closed_low=True)
         if self.wide_fraction + self.wavy_fraction > 1:
-            raise ValueError("wide_fraction and wavy_fraction must have a sum <= 1, got "
-                             f"{self.wide_fraction!r} and {self.wavy_fraction!r}")
+            raise InputError("wide_fraction and wavy_fraction must have a sum <= 1, got "
+                             f"{self.wide_fraction!r} and {self.wavy_fraction!r}",
+                             field=("wide_fraction", "wavy_fraction"))
         positive(self, "max_step")
 
     def to_json(self) -> dict[str, Any]:
@@ -232,19 +237,19 @@ class TransitionDataset:
             object.__setattr__(self, "peg_count", np.zeros(len(self.grasp), np.int8))
         if self.params is None:  # a version-1 file, or arrays made without: the file's cord
             if not isinstance(self.metadata, dict):
-                raise ValueError(f"metadata must be a dict, got {type(self.metadata).__name__}")
+                raise InputError(f"metadata must be a dict, got {type(self.metadata).__name__}")
             recorded = self.metadata.get("cord") or self.metadata.get("collect", {}).get("cord")
             cord = CordParams(**recorded) if recorded else CordParams()
             row = np.array([getattr(cord, k) for k in PARAM_COLUMNS], dtype=np.float32)
             object.__setattr__(self, "params", np.tile(row, (len(self.grasp), 1)))
         check_arrays(_ARRAYS, self.arrays())
         if len(self.grasp) and (self.grasp.min() < 0 or self.grasp.max() > 2):
-            raise ValueError("grasp must hold codes 0 (head), 1 (tail), 2 (both)")
+            raise InputError("grasp must hold codes 0 (head), 1 (tail), 2 (both)")
         if len(self.grasp) and (self.peg_count.min() < 0
                                 or self.peg_count.max() > self.pegs.shape[1]):
-            raise ValueError(f"peg_count must be in 0..{self.pegs.shape[1]} (the peg slots)")
+            raise InputError(f"peg_count must be in 0..{self.pegs.shape[1]} (the peg slots)")
         if not isinstance(self.metadata, dict):
-            raise ValueError(f"metadata must be a dict, got {type(self.metadata).__name__}")
+            raise InputError(f"metadata must be a dict, got {type(self.metadata).__name__}")
 
     def __len__(self) -> int:
         return len(self.grasp)
@@ -253,7 +258,7 @@ class TransitionDataset:
         """The single cord of these transitions, or a one-line ``ValueError`` when they hold
         several (collected with ``randomize``) or differ from their metadata's cord."""
         if len(self) and (self.params != self.params[0]).any():
-            raise ValueError(f"{name} holds transitions of several cords (collected with "
+            raise InputError(f"{name} holds transitions of several cords (collected with "
                              "randomize), where one cord's are needed (a model that reads the "
                              "cord trains on several: --cord-inputs)")
         recorded = self.metadata.get("cord") or self.metadata.get("collect", {}).get("cord")
@@ -261,7 +266,7 @@ class TransitionDataset:
         if len(self):
             row = np.array([getattr(cord, k) for k in PARAM_COLUMNS], dtype=np.float32)
             if (self.params[0] != row).any():
-                raise ValueError(f"{name} holds transitions of another cord than its metadata "
+                raise InputError(f"{name} holds transitions of another cord than its metadata "
                                  f"says ({dict(zip(PARAM_COLUMNS, self.params[0].tolist()))}): "
                                  "a part of a randomised collection; use one cord's data")
         return cord
@@ -280,7 +285,7 @@ class TransitionDataset:
         then tail dx, dy ``(T, 4)`` for both; only valid for transitions of one grasp."""
         grasp = np.unique(self.grasp[index])
         if len(grasp) != 1:
-            raise ValueError("end_displacement needs transitions of a single grasp")
+            raise InputError("end_displacement needs transitions of a single grasp")
         d = self.displacement[index]
         return {0: d[:, 0], 1: d[:, 1], 2: d.reshape(-1, 4)}[int(grasp[0])]
 
@@ -396,7 +401,7 @@ def collect_transition_chunk(config: TransitionCollectConfig, index: int, size: 
                              progress: Progress | None = None) -> TransitionDataset:
     """Generate chunk ``index``: exactly ``size`` transitions (a prefix of a larger chunk)."""
     if size < 1:
-        raise ValueError(f"size must be >= 1, got {size!r}")
+        raise InputError(f"size must be >= 1, got {size!r}")
     rng = chunk_rng(config.seed, index)
     weights = np.asarray(config.grasp_weights, dtype=np.float64)
     weights = weights / weights.sum()
@@ -451,7 +456,7 @@ def save_transitions(path: str | os.PathLike[str], data: TransitionDataset) -> P
 
 
 def load_transitions(path: str | os.PathLike[str]) -> TransitionDataset:
-    """Read and validate a transition dataset written by ``dlo collect --kind transitions``.
+    """Read and validate a transition dataset written by ``dlo collect transitions``.
 
     Raises:
         FileNotFoundError: No file at ``path``.
@@ -461,16 +466,16 @@ def load_transitions(path: str | os.PathLike[str]) -> TransitionDataset:
         path, format_name=FORMAT_NAME, format_version=READABLE_VERSIONS,
         names=tuple(n for n in ARRAY_NAMES if n not in _SINCE), optional=tuple(_SINCE),
         what="transition dataset",
-        missing_hint=("make one with `dlo collect --kind transitions --num-transitions N "
+        missing_hint=("make one with `dlo collect transitions --num-transitions N "
                       f"--out {Path(path).name}`"))
     version = meta.get("format_version", FORMAT_VERSION)
     for name, since in _SINCE.items():
         if version >= since and name not in arrays:
-            raise ValueError(f"{str(path)!r} lacks the array {name} (format_version {version})")
+            raise InputError(f"{str(path)!r} lacks the array {name} (format_version {version})")
     try:
         return TransitionDataset(**arrays, metadata=meta)
     except ValueError as exc:
-        raise ValueError(f"{str(path)!r}: {exc}") from exc
+        raise InputError(f"{str(path)!r}: {exc}") from exc
 
 
 def load_transition_files(paths: str | os.PathLike[str] | list[str | os.PathLike[str]]
@@ -489,22 +494,22 @@ def load_transition_files(paths: str | os.PathLike[str] | list[str | os.PathLike
     """
     paths = [paths] if isinstance(paths, (str, os.PathLike)) else list(paths)
     if not paths:
-        raise ValueError("paths must name at least one transition file, got none")
+        raise InputError("paths must name at least one transition file, got none")
     parts = [load_transitions(path) for path in paths]
     sources = [{"file": str(path), "transitions": len(part), "digest": file_digest(path),
                 "collect": part.metadata.get("collect", {})} for path, part in zip(paths, parts)]
     first = parts[0].metadata
     for path, part, source in zip(paths[1:], parts[1:], sources[1:]):
         if part.metadata.get("cord") != first.get("cord"):
-            raise ValueError(f"{str(path)!r} was collected with another cord than "
+            raise InputError(f"{str(path)!r} was collected with another cord than "
                              f"{str(paths[0])!r}")
         if source["collect"].get("max_step") != sources[0]["collect"].get("max_step"):
-            raise ValueError(f"{str(path)!r} was collected with another max_step than "
+            raise InputError(f"{str(path)!r} was collected with another max_step than "
                              f"{str(paths[0])!r}")
     digests = [source["digest"] for source in sources]
     for k, digest in enumerate(digests):
         if digest in digests[:k]:
-            raise ValueError(f"{str(paths[k])!r} holds the same transitions as "
+            raise InputError(f"{str(paths[k])!r} holds the same transitions as "
                              f"{str(paths[digests.index(digest)])!r}; give each file once")
     shared = {k: v for k, v in sources[0]["collect"].items()
               if all(source["collect"].get(k) == v for source in sources)}
@@ -519,10 +524,10 @@ def split_transitions(data: TransitionDataset, validation_fraction: float = 0.1,
                       seed: int = 0) -> tuple[TransitionDataset, TransitionDataset]:
     """Split by whole episodes (moves of one cord stay on one side): ``(train, validation)``."""
     if not 0.0 < validation_fraction < 1.0:
-        raise ValueError(f"validation_fraction must be in (0, 1), got {validation_fraction!r}")
+        raise InputError(f"validation_fraction must be in (0, 1), got {validation_fraction!r}")
     episodes = np.unique(data.episode)
     if len(episodes) < 2:
-        raise ValueError(f"data must hold at least 2 episodes to split, got {len(episodes)}")
+        raise InputError(f"data must hold at least 2 episodes to split, got {len(episodes)}")
     order = np.random.default_rng(seed).permutation(episodes)
     take = min(max(1, round(validation_fraction * len(episodes))), len(episodes) - 1)
     validation = np.isin(data.episode, order[:take])
@@ -570,7 +575,7 @@ def collect_transitions(
     """
     config = config if config is not None else TransitionCollectConfig()
     if not isinstance(num_transitions, (int, np.integer)) or num_transitions < 1:
-        raise ValueError(f"num_transitions must be an integer >= 1, got {num_transitions!r}")
+        raise InputError(f"num_transitions must be an integer >= 1, got {num_transitions!r}")
     out = check_out(out, resume=resume, workers=workers)
     started = time.perf_counter()
     plan = chunk_plan(int(num_transitions), config.chunk_size)

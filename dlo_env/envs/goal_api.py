@@ -15,6 +15,7 @@ import numpy as np
 from gymnasium import spaces
 
 from dlo_env.cord import MAX_PEGS
+from dlo_env.errors import InputError
 from dlo_env.shapes import SUCCESS_METRICS, TABLE_HALF, bead_share, error, max_error
 
 REWARD_TYPES = ("dense", "sparse")
@@ -27,23 +28,23 @@ def check_goal_args(*, params: object, max_step: object, reward_type: object,
     from dlo_env.cord import CordParams
 
     if params is not None and not isinstance(params, CordParams):
-        raise ValueError(f"params must be a CordParams or None, got {type(params).__name__}")
+        raise InputError(f"params must be a CordParams or None, got {type(params).__name__}")
     if not (isinstance(max_step, (int, float)) and np.isfinite(max_step) and max_step > 0):
-        raise ValueError(f"max_step must be a finite number > 0 (metres), got {max_step!r}")
+        raise InputError(f"max_step must be a finite number > 0 (metres), got {max_step!r}")
     if reward_type not in REWARD_TYPES:
-        raise ValueError(f"reward_type must be one of {REWARD_TYPES}, got {reward_type!r}")
+        raise InputError(f"reward_type must be one of {REWARD_TYPES}, got {reward_type!r}")
     if not (isinstance(success_threshold, (int, float)) and success_threshold > 0):
-        raise ValueError(f"success_threshold must be a number > 0, got {success_threshold!r}")
+        raise InputError(f"success_threshold must be a number > 0, got {success_threshold!r}")
     if success_metric not in SUCCESS_METRICS:
-        raise ValueError(f"success_metric must be one of {tuple(SUCCESS_METRICS)}, got "
+        raise InputError(f"success_metric must be one of {tuple(SUCCESS_METRICS)}, got "
                          f"{success_metric!r}")
     if not isinstance(judge_at_rest, (bool, np.bool_)):
-        raise ValueError(f"judge_at_rest must be True or False, got {judge_at_rest!r}")
+        raise InputError(f"judge_at_rest must be True or False, got {judge_at_rest!r}")
     if not (isinstance(max_pegs, (int, np.integer)) and not isinstance(max_pegs, bool)
             and 0 <= max_pegs <= MAX_PEGS):
-        raise ValueError(f"max_pegs must be an int from 0 to {MAX_PEGS}, got {max_pegs!r}")
+        raise InputError(f"max_pegs must be an int from 0 to {MAX_PEGS}, got {max_pegs!r}")
     if render_mode is not None and render_mode not in render_modes:
-        raise ValueError(f"render_mode must be None or one of {render_modes}, got "
+        raise InputError(f"render_mode must be None or one of {render_modes}, got "
                          f"{render_mode!r}")
 
 
@@ -95,12 +96,12 @@ def option_difficulty(options: dict[str, Any], known: tuple[str, ...], difficult
 
     unknown = sorted(set(options) - set(known))
     if unknown:
-        raise ValueError(f"options has unknown keys {unknown}; expected some of {known}")
+        raise InputError(f"options has unknown keys {unknown}; expected some of {known}")
     if "task" in options and len(set(options) - {"params"}) > 1:
-        raise ValueError("options['task'] combines only with options['params'] (a task "
+        raise InputError("options['task'] combines only with options['params'] (a task "
                          f"carries its pegs), got {sorted(options)}")
     if "goal" in options and "difficulty" in options:
-        raise ValueError("options['difficulty'] has no effect when options['goal'] is given")
+        raise InputError("options['difficulty'] has no effect when options['goal'] is given")
     if "difficulty" in options:
         return check_difficulty(options["difficulty"], name="options['difficulty']")
     return difficulty
@@ -112,13 +113,13 @@ def check_task(task: object, grasp: str, max_step: float) -> Any:
     from dlo_env.tasks import Task
 
     if not isinstance(task, Task):
-        raise ValueError(f"options['task'] must be a dlo_env.tasks.Task, got "
+        raise InputError(f"options['task'] must be a dlo_env.tasks.Task, got "
                          f"{type(task).__name__}")
     if task.grasp != grasp:
-        raise ValueError(f"options['task'] must have grasp {grasp!r} for this environment, "
+        raise InputError(f"options['task'] must have grasp {grasp!r} for this environment, "
                          f"got {task.grasp!r}")
     if task.max_step != max_step:
-        raise ValueError(f"options['task'] was made with max_step {task.max_step}, this "
+        raise InputError(f"options['task'] was made with max_step {task.max_step}, this "
                          f"environment uses {max_step}")
     return task
 
@@ -139,7 +140,7 @@ class GoalReward:
         a, d = np.asarray(achieved_goal), np.asarray(desired_goal)
         for name, x in (("achieved_goal", a), ("desired_goal", d)):
             if x.ndim < 1 or x.shape[-1] != n2:
-                raise ValueError(f"{name} must have shape (..., {n2}), got {x.shape}")
+                raise InputError(f"{name} must have shape (..., {n2}), got {x.shape}")
         return a.reshape(*a.shape[:-1], n2 // 2, 2), d.reshape(*d.shape[:-1], n2 // 2, 2)
 
     def compute_reward(

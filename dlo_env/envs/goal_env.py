@@ -31,6 +31,7 @@ from dlo_env.envs.goal_api import (
     goal_spaces,
     option_difficulty,
 )
+from dlo_env.errors import InputError
 from dlo_env.randomize import check_params, check_randomize, draw_params
 from dlo_env.shapes import (
     SUCCESS_METRICS,
@@ -179,9 +180,9 @@ class CordGoalEnv(GoalReward, gym.Env[dict[str, np.ndarray], np.ndarray]):
         """
         a = np.asarray(action, dtype=np.float64)  # clipped before float32: 1e39 is finite
         if a.shape != self.action_space.shape:
-            raise ValueError(f"action must have shape {self.action_space.shape}, got {a.shape}")
+            raise InputError(f"action must have shape {self.action_space.shape}, got {a.shape}")
         if not np.isfinite(a).all():
-            raise ValueError(f"action must be finite, got {a.tolist()}")
+            raise InputError(f"action must be finite, got {a.tolist()}")
         apply_action(self.cord, np.clip(a, -1.0, 1.0).astype(np.float32), self.max_step)
         state = self.cord.shape_and_speed()
         settle = self._settle_if_solved(*state) if self.judge_at_rest else 0
@@ -271,7 +272,7 @@ class CordGoalEnv(GoalReward, gym.Env[dict[str, np.ndarray], np.ndarray]):
         if self.grasp == "both":
             span = float(np.linalg.norm(cord[-1] - cord[0]))
             if span >= p.max_span * p.length:
-                raise ValueError(
+                raise InputError(
                     f"{name} must have its head and tail closer than max_span * length = "
                     f"{p.max_span * p.length:.3f} m when both ends are held, got {span:.3f} m"
                 )
@@ -308,7 +309,7 @@ class CordGoalEnv(GoalReward, gym.Env[dict[str, np.ndarray], np.ndarray]):
         pegs = check_pegs(options["pegs"], "options['pegs']",
                           radius=self.peg_radius).astype(np.float32)
         if len(pegs) > self.max_pegs:
-            raise ValueError(f"options['pegs'] holds {len(pegs)} pegs, more than this "
+            raise InputError(f"options['pegs'] holds {len(pegs)} pegs, more than this "
                              f"environment observes: make it with gym.make(id, max_pegs="
                              f"{len(pegs)}) (max_pegs={self.max_pegs})")
         return pegs
@@ -342,11 +343,11 @@ class CordGoalEnv(GoalReward, gym.Env[dict[str, np.ndarray], np.ndarray]):
     def _check_task(self, task: object, p: CordParams) -> Task:
         task = check_task(task, self.grasp, self.max_step)
         if len(task.pegs) > self.max_pegs:
-            raise ValueError(f"options['task'] has {len(task.pegs)} pegs, more than this "
+            raise InputError(f"options['task'] has {len(task.pegs)} pegs, more than this "
                              f"environment observes: make it with gym.make(id, max_pegs="
                              f"{len(task.pegs)}) (max_pegs={self.max_pegs})")
         if len(task.pegs) and task.peg_radius != self.peg_radius:
-            raise ValueError(f"options['task'] was made with peg_radius {task.peg_radius}, "
+            raise InputError(f"options['task'] was made with peg_radius {task.peg_radius}, "
                              f"this environment uses {self.peg_radius}")
         check_pegs(task.pegs, "options['task'].pegs", radius=self.peg_radius)
         for name in ("start", "goal"):

@@ -8,9 +8,17 @@ is parsed (``dlo_cli.flags``); what depends on several flags is checked first th
 
 from __future__ import annotations
 
+import itertools
+
 import pytest
 
 from dlo_cli.main import main
+
+
+def command_words(argv: list[str]) -> str:
+    """The command and subcommand of a command line, as its errors name them."""
+    return " ".join(itertools.takewhile(lambda word: not word.startswith("-"), argv))
+
 
 NOPE_ENV = "dlo_env/Nope-v0"
 ACCEPTED_ENVS = ("dlo_env/DLOEndpoint-v0", "dlo_env/DLODualEndpoint-v0")
@@ -34,8 +42,8 @@ CASES = [
     ("evaluate --agent straight-line --seed 4294967296 --out OUT", "--seed", ("4294967296",)),
     ("baseline --algo ppo --seed -5 --out OUT", "--seed", ("'-5'",)),
     ("benchmark --seed -5 --out OUT", "--seed", ("'-5'",)),
-    ("collect --num-shapes 10 --seed -5 --out OUT/d.npz", "--seed", ("'-5'",)),
-    ("train --data OUT/d.npz --seed -5 --out OUT", "--seed", ("'-5'",)),
+    ("collect shapes --num-shapes 10 --seed -5 --out OUT/d.npz", "--seed", ("'-5'",)),
+    ("train shape --data OUT/d.npz --seed -5 --out OUT", "--seed", ("'-5'",)),
     ("finetune --seed 1.5 --model OUT --shapes OUT/s.npz --out OUT", "--seed", ("'1.5'",)),
     # Difficulties are those of the tasks: 1 to dlo_env.tasks.MAX_DIFFICULTY.
     ("evaluate --agent straight-line --difficulty 11 --out OUT", "--difficulty",
@@ -44,9 +52,9 @@ CASES = [
     ("baseline --algo ppo --difficulty 7 --out OUT", "--difficulty", ("'7'", "from 1 to 5")),
     ("benchmark --difficulty 7 --out OUT", "--difficulty", ("'7'", "one of 1 2 3 4 5 8 10")),
     ("benchmark --threshold 0 --out OUT", "--threshold", ("'0'", "metres")),
-    ("collect --kind transitions --num-transitions 5 --randomize mass --out OUT.npz",
+    ("collect transitions --num-transitions 5 --randomize mass --out OUT.npz",
      "--randomize", ("'mass'", "NAME=LOW:HIGH")),
-    ("collect --kind transitions --num-transitions 5 --randomize mass=0.01:0.3 --out OUT.npz",
+    ("collect transitions --num-transitions 5 --randomize mass=0.01:0.3 --out OUT.npz",
      "--randomize", ("within 0.05..0.5",)),
     ("benchmark --threshold 0.01 0.01 --out OUT", "--threshold", ("repeat",)),
     ("evaluate --agent straight-line --threshold -1 --out OUT", "--threshold",
@@ -91,18 +99,22 @@ CASES = [
     ("export-minari --suite linear-9 --root OUT", "--suite", ("'linear-9'",)),
     ("export-minari --limit 0 --root OUT", "--limit", ("'0'",)),
     ("export-minari --no-demonstrations --root OUT", "--no-demonstrations", ("--transitions",)),
-    ("collect --num-shapes 10 --out OUT/d.txt", "--out", ("d.txt", ".npz")),
-    ("collect --num-shapes 10 --num-transitions 5 --out OUT/d.npz", "--num-transitions",
-     ("--kind transitions only",)),
-    ("collect --num-shapes 10 --max-pegs 2 --out OUT/d.npz", "--max-pegs",
-     ("--kind transitions only",)),
-    ("collect --kind transitions --num-transitions 5 --record-every 5 --out OUT/d.npz",
-     "--record-every", ("--kind shapes only",)),
-    ("collect --kind transitions --num-transitions 5 --cosine-threshold 0.5 --out OUT/d.npz",
-     "--cosine-threshold", ("--kind shapes only",)),
-    ("collect --kind transitions --num-transitions 5 --max-pegs 17 --out OUT/d.npz",
+    ("collect shapes --num-shapes 10 --out OUT/d.txt", "--out", ("d.txt", ".npz")),
+    # A flag of the other subcommand is not one of this one's.
+    ("collect shapes --num-shapes 10 --num-transitions 5 --out OUT/d.npz", "--num-transitions",
+     ("unrecognized arguments",)),
+    ("collect shapes --num-shapes 10 --max-pegs 2 --out OUT/d.npz", "--max-pegs",
+     ("unrecognized arguments",)),
+    ("collect transitions --num-transitions 5 --record-every 5 --out OUT/d.npz",
+     "--record-every", ("unrecognized arguments",)),
+    ("collect transitions --num-transitions 5 --cosine-threshold 0.5 --out OUT/d.npz",
+     "--cosine-threshold", ("unrecognized arguments",)),
+    ("train shape --data OUT/d.npz --lr 0.1 --out OUT", "--lr", ("unrecognized arguments",)),
+    ("train transition --data OUT/d.npz --gan-steps 5 --out OUT", "--gan-steps",
+     ("unrecognized arguments",)),
+    ("collect transitions --num-transitions 5 --max-pegs 17 --out OUT/d.npz",
      "--max-pegs", ("'17'", "from 0 to 16")),
-    ("train --stage transition --data OUT/d.npz --lr -1 --out OUT", "--lr", ("'-1'",)),
+    ("train transition --data OUT/d.npz --lr -1 --out OUT", "--lr", ("'-1'",)),
     ("finetune --model OUT/none --shapes OUT/s.npz --out OUT", "--model", ("none",)),
 ]
 
@@ -119,7 +131,7 @@ def test_a_bad_input_is_one_line_naming_the_flag_before_any_work(line, flag, wor
     assert code == 2, captured.err
     assert len(lines) == 1, captured.err
     assert "Traceback" not in captured.err
-    assert lines[0].startswith(f"dlo {argv[0]}: error: "), lines[0]
+    assert lines[0].startswith(f"dlo {command_words(argv)}: error: "), lines[0]
     assert flag in lines[0]
     for word in words:
         assert word in lines[0], lines[0]
@@ -136,8 +148,8 @@ BAD_OUTS = [
     ("benchmark --quick --allow-dirty --out FILE/sub", "this user can write"),
     ("reference --limit 1 --out FILE", "--out must be a folder, got"),
     ("baseline --algo ppo --timesteps 8 --out FILE", "--out must be a folder, got"),
-    ("collect --num-shapes 10 --out FILE/d.npz", "a file in a folder this user can write"),
-    ("collect --kind transitions --num-transitions 5 --out FILE/d.npz",
+    ("collect shapes --num-shapes 10 --out FILE/d.npz", "a file in a folder this user can write"),
+    ("collect transitions --num-transitions 5 --out FILE/d.npz",
      "a file in a folder this user can write"),
 ]
 
@@ -163,7 +175,8 @@ def test_an_output_that_cannot_be_written_is_refused_before_any_work(line, words
     captured = capsys.readouterr()
     lines = [text for text in captured.err.splitlines() if text.strip()]
     assert code == 2, captured.err
-    assert lines == [lines[0]] and lines[0].startswith(f"dlo {argv[0]}: error: --out "), lines
+    assert lines == [lines[0]] and lines[0].startswith(
+        f"dlo {command_words(argv)}: error: --out "), lines
     assert words in lines[0] and str(file) in lines[0], lines[0]
     assert captured.out == ""  # no work started: nothing printed
     assert file.read_text() == "the user's file"

@@ -13,7 +13,7 @@ from dlo_env.shapes import is_cord_like
 
 def test_collect_writes_the_dataset_and_prints_a_summary_with_diversity(tmp_path, capsys):
     out = tmp_path / "d.npz"
-    assert main(["collect", "--num-shapes", "120", "--out", str(out), "--seed", "2"]) == 0
+    assert main(["collect", "shapes", "--num-shapes", "120", "--out", str(out), "--seed", "2"]) == 0
     data = load_shapes(out)
     assert data.shapes.shape == (120, 20, 2)
     assert data.metadata["seed"] == 2 and data.metadata["record_every"] == 10
@@ -27,8 +27,8 @@ def test_collect_writes_the_dataset_and_prints_a_summary_with_diversity(tmp_path
 
 def test_collect_flags_reach_the_configuration(tmp_path):
     out = tmp_path / "d.npz"
-    args = ["collect", "--num-shapes", "40", "--out", str(out), "--cosine-threshold", "0.9",
-            "--record-every", "5"]
+    args = ["collect", "shapes", "--num-shapes", "40", "--out", str(out), "--cosine-threshold",
+            "0.9", "--record-every", "5"]
     assert main(args) == 0
     meta = load_shapes(out).metadata
     assert meta["cosine_threshold"] == 0.9 and meta["record_every"] == 5
@@ -38,17 +38,17 @@ def test_collect_flags_reach_the_configuration(tmp_path):
 def test_grasp_weights_and_push_fraction_choose_the_moves_of_a_shape_collection(tmp_path,
                                                                                 capsys):
     out = tmp_path / "both.npz"
-    assert main(["collect", "--num-shapes", "300", "--out", str(out), "--grasp-weights", "0.05",
-                 "0.05", "0.9", "--push-fraction", "0.7"]) == 0
+    assert main(["collect", "shapes", "--num-shapes", "300", "--out", str(out),
+                 "--grasp-weights", "0.05", "0.05", "0.9", "--push-fraction", "0.7"]) == 0
     data = load_shapes(out)
     assert tuple(data.metadata["collect"]["grasp_weights"]) == (0.05, 0.05, 0.9)
     assert data.metadata["collect"]["push_fraction"] == 0.7
     both = data.transition_grasp[data.shape_transition] == 2
     assert both.mean() > 0.6  # both only while the ends are within the span limit
-    assert main(["collect", "--num-shapes", "5", "--grasp-weights", "0", "0", "1",
+    assert main(["collect", "shapes", "--num-shapes", "5", "--grasp-weights", "0", "0", "1",
                  "--out", str(tmp_path / "z.npz")]) == 2
-    assert "--grasp-weights must be 3 non-negative weights (head, tail, both) with head or " \
-           "tail > 0" in capsys.readouterr().err
+    assert "argument --grasp-weights: grasp_weights must be 3 non-negative weights (head, tail, " \
+           "both) with head or tail > 0" in capsys.readouterr().err
     assert not (tmp_path / "z.npz").exists()
 
 
@@ -69,22 +69,23 @@ def test_grasp_weights_and_push_fraction_choose_the_moves_of_a_shape_collection(
     ],
 )
 def test_bad_arguments_are_rejected_with_clear_messages(tmp_path, capsys, flags, message):
-    args = {"--num-shapes": "10", "--out": str(tmp_path / "d.npz")}
+    kind = "transitions" if flags[0] in ("--wide-fraction", "--wavy-fraction") else "shapes"
+    args = {f"--num-{kind}": "10", "--out": str(tmp_path / "d.npz")}
     args.update(dict(zip(flags[::2], flags[1::2])))
-    assert main(["collect", *[x for pair in args.items() for x in pair]]) == 2
+    assert main(["collect", kind, *[x for pair in args.items() for x in pair]]) == 2
     assert message in capsys.readouterr().err
     assert not any(tmp_path.iterdir())
 
 
 def test_missing_required_flags_are_named(capsys):
-    assert main(["collect", "--num-shapes", "10"]) == 2
+    assert main(["collect", "shapes", "--num-shapes", "10"]) == 2
     assert "--out" in capsys.readouterr().err
 
 
 def test_an_existing_output_is_an_error_not_an_overwrite(tmp_path, capsys):
     out = tmp_path / "d.npz"
     out.write_bytes(b"keep me")
-    assert main(["collect", "--num-shapes", "10", "--out", str(out)]) == 2
+    assert main(["collect", "shapes", "--num-shapes", "10", "--out", str(out)]) == 2
     assert "already exists" in capsys.readouterr().err
     assert out.read_bytes() == b"keep me"
 
@@ -100,20 +101,20 @@ def test_interrupt_says_how_to_resume_and_resume_finishes(tmp_path, capsys, monk
         return real(*args, **{**kwargs, "progress": stop})
 
     monkeypatch.setattr(dlo_env.dataset.collect, "collect", interrupted)
-    assert main(["collect", "--num-shapes", "30", "--out", str(out)]) == 130
+    assert main(["collect", "shapes", "--num-shapes", "30", "--out", str(out)]) == 130
     assert "--resume" in capsys.readouterr().err
     assert not out.exists()
     monkeypatch.setattr(dlo_env.dataset.collect, "collect", real)
-    assert main(["collect", "--num-shapes", "30", "--out", str(out), "--resume"]) == 0
+    assert main(["collect", "shapes", "--num-shapes", "30", "--out", str(out), "--resume"]) == 0
     assert load_shapes(out).num_shapes == 30
     fresh = tmp_path / "fresh.npz"
-    assert main(["collect", "--num-shapes", "30", "--out", str(fresh)]) == 0
+    assert main(["collect", "shapes", "--num-shapes", "30", "--out", str(fresh)]) == 0
     np.testing.assert_array_equal(load_shapes(out).shapes, load_shapes(fresh).shapes)
 
 
 def test_help_lists_every_flag(capsys):
     with pytest.raises(SystemExit):
-        main(["collect", "--help"])
+        main(["collect", "shapes", "--help"])
     text = capsys.readouterr().out
     for flag in ("--num-shapes", "--out", "--seed", "--workers", "--cosine-threshold",
                  "--record-every", "--resume"):

@@ -77,8 +77,12 @@ def test_the_top_level_help_says_train_also_trains_the_transition_model(capsys):
         main(["--help"])
     assert stop.value.code == 0
     text = re.sub(r"\s+", " ", capsys.readouterr().out)
-    assert "train the shape model (GAN + encoder)" in text
-    assert "--stage transition, the transition model" in text
+    assert "train the shape model (GAN + encoder) on shapes or the transition model" in text
+    with pytest.raises(SystemExit):
+        main(["train", "--help"])
+    text = re.sub(r"\s+", " ", capsys.readouterr().out)
+    assert "shape the shape model (GAN + encoder) on shapes" in text
+    assert "transition the transition model on transitions" in text
 
 
 def test_repeated_set_flags_add_up():
@@ -91,7 +95,8 @@ def test_device_takes_what_this_machine_has(capsys):
     import torch
 
     assert _parse("baseline", "--algo", "ppo", "--device", "cpu").device == "cpu"
-    for command in (["train", "--data", "d.npz"], ["finetune"], ["baseline", "--algo", "ppo"]):
+    for command in (["train", "shape", "--data", "d.npz"], ["finetune"],
+                    ["baseline", "--algo", "ppo"]):
         assert main([*command, "--device", "tpu"]) == 2
         err = capsys.readouterr().err
         assert "--device: expected auto, cpu, cuda, cuda:N or mps, got 'tpu'" in err

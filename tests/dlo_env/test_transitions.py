@@ -137,7 +137,7 @@ def test_files_round_trip_and_a_foreign_or_corrupt_file_gets_one_line(tmp_path, 
         with pytest.raises(ValueError, match=message) as info:
             load_transitions(path)
         assert "\n" not in str(info.value)
-    with pytest.raises(FileNotFoundError, match="dlo collect --kind transitions"):
+    with pytest.raises(FileNotFoundError, match="dlo collect transitions"):
         load_transitions(tmp_path / "missing.npz")
 
 

@@ -342,7 +342,7 @@ def test_a_file_from_before_rim_targets_or_with_a_retired_setting_is_refused_in_
     del state["config"]["mirror"]
     with pytest.raises(ValueError, match=r"^path: a transition model file from before "
                        r"rim_targets, mirror existed, which this version no longer reads: "
-                       r"train it again with dlo train --stage transition$"):
+                       r"train it again with dlo train transition$"):
         TransitionModel.from_state(state, device="cpu")
     both = old.state()
     both["config"].update(mirror=False, rim_targets=1)  # both handednesses, one target's rim
