@@ -11,12 +11,11 @@ from __future__ import annotations
 from collections.abc import Callable
 from typing import Any
 
-#: The keys :class:`StepInfo` computes on read, in their order in the dict.
-METRIC_KEYS = ("error", "max_error", "direction_free_error", "bead_share")
+from dlo_env.envs.goal_api import METRIC_KEYS
 
 
 class StepInfo(dict):
-    """A ``dict`` whose :data:`METRIC_KEYS` are computed by ``metrics()`` when first read.
+    """A ``dict`` whose ``goal_api.METRIC_KEYS`` are computed by ``metrics()`` when first read.
 
     It holds the same keys, in the same order, with the same values as the plain dict
     ``{**head, **metrics(), **later}``; reading a metric, iterating, comparing, printing,
@@ -86,7 +85,7 @@ class StepInfo(dict):
     __hash__ = None  # type: ignore[assignment]  # mutable, as dict
 
     def __reduce_ex__(self, protocol: Any) -> tuple:
-        # pickle, copy and deepcopy give the plain dict the environment used to return.
+        # pickle, copy and deepcopy give a plain dict with every item.
         return dict, (list(self.items()),)
 
 

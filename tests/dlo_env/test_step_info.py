@@ -11,8 +11,8 @@ import pytest
 
 import dlo_env  # noqa: F401
 from dlo_env.envs import goal_env
-from dlo_env.envs.goal_api import goal_metrics
-from dlo_env.envs.step_info import METRIC_KEYS, StepInfo
+from dlo_env.envs.goal_api import METRIC_KEYS, goal_metrics
+from dlo_env.envs.step_info import StepInfo
 from dlo_env.tasks import at_rest, wait_for_rest
 
 ENDPOINT = "dlo_env/DLOEndpoint-v0"
@@ -71,7 +71,7 @@ def test_step_info_holds_the_errors_of_the_returned_shape_in_order():
     obs, info = env.reset(seed=2)
     obs, _, _, _, info = env.step(env.action_space.sample())
     metrics = goal_metrics(obs["achieved_goal"].reshape(-1, 2), obs["desired_goal"].reshape(-1, 2))
-    assert isinstance(info, dict)
+    assert isinstance(info, dict) and tuple(metrics) == METRIC_KEYS
     assert list(info) == ["is_success", "at_rest", *METRIC_KEYS, "settle_actions", "params"]
     assert all(info[k] == metrics[k] for k in METRIC_KEYS)
     plain = {**info}
