@@ -66,9 +66,9 @@ class DLOEndpointEnv(CordGoalEnv):
     `settle_actions`, `params` (the episode's `CordParams`), and the errors of the returned
     shape: `error`, `max_error` (largest per-point distance), `direction_free_error` (the
     smaller of the errors to the goal and to the reversed goal) and `bead_share` (share of
-    points within 1.75 cm of the goal polyline), metres. `env.unwrapped.settled_metrics()` gives
-    the same errors for the shape the cord would come to rest in now, without changing the
-    episode.
+    points within 1.75 cm of the goal polyline), metres, computed when first read.
+    `env.unwrapped.settled_metrics()` gives the same errors for the shape the cord would come to
+    rest in now, without changing the episode.
 
     ## Starting State
 

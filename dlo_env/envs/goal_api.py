@@ -69,10 +69,14 @@ def goal_spaces(n_points: int, held_ends: int, max_pegs: int = 0
     return action, observation
 
 
+#: The errors an environment reports of a shape against its goal, in ``info``'s order.
+METRIC_KEYS = ("error", "max_error", "direction_free_error", "bead_share")
+
+
 def goal_metrics(shapes: np.ndarray, goals: np.ndarray) -> dict[str, Any]:
-    """The errors an environment reports of shapes ``(..., n, 2)`` against goals: ``error``,
-    ``max_error``, ``direction_free_error`` and ``bead_share`` (floats for one shape, arrays
-    of the leading shape for a batch)."""
+    """The errors an environment reports of shapes ``(..., n, 2)`` against goals: the
+    :data:`METRIC_KEYS` ``error``, ``max_error``, ``direction_free_error`` and ``bead_share``
+    (floats for one shape, arrays of the leading shape for a batch)."""
     goals = np.asarray(goals)
     err = error(shapes, goals)
     free = np.minimum(err, error(shapes, goals[..., ::-1, :]))

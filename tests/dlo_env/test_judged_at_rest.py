@@ -78,9 +78,10 @@ def test_a_moving_cord_within_the_threshold_that_rests_outside_it_is_not_solved(
         base.goal, base._goal_flat = goal, goal.reshape(-1).astype(np.float32)
         if error(moving, goal) > 0.02 or error(rest.shape, goal) <= 0.02:
             continue
-        state = base.cord.shape_and_speed()
-        assert base._settle_if_solved(*state) == 0
-        _, info = base._observe(state)
+        shape, speed = base.cord.shape_and_speed()
+        distance = error(shape, base._goal_flat.reshape(-1, 2))
+        assert base._settle_if_solved(shape, speed, distance) == 0
+        _, info = base._observe(shape, speed, distance)
         assert not info["is_success"] and not info["at_rest"] and info["error"] <= 0.02
         checked += 1
     assert checked >= 5
