@@ -24,7 +24,7 @@ from typing import Any
 
 import numpy as np
 
-from dlo_env.atomic import atomic_path, write_text_atomic
+from dlo_env.core.atomic import atomic_path, write_text_atomic
 
 FORMAT_VERSION = 1
 #: The demonstrations a ``bc`` agent is cloned from, per environment: the oracle of the

@@ -67,8 +67,8 @@ from dlo_bench.paths import (
     shipped_baseline,
 )
 from dlo_bench.report import json_ready, threshold_label, write_evaluation
-from dlo_env.atomic import file_digest
 from dlo_env.cord_suites import CORD_SUITES
+from dlo_env.core.atomic import file_digest
 from dlo_env.designed_suites import DESIGNED_SUITES
 from dlo_env.envs import ENVIRONMENTS
 from dlo_env.peg_suites import PEGGED_SUITES
@@ -873,7 +873,7 @@ def run_benchmark(config: BenchmarkConfig, out_dir: str | os.PathLike, *,
         resume: Reuse cells already written by a run with the same settings.
         progress: Show progress bars.
         backend: None runs the cells one after the other in this process; a
-            ``dlo_env.dataset.ray_backend.RayBackend`` runs them as Ray tasks (same results:
+            ``dlo_env.core.ray_backend.RayBackend`` runs them as Ray tasks (same results:
             a cell is self-contained, see :func:`run_cell`).
         run_id: The id recorded with every cell this call evaluates (None: a
             :func:`new_run_id`); reused cells keep the id of the run that timed them.

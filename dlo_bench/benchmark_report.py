@@ -17,7 +17,7 @@ from pathlib import Path
 from typing import Any
 
 from dlo_bench.report import cell_label, json_ready, threshold_label
-from dlo_env.atomic import file_digest, write_text_atomic
+from dlo_env.core.atomic import file_digest, write_text_atomic
 
 
 @dataclass(frozen=True)

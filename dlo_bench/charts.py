@@ -13,7 +13,7 @@ from typing import Any
 
 import numpy as np
 
-from dlo_env.atomic import atomic_path
+from dlo_env.core.atomic import atomic_path
 
 
 def _pyplot() -> Any:

@@ -19,7 +19,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from dlo_env.progress import progress_bar
+from dlo_env.core.progress import progress_bar
 from planners.interfaces import EpisodeStats, PlanningPolicy, Policy
 
 if TYPE_CHECKING:

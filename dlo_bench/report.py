@@ -18,7 +18,7 @@ from typing import Any
 import numpy as np
 
 from dlo_bench.evaluation import EpisodeRecord, Evaluation
-from dlo_env.atomic import write_text_atomic
+from dlo_env.core.atomic import write_text_atomic
 
 #: Columns of the printed table: (summary key, header, format).
 TABLE_COLUMNS = (

@@ -250,7 +250,7 @@ def run(args: argparse.Namespace) -> int:
         if backend is not None:
             raise ValueError("--jobs runs the cells in local processes; with --backend ray the "
                              "cluster's CPUs set how many run at once")
-        from dlo_env.dataset.process_backend import ProcessBackend
+        from dlo_env.core.process_backend import ProcessBackend
 
         backend = ProcessBackend(args.jobs)
     writable_folder(args.out)  # the last check: a bad command line leaves no folder

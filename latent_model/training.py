@@ -19,7 +19,7 @@ from typing import Any
 import numpy as np
 import torch
 
-from dlo_env.atomic import atomic_path
+from dlo_env.core.atomic import atomic_path
 from dlo_env.shapes import TABLE_HALF
 from latent_model import losses, metrics, pose
 from latent_model.checkpoint import FORMAT, FORMAT_VERSION, load_checkpoint, save_atomic
@@ -358,7 +358,7 @@ def train(
     Returns:
         The trained model (also saved to ``out_dir/model.pt``).
     """
-    from dlo_env.progress import progress_bar as bar_of
+    from dlo_env.core.progress import progress_bar as bar_of
 
     if stage not in STAGES:
         raise ValueError(f"stage must be one of {STAGES}, got {stage!r}")

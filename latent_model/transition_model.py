@@ -30,7 +30,6 @@ import numpy as np
 import torch
 from torch import nn
 
-from dlo_env.checks import non_negative, positive, positive_ints
 from dlo_env.cord import (
     LINK_RADIUS,
     PEG_GUARD,
@@ -40,6 +39,7 @@ from dlo_env.cord import (
     peg_contact,
     reachable_targets,
 )
+from dlo_env.core.checks import non_negative, positive, positive_ints
 from dlo_env.dataset.transitions import PARAM_COLUMNS
 from dlo_env.shapes import TABLE_HALF, unflatten
 from dlo_env.tasks import DEFAULT_MAX_STEP
