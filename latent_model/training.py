@@ -19,9 +19,11 @@ from typing import Any
 import numpy as np
 import torch
 
+import latent_model.losses as losses
+import latent_model.metrics as metrics
+import latent_model.pose as pose
 from dlo_env.core.atomic import atomic_path
 from dlo_env.shapes import TABLE_HALF
-from latent_model import losses, metrics, pose
 from latent_model.checkpoint import FORMAT, FORMAT_VERSION, load_checkpoint, save_atomic
 from latent_model.config import ModelConfig, TrainConfig, config_from_dict
 from latent_model.dataset import evaluation_subsets
