@@ -66,7 +66,7 @@ from dlo_bench.paths import (
     baseline_folder_name,
     shipped_baseline,
 )
-from dlo_bench.report import json_ready, threshold_label, write_evaluation
+from dlo_bench.report import HEADLINE_THRESHOLD, json_ready, threshold_label, write_evaluation
 from dlo_env.cord_suites import CORD_SUITES
 from dlo_env.core.atomic import file_digest
 from dlo_env.designed_suites import DESIGNED_SUITES
@@ -82,8 +82,6 @@ SUITE_OF_DIFFICULTY = {difficulty: name for name, difficulty in SUITES.items()}
 DEFAULT_DIFFICULTIES = {ENDPOINT: (1, 2, 3, 4, 5, 8, 10), DUAL_ENDPOINT: (1, 2, 3, 8, 10)}
 #: Success thresholds every cell runs at, metres (judged at rest): one evaluation each.
 THRESHOLDS = (0.02, 0.01, 0.005)
-#: The threshold the report's first table shows (and the designed cells run at).
-HEADLINE_THRESHOLD = 0.01
 #: The designed suites the benchmark runs in every environment.
 DEFAULT_DESIGNED = ("shapes-curves",)
 #: The cord suites of the ``cords`` section (tasks on held-out cords the agents are not told).

@@ -16,7 +16,13 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from dlo_bench.report import cell_label, json_ready, threshold_label
+from dlo_bench.report import (
+    cell_label,
+    headline_first,
+    json_ready,
+    threshold_label,
+    thresholds_of,
+)
 from dlo_env.core.atomic import file_digest, write_text_atomic
 
 
@@ -137,18 +143,6 @@ def run_summary(rows: list[dict[str, Any]]) -> str:
     return "; ".join(", ".join(f"{run} ({n} cell{'s' * (n != 1)})"
                                for run, n in sorted(counts.items())) + f" on {machine}"
                      for machine, counts in sorted(machines.items()))
-
-
-def thresholds_of(rows: list[dict[str, Any]]) -> list[float | None]:
-    """The success thresholds of the rows, in row order (None: rows without one)."""
-    return list(dict.fromkeys(r.get("threshold") for r in rows))
-
-
-def headline_first(thresholds: list[float | None]) -> list[float | None]:
-    """``thresholds`` with the headline one (1 cm) first."""
-    from dlo_bench.benchmark import HEADLINE_THRESHOLD
-
-    return sorted(thresholds, key=lambda t: t != HEADLINE_THRESHOLD)
 
 
 def success_table(rows: list[dict[str, Any]], threshold: float | None = None) -> list[str]:
