@@ -22,7 +22,7 @@ from dlo_bench.paths import baseline_folder_name, shipped_baseline
 from planners.interfaces import Policy, ShapeSurrogate
 
 if TYPE_CHECKING:
-    from dlo_bench.benchmark import BenchmarkConfig
+    from dlo_bench.benchmark.config import BenchmarkConfig
 
 
 @dataclass(frozen=True)

@@ -137,7 +137,7 @@ def check_committed(allow_dirty: bool) -> None:
     """Refuse (``ValueError``, one line naming ``--allow-dirty``) to run code with uncommitted
     changes to tracked files, unless ``allow_dirty``; code outside a git checkout of its own
     (an installed package) runs."""
-    from dlo_bench.benchmark import code_state
+    from dlo_bench.benchmark.provenance import code_state
 
     state = code_state()
     if allow_dirty or state is None or not state.changed:
