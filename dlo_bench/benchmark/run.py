@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import os
 import time
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
@@ -98,6 +99,108 @@ def run_cell(name: str, env_id: str, suite: str | int, config: BenchmarkConfig, 
         return result, time.perf_counter() - t0
 
 
+@dataclass(frozen=True)
+class PendingCell:
+    """A cell this run evaluates (neither missing nor reused).
+
+    Attributes:
+        slot: The index of its row in the results.
+        name, env_id, suite, threshold: The cell: its agent, environment, suite and success
+            threshold.
+        agent: Its agent, loaded.
+        key: What its result depends on (:func:`cell_key`), written with it.
+    """
+
+    slot: int
+    name: str
+    env_id: str
+    suite: str
+    threshold: float
+    agent: LoadedAgent
+    key: dict[str, Any]
+
+    @property
+    def file_name(self) -> str:
+        """The cell's file name (:func:`cell_name`)."""
+        return cell_name(self.name, self.env_id, self.suite, self.threshold)
+
+
+@dataclass
+class _Run:
+    """One call of :func:`run_benchmark`: what it runs and records, its rows, the cells it
+    evaluates and their finished parts.
+
+    Attributes:
+        config, folder, part, progress, backend: As given (``folder``: the cells' folder).
+        version, run_id, machine: The facts every cell evaluated here records.
+        rows: The results, one per cell (empty while the cell runs).
+        todo: The cells to evaluate, in the order they run.
+        done: Per cell of ``todo`` (by index), its finished parts by their first episode, each
+            with its facts.
+    """
+
+    config: BenchmarkConfig
+    folder: Path
+    part: int | None
+    progress: bool
+    backend: Any
+    version: str
+    run_id: str
+    machine: str
+    rows: list[dict[str, Any]] = field(default_factory=list)
+    todo: list[PendingCell] = field(default_factory=list)
+    done: dict[int, dict[int, tuple[Evaluation, dict[str, Any]]]] = field(default_factory=dict)
+
+    @property
+    def parts_folder(self) -> Path:
+        """Where the finished parts of unfinished cells are written."""
+        return self.folder / PARTS_DIR
+
+    def finish(self, k: int, first: int, count: int, result: Evaluation, seconds: float) -> None:
+        """Keep a finished part (on disk when the cell has several) and complete its cell."""
+        cell = self.todo[k]
+        facts = {"wall_seconds": seconds, "commit": self.version, "run": self.run_id,
+                 "machine": self.machine}
+        if len(split_episodes(self.config.episodes, self.part)) > 1:
+            write_evaluation(result, self.parts_folder, part_name(cell.file_name, first, count),
+                             extra={"benchmark_key": cell.key, **facts,
+                                    "goals": [g.tolist() for g in result.goals],
+                                    "rest": [r.tolist() for r in result.rest_shapes]})
+        self.done[k][first] = (result, facts)
+        self.complete(k)
+
+    def complete(self, k: int) -> None:
+        """Write cell ``k`` when all its parts are done, and delete its parts."""
+        cell = self.todo[k]
+        pieces = split_episodes(self.config.episodes, self.part)
+        if len(self.done[k]) < len(pieces):
+            return
+        result, facts = merge_parts([self.done[k][a] for a, _ in pieces], cell.name, cell.env_id)
+        extra: dict[str, Any] = {"benchmark_key": cell.key, **facts}
+        shapes = {"goals": [g.tolist() for g in result.goals],
+                  "rest": [r.tolist() for r in result.rest_shapes]}
+        if cell.suite in DESIGNED_SUITES:  # for the figure of designed shapes
+            tasks = designed_tasks(cell.suite, cell.env_id, len(result.records))
+            extra["shapes"] = {"seeds": [s for s, _ in tasks], "families": [f for _, f in tasks],
+                               **shapes}
+        elif cell.suite in PEGGED_SUITES:  # for the figure of routed cords
+            made = peg_tasks(cell.suite, cell.env_id, len(result.records))
+            extra["shapes"] = {"seeds": [t.seed for t in made],
+                               "families": [cell.suite] * len(made),
+                               "pegs": [np.asarray(t.pegs).tolist() for t in made],
+                               "peg_radius": [float(t.peg_radius) for t in made], **shapes}
+        write_evaluation(result, self.folder, cell.file_name, extra=extra)
+        self.rows[cell.slot] = {**row_of(cell.agent, cell.env_id, cell.suite, cell.threshold,
+                                         result, self.config.episodes), **facts}
+        if self.parts_folder.is_dir():  # its parts, also those of a run with another part size
+            for stale in self.parts_folder.glob(f"{cell.file_name}.episodes-*"):
+                stale.unlink(missing_ok=True)
+            if not any(self.parts_folder.iterdir()):
+                self.parts_folder.rmdir()
+        if self.progress and self.backend is not None:
+            print(f"{cell.file_name}: success {result.summary['success_rate']:.0%}", flush=True)
+
+
 def run_benchmark(config: BenchmarkConfig, out_dir: str | os.PathLike, *,
                   resume: bool = False, progress: bool = True,
                   backend: Any = None, run_id: str | None = None,
@@ -126,8 +229,6 @@ def run_benchmark(config: BenchmarkConfig, out_dir: str | os.PathLike, *,
         The rows: agents in ``config.all_agents`` order, then each agent's cells in
         ``config.cells(agent)`` order.
     """
-    import gymnasium as gym
-
     import dlo_env  # noqa: F401  (registers the environments)
 
     if part is not None and not (isinstance(part, int) and not isinstance(part, bool)
@@ -138,127 +239,111 @@ def run_benchmark(config: BenchmarkConfig, out_dir: str | os.PathLike, *,
     # The code that runs, read once before any cell is written: a run writing into a tracked
     # folder (``--out benchmarks``) must not mark its own later cells "+dirty".
     version = code_version()
-    machine = machine_label()
+    run = _Run(config, folder, part, progress, backend, version, run_id, machine_label())
     shape_model, why = (None, "")
     if any(agent_spec(a).shape_model for a in config.all_agents):
         shape_model, why = load_shape_model(config.model)
-    rows: list[dict[str, Any]] = []
-    todo: list[tuple[int, str, str, str, float, LoadedAgent, dict[str, Any]]] = []
     for name in config.all_agents:
-        # one agent per environment and number of peg slots it observes
-        agents: dict[tuple[str, int], LoadedAgent] = {}
-        for env_id, pegs in dict.fromkeys(
-                (env, task_env_kwargs(suite=suite).get("max_pegs", 0))
-                for env, suite, _ in config.cells(name)):
-            with gym.make(env_id, max_pegs=pegs) as env:
-                agent = load_agent(name, config, env, shape_model)
-            if agent.missing.startswith("no shape model") and why:
-                agent = LoadedAgent(name, None, missing=f"no shape model: {why}")
-            agents[env_id, pegs] = agent
-        for env_id, suite, threshold in config.cells(name):
-            agent = agents[env_id, task_env_kwargs(suite=suite).get("max_pegs", 0)]
-            cell = cell_name(name, env_id, suite, threshold)
-            if agent.policy is None:
-                rows.append(row_of(agent, env_id, suite, threshold, None, 0))
-                if progress:
-                    print(f"{cell}: {'missing' if agent.applicable else 'n/a'} "
-                          f"({agent.missing})", flush=True)
-                continue
-            key = cell_key(config, agent, env_id, suite, threshold)
-            path = folder / f"{cell}.json"
-            loaded = _load_cell(path, key) if resume else None
-            if loaded is not None:
-                result, facts = loaded
-                rows.append({**row_of(agent, env_id, suite, threshold, result,
-                                      config.episodes), **facts})
-                if progress:
-                    print(f"{cell}: reused {path}", flush=True)
-                continue
-            todo.append((len(rows), name, env_id, suite, threshold, agent, key))
-            rows.append({})
+        _add_cells(run, name, _loaded_agents(config, name, shape_model, why), resume)
+    _put_in_run_order(config, run.todo)
+    calls = _parts_to_run(run, resume)
+    for k in run.done:  # cells whose every part was reused
+        run.complete(k)
+    _evaluate(run, calls, shape_model)
+    return run.rows
 
-    # Cell by cell, every agent of a cell one after the other: an interrupted run leaves whole
-    # cells, and the agents of a cell are timed in one run (their time ratio is comparable).
-    # The headline threshold's cells first.
+
+def _loaded_agents(config: BenchmarkConfig, name: str, shape_model: ShapeSurrogate | None,
+                   why: str) -> dict[tuple[str, int], LoadedAgent]:
+    """Agent ``name`` loaded once per environment and number of peg slots it observes in the
+    cells of ``config``; ``why`` says why the shape model is missing (when it is)."""
+    import gymnasium as gym
+
+    agents: dict[tuple[str, int], LoadedAgent] = {}
+    for env_id, pegs in dict.fromkeys((env, task_env_kwargs(suite=suite).get("max_pegs", 0))
+                                      for env, suite, _ in config.cells(name)):
+        with gym.make(env_id, max_pegs=pegs) as env:
+            agent = load_agent(name, config, env, shape_model)
+        if agent.missing.startswith("no shape model") and why:
+            agent = LoadedAgent(name, None, missing=f"no shape model: {why}")
+        agents[env_id, pegs] = agent
+    return agents
+
+
+def _add_cells(run: _Run, name: str, agents: dict[tuple[str, int], LoadedAgent],
+               resume: bool) -> None:
+    """The rows of agent ``name``'s cells: where it is missing, its row says so; a cell
+    written by an earlier run with the same key is reused (``resume``); every other cell gets an
+    empty row and a place in ``run.todo``."""
+    config = run.config
+    for env_id, suite, threshold in config.cells(name):
+        agent = agents[env_id, task_env_kwargs(suite=suite).get("max_pegs", 0)]
+        cell = cell_name(name, env_id, suite, threshold)
+        if agent.policy is None:
+            run.rows.append(row_of(agent, env_id, suite, threshold, None, 0))
+            if run.progress:
+                print(f"{cell}: {'missing' if agent.applicable else 'n/a'} "
+                      f"({agent.missing})", flush=True)
+            continue
+        key = cell_key(config, agent, env_id, suite, threshold)
+        path = run.folder / f"{cell}.json"
+        loaded = _load_cell(path, key) if resume else None
+        if loaded is not None:
+            result, facts = loaded
+            run.rows.append({**row_of(agent, env_id, suite, threshold, result,
+                                      config.episodes), **facts})
+            if run.progress:
+                print(f"{cell}: reused {path}", flush=True)
+            continue
+        run.todo.append(PendingCell(len(run.rows), name, env_id, suite, threshold, agent, key))
+        run.rows.append({})
+
+
+def _put_in_run_order(config: BenchmarkConfig, todo: list[PendingCell]) -> None:
+    """Sort ``todo`` cell by cell, every agent of a cell one after the other: an interrupted
+    run leaves whole cells, and the agents of a cell are timed in one run (their time ratio is
+    comparable). The headline threshold's cells first."""
     cells = config.cells()
     order = {cell: (cell[2] != HEADLINE_THRESHOLD, i) for i, cell in enumerate(cells)}
     ranks = {name: i for i, name in enumerate(config.all_agents)}
-    todo.sort(key=lambda item: (order[(item[2], item[3], item[4])], ranks[item[1]]))
+    todo.sort(key=lambda c: (order[(c.env_id, c.suite, c.threshold)], ranks[c.name]))
 
-    parts_folder = folder / PARTS_DIR
-    calls: list[tuple[int, int, int]] = []  # (todo index, first, count)
-    done: dict[int, dict[int, tuple[Evaluation, dict[str, Any]]]] = {}
-    for k, (_, name, env_id, suite, threshold, _, key) in enumerate(todo):
-        done[k] = {}
-        for first, count in split_episodes(config.episodes, part):
-            cell = cell_name(name, env_id, suite, threshold)
-            path = parts_folder / f"{part_name(cell, first, count)}.json"
-            loaded = _load_cell(path, key, full=True) if resume and part is not None else None
+
+def _parts_to_run(run: _Run, resume: bool) -> list[tuple[int, int, int]]:
+    """``(index into run.todo, first episode, count)`` of every part to evaluate; the parts
+    an earlier run finished (``resume`` with parts) go to ``run.done``."""
+    calls: list[tuple[int, int, int]] = []
+    for k, cell in enumerate(run.todo):
+        run.done[k] = {}
+        for first, count in split_episodes(run.config.episodes, run.part):
+            path = run.parts_folder / f"{part_name(cell.file_name, first, count)}.json"
+            loaded = (_load_cell(path, cell.key, full=True) if resume and run.part is not None
+                      else None)
             if loaded is not None and len(loaded[0].records) == count:
-                done[k][first] = loaded
+                run.done[k][first] = loaded
             else:
                 calls.append((k, first, count))
+    return calls
 
-    def finish(k: int, first: int, count: int, result: Evaluation, seconds: float) -> None:
-        """Keep a finished part (on disk when the cell has several) and complete its cell."""
-        _, name, env_id, suite, threshold, _, key = todo[k]
-        facts = {"wall_seconds": seconds, "commit": version, "run": run_id, "machine": machine}
-        if len(split_episodes(config.episodes, part)) > 1:
-            cell = cell_name(name, env_id, suite, threshold)
-            write_evaluation(result, parts_folder, part_name(cell, first, count), extra={
-                "benchmark_key": key, **facts, "goals": [g.tolist() for g in result.goals],
-                "rest": [r.tolist() for r in result.rest_shapes]})
-        done[k][first] = (result, facts)
-        complete(k)
 
-    def complete(k: int) -> None:
-        """Write cell ``k`` when all its parts are done, and delete its parts."""
-        slot, name, env_id, suite, threshold, agent, key = todo[k]
-        pieces = split_episodes(config.episodes, part)
-        if len(done[k]) < len(pieces):
-            return
-        cell = cell_name(name, env_id, suite, threshold)
-        result, facts = merge_parts([done[k][a] for a, _ in pieces], name, env_id)
-        extra: dict[str, Any] = {"benchmark_key": key, **facts}
-        shapes = {"goals": [g.tolist() for g in result.goals],
-                  "rest": [r.tolist() for r in result.rest_shapes]}
-        if suite in DESIGNED_SUITES:  # for the figure of designed shapes
-            tasks = designed_tasks(suite, env_id, len(result.records))
-            extra["shapes"] = {"seeds": [s for s, _ in tasks], "families": [f for _, f in tasks],
-                               **shapes}
-        elif suite in PEGGED_SUITES:  # for the figure of routed cords
-            made = peg_tasks(suite, env_id, len(result.records))
-            extra["shapes"] = {"seeds": [t.seed for t in made], "families": [suite] * len(made),
-                               "pegs": [np.asarray(t.pegs).tolist() for t in made],
-                               "peg_radius": [float(t.peg_radius) for t in made], **shapes}
-        write_evaluation(result, folder, cell, extra=extra)
-        rows[slot] = {**row_of(agent, env_id, suite, threshold, result, config.episodes),
-                      **facts}
-        if parts_folder.is_dir():  # its parts, also those of a run with another part size
-            for stale in parts_folder.glob(f"{cell}.episodes-*"):
-                stale.unlink(missing_ok=True)
-            if not any(parts_folder.iterdir()):
-                parts_folder.rmdir()
-        if progress and backend is not None:
-            print(f"{cell}: success {result.summary['success_rate']:.0%}", flush=True)
-
-    for k in done:  # cells whose every part was reused
-        complete(k)
-    if backend is None:
+def _evaluate(run: _Run, calls: list[tuple[int, int, int]],
+              shape_model: ShapeSurrogate | None) -> None:
+    """Evaluate the parts ``calls`` (:func:`_parts_to_run`), in this process or on the run's
+    backend, each kept as it finishes (:meth:`_Run.finish`)."""
+    if run.backend is None:
         for k, first, count in calls:
-            _, name, env_id, suite, threshold, _, _ = todo[k]
-            result, seconds = run_cell(name, env_id, suite, config, threshold=threshold,
-                                       shape_model=shape_model, progress=progress,
-                                       first=first, count=count)
-            finish(k, first, count, result, seconds)
-    else:
-        threads = _torch_threads()
-        config = absolute_paths(config)  # the tasks may run in another folder or node
-        tasks = [(todo[k][1], todo[k][2], todo[k][3], todo[k][4], config, None, threads, first,
-                  count) for k, first, count in calls]
-        for i, (result, seconds) in backend.map(_run_cell_task, tasks):
-            finish(*calls[i], result, seconds)
-    return rows
+            cell = run.todo[k]
+            result, seconds = run_cell(cell.name, cell.env_id, cell.suite, run.config,
+                                       threshold=cell.threshold, shape_model=shape_model,
+                                       progress=run.progress, first=first, count=count)
+            run.finish(k, first, count, result, seconds)
+        return
+    threads = _torch_threads()
+    config = absolute_paths(run.config)  # the tasks may run in another folder or node
+    tasks = [(run.todo[k].name, run.todo[k].env_id, run.todo[k].suite, run.todo[k].threshold,
+              config, None, threads, first, count) for k, first, count in calls]
+    for i, (result, seconds) in run.backend.map(_run_cell_task, tasks):
+        run.finish(*calls[i], result, seconds)
 
 
 def _run_cell_task(name: str, env_id: str, suite: str, threshold: float,
