@@ -20,8 +20,8 @@ import tempfile
 import time
 from dataclasses import dataclass
 
+from dlo_env.core.ray_backend import RayBackend
 from dlo_env.dataset.collect import CollectConfig, collect
-from dlo_env.dataset.ray_backend import RayBackend
 from dlo_env.dataset.transitions import TransitionCollectConfig, collect_transitions
 
 

@@ -23,7 +23,7 @@ from pathlib import Path
 import numpy as np
 import torch
 
-from dlo_env.atomic import write_text_atomic
+from dlo_env.core.atomic import write_text_atomic
 from dlo_env.dataset.transitions import GRASP_NAMES, PARAM_COLUMNS, load_transitions
 from dlo_env.shapes import cord_length, error
 from latent_model.transition_model import TransitionModel

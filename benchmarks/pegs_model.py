@@ -30,8 +30,8 @@ from pathlib import Path
 import numpy as np
 import torch
 
-from dlo_env.atomic import file_digest, write_text_atomic
 from dlo_env.cord import PEG_RADIUS, Cord, CordParams, peg_clearance
+from dlo_env.core.atomic import file_digest, write_text_atomic
 from dlo_env.dataset.transitions import (
     GRASP_NAMES,
     PARAM_COLUMNS,

@@ -18,7 +18,7 @@ import argparse
 import numpy as np
 import torch
 
-from dlo_env.atomic import file_digest
+from dlo_env.core.atomic import file_digest
 from dlo_env.dataset.transitions import GRASP_NAMES, TransitionDataset, load_transitions
 from dlo_env.shapes import error
 from latent_model.transition_metrics import cords_of

@@ -35,8 +35,8 @@ import numpy as np
 import torch
 
 from dlo_bench.report import json_ready
-from dlo_env.atomic import atomic_path, write_text_atomic
 from dlo_env.cord import Cord, CordParams
+from dlo_env.core.atomic import atomic_path, write_text_atomic
 from dlo_env.dataset.transitions import GRASP_NAMES, carry_out, load_transitions
 from dlo_env.shapes import ANALYTIC_KINDS, analytic_shape, error, on_table
 from dlo_env.tasks import (

@@ -34,7 +34,7 @@ import numpy as np
 import torch
 
 from dlo_bench.charts import plot_scaling
-from dlo_env.atomic import file_digest, write_text_atomic
+from dlo_env.core.atomic import file_digest, write_text_atomic
 from dlo_env.dataset.transitions import (
     GRASP_NAMES,
     TransitionDataset,

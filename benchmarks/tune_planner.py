@@ -116,7 +116,7 @@ def main() -> None:
             raise SystemExit(f"--grid must be a JSON object of {args.agent} config fields to "
                              f"lists, got {args.grid!r} ({exc})") from None
 
-    from dlo_env.atomic import write_text_atomic
+    from dlo_env.core.atomic import write_text_atomic
 
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)

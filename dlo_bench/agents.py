@@ -470,7 +470,7 @@ def build_agent(name: str, env: Any, **options: Any) -> Policy:
     given = {k: v for k, v in options.items() if v is not None}  # None: the default
     policy = spec.build(env, replace(AgentOptions(), **{**spec.defaults, **given}))
     _check_observation(name, policy, env)
-    from planners.episodes import EpisodicPolicy
+    from planners.episodic_policy import EpisodicPolicy
 
     if isinstance(policy, EpisodicPolicy):  # aim as the environment scores, in it alone
         policy.success_metric = getattr(env.unwrapped, "success_metric", "error")

@@ -28,8 +28,8 @@ import gymnasium as gym
 import numpy as np
 
 from dlo_bench.policy_file import POLICY_FILE, load_policy_file, write_policy_file
-from dlo_env.atomic import atomic_path, write_text_atomic
-from dlo_env.checks import (
+from dlo_env.core.atomic import atomic_path, write_text_atomic
+from dlo_env.core.checks import (
     check_fields,
     fractions,
     non_negative,
@@ -342,7 +342,7 @@ def _training_callback(total: int, start: int, checkpoint: Path | None, every: i
 
     class _Progress(BaseCallback):
         def _on_training_start(self) -> None:
-            from dlo_env.progress import progress_bar as bar
+            from dlo_env.core.progress import progress_bar as bar
 
             self._bar = bar(total, "training", "step", initial=start, enabled=progress_bar)
             self._next = (start // every + 1) * every if every else None

@@ -26,7 +26,7 @@ from typing import Any
 import numpy as np
 
 from dlo_bench.policy_file import POLICY_FILE, load_policy_file, write_policy_file
-from dlo_env.atomic import atomic_path, write_text_atomic
+from dlo_env.core.atomic import atomic_path, write_text_atomic
 from dlo_env.errors import InputError, MissingFileError
 
 FORMAT_VERSION = 1

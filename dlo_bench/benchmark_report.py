@@ -16,8 +16,17 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from dlo_bench.report import cell_label, json_ready, threshold_label
-from dlo_env.atomic import file_digest, write_text_atomic
+from dlo_bench.benchmark.cells import CELLS_DIR, cell_name
+from dlo_bench.benchmark.config import CORD_AGENTS
+from dlo_bench.benchmark.rows import NEAR_REFERENCE
+from dlo_bench.report import (
+    cell_label,
+    headline_first,
+    json_ready,
+    threshold_label,
+    thresholds_of,
+)
+from dlo_env.core.atomic import file_digest, write_text_atomic
 
 
 @dataclass(frozen=True)
@@ -137,18 +146,6 @@ def run_summary(rows: list[dict[str, Any]]) -> str:
     return "; ".join(", ".join(f"{run} ({n} cell{'s' * (n != 1)})"
                                for run, n in sorted(counts.items())) + f" on {machine}"
                      for machine, counts in sorted(machines.items()))
-
-
-def thresholds_of(rows: list[dict[str, Any]]) -> list[float | None]:
-    """The success thresholds of the rows, in row order (None: rows without one)."""
-    return list(dict.fromkeys(r.get("threshold") for r in rows))
-
-
-def headline_first(thresholds: list[float | None]) -> list[float | None]:
-    """``thresholds`` with the headline one (1 cm) first."""
-    from dlo_bench.benchmark import HEADLINE_THRESHOLD
-
-    return sorted(thresholds, key=lambda t: t != HEADLINE_THRESHOLD)
 
 
 def success_table(rows: list[dict[str, Any]], threshold: float | None = None) -> list[str]:
@@ -271,8 +268,6 @@ def cords_section(rows: list[dict[str, Any]]) -> list[str]:
         + "; ".join(f"{i} = {label(c)}" for i, c in enumerate(TEST_CORDS)) + ".",
         "",
     ]
-    from dlo_bench.benchmark import CORD_AGENTS
-
     order = {name: i for i, name in enumerate(CORD_AGENTS)}
     for key in dict.fromkeys((_suite(r), r["env"], r.get("threshold")) for r in cords):
         group = sorted((r for r in cords if (_suite(r), r["env"], r.get("threshold")) == key),
@@ -307,8 +302,6 @@ def designed_section(rows: list[dict[str, Any]]) -> list[str]:
     designed = [r for r in rows if r.get("designed")]
     if not designed:
         return []
-    from dlo_bench.benchmark import NEAR_REFERENCE
-
     near = threshold_label(NEAR_REFERENCE)
     lines = [
         "## Designed shapes",
@@ -361,8 +354,6 @@ def designed_panels(rows: list[dict[str, Any]], out_dir: str | os.PathLike,
     ``pegs``: the same of the cells with pegs (a family per suite), with the error at rest
     and the task's pegs (``(k, 2)`` centres, radius)."""
     import numpy as np
-
-    from dlo_bench.benchmark import CELLS_DIR, cell_name
 
     designed = [r for r in rows if r["status"] == "ok"
                 and (is_pegs_row(r) if pegs else r.get("designed"))]

@@ -27,7 +27,7 @@ from typing import Any
 
 import numpy as np
 
-from dlo_env.atomic import atomic_path
+from dlo_env.core.atomic import atomic_path
 from dlo_env.errors import InputError
 
 #: A cell's file suffix; ``LEGACY_SUFFIX`` cells (one JSON document) are still read.

@@ -13,7 +13,7 @@ from typing import Any
 
 import numpy as np
 
-from dlo_env.atomic import atomic_path
+from dlo_env.core.atomic import atomic_path
 
 
 def _pyplot() -> Any:
@@ -104,8 +104,7 @@ def plot_results(rows: list[dict[str, Any]], png: str | os.PathLike) -> None:
     skipped), at the headline threshold when the rows have several."""
     plt = _pyplot()
 
-    from dlo_bench.benchmark_report import headline_first, thresholds_of
-    from dlo_bench.report import cell_label, threshold_label
+    from dlo_bench.report import cell_label, headline_first, threshold_label, thresholds_of
 
     threshold = headline_first(thresholds_of(rows))[0] if rows else None
     rows = [r for r in rows if r.get("threshold") == threshold]

@@ -20,7 +20,7 @@ from typing import Any
 import numpy as np
 import torch
 
-from dlo_env.checks import positive, positive_ints
+from dlo_env.core.checks import positive, positive_ints
 from dlo_env.errors import InputError
 from dlo_env.shapes import error
 from planners.distilled import DistilledConfig, MoveNetwork, features, to_frame

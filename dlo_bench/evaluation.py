@@ -18,9 +18,9 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from dlo_env.core.deprecation import renamed_argument
+from dlo_env.core.progress import progress_bar
 from dlo_env.errors import InputError
-from dlo_env.progress import progress_bar
-from planners.deprecated import renamed_argument
 from planners.interfaces import EpisodeStats, PlanningPolicy, Policy
 
 if TYPE_CHECKING:

@@ -14,7 +14,7 @@ from typing import Any
 
 import numpy as np
 
-from dlo_env.atomic import atomic_path
+from dlo_env.core.atomic import atomic_path
 from dlo_env.errors import InputError
 from dlo_env.rendering import PALETTE
 from dlo_env.shapes import TABLE_HALF

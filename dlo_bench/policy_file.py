@@ -16,7 +16,7 @@ import os
 from pathlib import Path
 from typing import Any
 
-from dlo_env.atomic import atomic_path
+from dlo_env.core.atomic import atomic_path
 from dlo_env.errors import InputError
 
 #: The file of a folder holding the acting weights.

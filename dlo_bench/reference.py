@@ -27,7 +27,7 @@ from typing import Any
 
 import numpy as np
 
-from dlo_env.atomic import write_text_atomic
+from dlo_env.core.atomic import write_text_atomic
 from dlo_env.designed_suites import designed_suite_seeds, designed_task
 from dlo_env.errors import InputError
 from planners.physics_mpc import PhysicsMPCConfig
@@ -208,7 +208,7 @@ def make_references(suite: str, env_id: str, out: str | Path, *, split: str = "t
     else:
         from multiprocessing import get_context
 
-        from dlo_env.dataset.process_backend import watch_parent
+        from dlo_env.core.process_backend import watch_parent
 
         # workers end with a parent killed outright (finished searches are in the file)
         with get_context("spawn").Pool(jobs, initializer=watch_parent) as pool:

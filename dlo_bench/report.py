@@ -18,8 +18,10 @@ from typing import Any
 import numpy as np
 
 from dlo_bench.evaluation import EpisodeRecord, Evaluation
-from dlo_env.atomic import write_text_atomic
+from dlo_env.core.atomic import write_text_atomic
 
+#: The threshold the report's first table shows (and the designed cells run at).
+HEADLINE_THRESHOLD = 0.01
 #: Columns of the printed table: (summary key, header, format).
 TABLE_COLUMNS = (
     ("agent", "agent", "{}"),
@@ -179,3 +181,13 @@ def threshold_label(threshold: float, space: str = " ") -> str:
     """A success threshold in tables and file names: ``1 cm``, ``0.5 cm`` (``1cm`` with
     ``space=""``)."""
     return f"{100 * threshold:g}{space}cm"
+
+
+def thresholds_of(rows: list[dict[str, Any]]) -> list[float | None]:
+    """The success thresholds of the rows, in row order (None: rows without one)."""
+    return list(dict.fromkeys(r.get("threshold") for r in rows))
+
+
+def headline_first(thresholds: list[float | None]) -> list[float | None]:
+    """``thresholds`` with the headline one (1 cm) first."""
+    return sorted(thresholds, key=lambda t: t != HEADLINE_THRESHOLD)

@@ -20,7 +20,7 @@ from typing import Any
 
 from dlo_bench.agents import DUAL_ENDPOINT, ENDPOINT
 from dlo_bench.baselines import BaselineConfig
-from dlo_env.atomic import write_text_atomic
+from dlo_env.core.atomic import write_text_atomic
 from dlo_env.errors import InputError
 
 #: Folder of the shipped rl-zoo3 hyperparameter files.

@@ -144,7 +144,7 @@ def check_committed(allow_dirty: bool) -> None:
     """Refuse (``ValueError``, one line naming ``--allow-dirty``) to run code with uncommitted
     changes to tracked files, unless ``allow_dirty``; code outside a git checkout of its own
     (an installed package) runs."""
-    from dlo_bench.benchmark import code_state
+    from dlo_bench.benchmark.provenance import code_state
 
     state = code_state()
     if allow_dirty or state is None or not state.changed:
@@ -251,7 +251,7 @@ def run(args: argparse.Namespace) -> int:
         if backend is not None:
             raise InputError("--jobs runs the cells in local processes; with --backend ray the "
                              "cluster's CPUs set how many run at once")
-        from dlo_env.dataset.process_backend import ProcessBackend
+        from dlo_env.core.process_backend import ProcessBackend
 
         backend = ProcessBackend(args.jobs)
     writable_folder(args.out)  # the last check: a bad command line leaves no folder

@@ -22,8 +22,8 @@ def run_chunked(args: argparse.Namespace, job: Callable[[Callable[[int, int], No
     import time
 
     from dlo_cli.flags import writable_file
+    from dlo_env.core.progress import progress_bar
     from dlo_env.dataset.chunks import parts_dir
-    from dlo_env.progress import progress_bar
 
     writable_file(args.out)
 

@@ -57,7 +57,7 @@ def run(args: argparse.Namespace) -> int:
     from dlo_bench.fidelity import transition_fidelity
     from dlo_bench.figures import save_episode_gif
     from dlo_bench.report import format_legend, format_table, write_evaluation, write_summaries
-    from dlo_env.progress import progress_bar
+    from dlo_env.core.progress import progress_bar
     from planners.interpolation import interpolate
     from planners.latent_tree import LatentTreePlanner
 

@@ -41,6 +41,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 def run(args: argparse.Namespace) -> int:
     """Write the datasets, printing one line per dataset."""
+    from dlo_env.core.progress import progress_bar
     from dlo_env.dataset.minari_export import (
         check_absent,
         check_name,
@@ -49,7 +50,6 @@ def run(args: argparse.Namespace) -> int:
         export_transitions,
         transitions_ids,
     )
-    from dlo_env.progress import progress_bar
 
     if args.no_demonstrations and args.transitions is None:
         raise InputError("--no-demonstrations leaves nothing to export; give --transitions FILE")

@@ -43,7 +43,7 @@ def run(args: argparse.Namespace) -> int:
     from pathlib import Path
 
     from dlo_bench.paths import default_out
-    from dlo_env.atomic import write_text_atomic
+    from dlo_env.core.atomic import write_text_atomic
     from latent_model import FinetuneConfig, ShapeModel, finetune
     from latent_model.dataset import load_labelled_shapes, load_shapes
     from latent_model.shape_model import MODEL_FILE

@@ -354,7 +354,7 @@ def backend_of(args: argparse.Namespace) -> Any:
         if args.address is not None:
             raise InputError("--address needs --backend ray")
         return None
-    from dlo_env.dataset.ray_backend import RayBackend
+    from dlo_env.core.ray_backend import RayBackend
 
     return RayBackend(address=args.address)
 

@@ -80,7 +80,7 @@ def run(args: argparse.Namespace) -> int:
     from dataclasses import replace
     from pathlib import Path
 
-    from dlo_env.atomic import write_text_atomic
+    from dlo_env.core.atomic import write_text_atomic
     from latent_model.config import PAPER_MODEL, PAPER_TRAIN, ModelConfig, TrainConfig
     from latent_model.dataset import load_labelled_shapes, split_heldout
     from latent_model.evaluation import quality_report

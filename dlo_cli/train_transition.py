@@ -99,11 +99,11 @@ def run(args: argparse.Namespace) -> int:
     import torch
 
     from dlo_cli.flags import writable_folder
+    from dlo_env.core.progress import progress_bar
     from dlo_env.dataset.transitions import (
         load_transition_files,
         split_transitions,
     )
-    from dlo_env.progress import progress_bar
     from latent_model.transition_metrics import report_lines, transition_report, write_report
     from latent_model.transition_model import TransitionModel, TransitionModelConfig
     from latent_model.transition_training import (

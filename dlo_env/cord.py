@@ -27,7 +27,7 @@ import numpy as np
 import pymunk
 import pymunk.batch
 
-from dlo_env.checks import fractions, non_negative, positive, positive_ints
+from dlo_env.core.checks import fractions, non_negative, positive, positive_ints
 from dlo_env.errors import InputError
 from dlo_env.shapes import TABLE_HALF, at_segment_length, validate_shape
 

@@ -25,8 +25,8 @@ from pathlib import Path
 
 import numpy as np
 
-from dlo_env.atomic import write_text_atomic
 from dlo_env.cord import Cord, peg_clearance
+from dlo_env.core.atomic import write_text_atomic
 from dlo_env.errors import InputError
 from dlo_env.shapes import error
 from dlo_env.tasks import (

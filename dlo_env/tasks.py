@@ -25,7 +25,6 @@ from pathlib import Path
 
 import numpy as np
 
-from dlo_env.atomic import atomic_path
 from dlo_env.cord import (
     LINK_RADIUS,
     PEG_RADIUS,
@@ -36,6 +35,7 @@ from dlo_env.cord import (
     check_pegs,
     peg_clearance,
 )
+from dlo_env.core.atomic import atomic_path
 from dlo_env.dataset.npz_file import open_npz
 from dlo_env.errors import InputError
 from dlo_env.shapes import (

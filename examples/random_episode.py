@@ -76,7 +76,7 @@ if __name__ == "__main__":
     if args.gif:
         from PIL import Image
 
-        from dlo_env.atomic import atomic_path
+        from dlo_env.core.atomic import atomic_path
 
         images = [Image.fromarray(f) for f in frames]
         fps = env.metadata["render_fps"]

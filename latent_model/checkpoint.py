@@ -8,7 +8,7 @@ from typing import Any
 
 import torch
 
-from dlo_env.atomic import atomic_path
+from dlo_env.core.atomic import atomic_path
 from dlo_env.errors import InputError, MissingFileError
 
 #: Marks a file as a dlo shape-model checkpoint.

@@ -10,7 +10,7 @@ from __future__ import annotations
 from dataclasses import dataclass, fields
 from typing import Any
 
-from dlo_env.checks import positive_ints
+from dlo_env.core.checks import positive_ints
 from dlo_env.errors import InputError
 
 REPRESENTATIONS = ("canonical", "world")

@@ -12,9 +12,9 @@ from dataclasses import asdict, dataclass, field
 import numpy as np
 import torch
 
+import latent_model.metrics as metrics
 from dlo_env.errors import InputError
 from dlo_env.shapes import TABLE_HALF, is_cord_like, shape_from_headings
-from latent_model import metrics
 from latent_model.dataset import SHAPE_GROUPS, evaluation_subsets
 from latent_model.shape_model import ShapeModel
 

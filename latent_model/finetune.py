@@ -163,7 +163,7 @@ def finetune(
     Returns:
         The new model (the given one is left unchanged) and the report.
     """
-    from dlo_env.progress import progress_bar as bar_of
+    from dlo_env.core.progress import progress_bar as bar_of
 
     config = config or FinetuneConfig()
     if model.discriminator is None:

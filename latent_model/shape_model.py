@@ -12,10 +12,10 @@ from typing import Any
 import numpy as np
 import torch
 
+import latent_model.pose as pose
 from dlo_env.cord import CordParams
 from dlo_env.errors import InputError
 from dlo_env.shapes import TABLE_HALF, unflatten
-from latent_model import pose
 from latent_model.checkpoint import FORMAT, FORMAT_VERSION, load_checkpoint, save_atomic
 from latent_model.config import ModelConfig, config_from_dict
 from latent_model.inversion import refine_latents

@@ -19,10 +19,12 @@ from typing import Any
 import numpy as np
 import torch
 
-from dlo_env.atomic import atomic_path
+import latent_model.losses as losses
+import latent_model.metrics as metrics
+import latent_model.pose as pose
+from dlo_env.core.atomic import atomic_path
 from dlo_env.errors import InputError
 from dlo_env.shapes import TABLE_HALF
-from latent_model import losses, metrics, pose
 from latent_model.checkpoint import FORMAT, FORMAT_VERSION, load_checkpoint, save_atomic
 from latent_model.config import ModelConfig, TrainConfig, config_from_dict
 from latent_model.dataset import evaluation_subsets
@@ -438,7 +440,7 @@ class _Run:
 def _train_steps(run: _Run, budget: _StageBudget, progress_bar: bool) -> None:
     """Steps of one stage until its budget is spent: evaluations every ``eval_every`` steps,
     checkpoints every ``checkpoint_every_seconds``."""
-    from dlo_env.progress import progress_bar as bar_of
+    from dlo_env.core.progress import progress_bar as bar_of
 
     trainer, prog, tc = run.trainer, run.trainer.progress, run.trainer.tc
     step_fn = trainer.gan_step if budget.name == "gan" else trainer.encoder_step
@@ -514,6 +516,7 @@ def train(
     Returns:
         The trained model (also saved to ``out_dir/model.pt``).
     """
+
     if stage not in STAGES:
         raise InputError(f"stage must be one of {STAGES}, got {stage!r}")
     if not minutes > 0:

@@ -15,7 +15,7 @@ from pathlib import Path
 
 import numpy as np
 
-from dlo_env.atomic import atomic_path
+from dlo_env.core.atomic import atomic_path
 from dlo_env.dataset.transitions import GRASP_NAMES, TransitionDataset
 from dlo_env.errors import InputError
 from dlo_env.shapes import error

@@ -29,7 +29,6 @@ import numpy as np
 import torch
 from torch import nn
 
-from dlo_env.checks import non_negative, positive, positive_ints
 from dlo_env.cord import (
     LINK_RADIUS,
     PEG_GUARD,
@@ -39,6 +38,8 @@ from dlo_env.cord import (
     peg_contact,
     reachable_targets,
 )
+from dlo_env.core.checks import non_negative, positive, positive_ints
+from dlo_env.core.deprecation import renamed_argument
 from dlo_env.dataset.transitions import PARAM_COLUMNS
 from dlo_env.errors import InputError
 from dlo_env.shapes import TABLE_HALF, unflatten
@@ -58,7 +59,6 @@ from latent_model.move_frame import (
     to_frame,
 )
 from latent_model.shape_model import resolve_device
-from planners.deprecated import renamed_argument
 
 #: Marks a file as a transition-model checkpoint.
 FORMAT = "dlo-transition-model"

@@ -33,8 +33,8 @@ from typing import Any
 import numpy as np
 import torch
 
-from dlo_env.atomic import atomic_path
-from dlo_env.checks import non_negative, positive, positive_ints
+from dlo_env.core.atomic import atomic_path
+from dlo_env.core.checks import non_negative, positive, positive_ints
 from dlo_env.dataset.transitions import (
     GRASP_NAMES,
     PARAM_COLUMNS,

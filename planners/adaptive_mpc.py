@@ -23,7 +23,7 @@ from typing import Any
 
 import numpy as np
 
-from dlo_env.checks import positive_ints
+from dlo_env.core.checks import positive_ints
 from dlo_env.dataset.transitions import PARAM_COLUMNS
 from dlo_env.errors import InputError
 from dlo_env.randomize import DEFAULT_RANGES, check_randomize

@@ -16,12 +16,12 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from dlo_env.checks import fractions, non_negative, non_negative_ints, positive, positive_ints
 from dlo_env.cord import CordParams
+from dlo_env.core.checks import fractions, non_negative, non_negative_ints, positive, positive_ints
 from dlo_env.errors import InputError
 from dlo_env.shapes import SUCCESS_METRICS
 from dlo_env.tasks import GRASP_ENDS, split_move
-from planners.episodes import EpisodicPolicy
+from planners.episodic_policy import EpisodicPolicy
 from planners.interfaces import EpisodeStats
 from planners.observation import CordObservation
 
@@ -100,7 +100,7 @@ class CEMPolicy(EpisodicPolicy):
     Same interface as Stable-Baselines3 models and ``planners.PlannerPolicy``: ``predict`` maps a
     Dict observation of a ``dlo_env`` environment (or a vector env's batch) to an action in
     ``[-1, 1]^d``; a new episode is noticed without ``episode_start``
-    (``planners.episodes.EpisodicPolicy``).
+    (``planners.episodic_policy.EpisodicPolicy``).
 
     Args:
         params: The cord's parameters (those of the environment it acts in).

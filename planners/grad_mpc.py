@@ -18,7 +18,7 @@ from typing import Any
 
 import numpy as np
 
-from dlo_env.checks import non_negative_ints, positive, positive_ints
+from dlo_env.core.checks import non_negative_ints, positive, positive_ints
 from planners.latent_mpc import LatentMPCConfig, LatentMPCPolicy
 
 

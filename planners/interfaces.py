@@ -16,7 +16,7 @@ from typing import Any, Protocol, runtime_checkable
 
 import numpy as np
 
-from planners.deprecated import renamed_field
+from dlo_env.core.deprecation import renamed_field
 
 
 @renamed_field("end", "grasp")

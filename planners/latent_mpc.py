@@ -16,7 +16,7 @@ from typing import Any
 
 import numpy as np
 
-from dlo_env.checks import non_negative, non_negative_ints, positive_ints
+from dlo_env.core.checks import non_negative, non_negative_ints, positive_ints
 from dlo_env.errors import InputError
 from planners.cem import CEMConfig, CEMPolicy
 from planners.observation import CordObservation

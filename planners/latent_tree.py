@@ -24,6 +24,7 @@ from typing import Any, Protocol
 
 import numpy as np
 
+from dlo_env.core.deprecation import renamed_argument, renamed_field
 from dlo_env.errors import InputError
 from dlo_env.shapes import (
     COSINE_THRESHOLD,
@@ -32,7 +33,6 @@ from dlo_env.shapes import (
     segment_lengths,
     turning_cosines,
 )
-from planners.deprecated import renamed_argument, renamed_field
 from planners.interfaces import Plan, ShapeSurrogate
 from planners.observation import as_shape
 from planners.surrogate import Surrogate

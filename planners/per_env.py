@@ -18,7 +18,7 @@ from typing import Any
 import numpy as np
 
 from dlo_env.errors import InputError
-from planners.episodes import _starts
+from planners.episodic_policy import _starts
 from planners.interfaces import Policy
 from planners.observation import split_batch
 

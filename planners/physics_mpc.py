@@ -16,8 +16,8 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from dlo_env.checks import non_negative_ints, positive_ints
 from dlo_env.cord import PEG_RADIUS, Cord, CordParams
+from dlo_env.core.checks import non_negative_ints, positive_ints
 from dlo_env.errors import InputError
 from dlo_env.shapes import cord_length, onto_table, segment_lengths, shape_from_headings
 from planners.cem import CEMConfig, CEMPolicy

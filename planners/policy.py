@@ -32,7 +32,7 @@ import numpy as np
 
 from dlo_env.errors import InputError
 from dlo_env.shapes import error
-from planners.episodes import EpisodicPolicy
+from planners.episodic_policy import EpisodicPolicy
 from planners.interfaces import EpisodeStats, Plan, ShapeSurrogate
 from planners.latent_tree import ENDS, LatentTreePlanner
 from planners.moves import actions_by_move
@@ -78,7 +78,7 @@ class PlannerPolicy(EpisodicPolicy):
     """Plan with a latent-tree planner and act on the environment (SB3 interface).
 
     A new episode is noticed without ``episode_start``, and a vector env's batch gets one
-    plan per environment (``planners.episodes.EpisodicPolicy``).
+    plan per environment (``planners.episodic_policy.EpisodicPolicy``).
 
     Args:
         model: The shape model (``latent_model.ShapeModel`` or the same interface); its

@@ -6,7 +6,7 @@ import numpy as np
 
 from dlo_env.errors import InputError
 from dlo_env.tasks import GRASP_ENDS, split_move
-from planners.episodes import EpisodicPolicy
+from planners.episodic_policy import EpisodicPolicy
 from planners.moves import actions_through
 from planners.observation import CordObservation
 
@@ -19,7 +19,7 @@ class StraightLinePolicy(EpisodicPolicy):
     difficulties, where friction makes the result depend on the path. Same interface as
     Stable-Baselines3 models: ``predict(obs, state, episode_start, deterministic)``; a new
     episode is noticed without ``episode_start`` and a vector env's batch gets one line per
-    environment (``planners.episodes.EpisodicPolicy``).
+    environment (``planners.episodic_policy.EpisodicPolicy``).
 
     With both ends held (``DLODualEndpoint-v0``) both move at once, each on its own straight
     line, as one move of ``split_move``.

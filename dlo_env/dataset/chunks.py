@@ -22,7 +22,8 @@ from typing import Any
 
 import numpy as np
 
-from dlo_env.atomic import write_text_atomic
+from dlo_env.core.atomic import atomic_path, write_text_atomic
+from dlo_env.dataset.remote_chunks import make_chunk_bytes
 from dlo_env.errors import InputError
 
 #: ``progress(done, rejected)`` receives increments of finished and rejected items.
@@ -96,7 +97,7 @@ def _init_worker(queue: Any) -> None:
     signal.signal(signal.SIGINT, signal.SIG_IGN)
     # A parent killed outright (SIGTERM, SIGKILL) cannot stop its workers: they stop themselves
     # (their unfinished chunk is made again by the resumed run; finished ones are on disk).
-    from dlo_env.dataset.process_backend import watch_parent
+    from dlo_env.core.process_backend import watch_parent
 
     watch_parent()
 
@@ -184,12 +185,26 @@ def check_out(out: str | os.PathLike[str], *, resume: bool, workers: object) -> 
     return out
 
 
+def _run_on(backend: Any, job: ChunkJob, todo: list[tuple[int, int]], parts: Path,
+            progress: Progress | None) -> None:
+    """Make the chunks ``todo`` (``(index, size)`` pairs) of ``job`` into ``parts`` as calls of
+    ``backend.map``, each returning its chunk's bytes (:func:`make_chunk_bytes`), written here;
+    ``progress(done, 0)`` is told a chunk's size when it is written."""
+    for k, data in backend.map(make_chunk_bytes, [(job, i, n) for i, n in todo]):
+        index, size = todo[k]
+        with atomic_path(chunk_path(parts, index)) as tmp:
+            tmp.write_bytes(data)
+        if progress is not None:
+            progress(size, 0)
+
+
 def run_chunks(job: ChunkJob, out: Path, plan: list[tuple[int, int]], *, workers: int,
                progress: Progress | None, backend: Any = None) -> tuple[Path, int, int]:
     """Make every chunk of ``plan`` that ``OUT.parts/`` does not hold yet.
 
-    ``backend`` (a :class:`dlo_env.dataset.ray_backend.RayBackend`) runs the chunks elsewhere
-    instead of in ``workers`` local processes; the chunks are the same either way.
+    ``backend`` (a :class:`dlo_env.core.ray_backend.RayBackend`) runs the chunks elsewhere
+    instead of in ``workers`` local processes (:mod:`dlo_env.dataset.remote_chunks`); the
+    chunks are the same either way.
 
     Returns:
         The parts folder, the number of chunks and of items reused from an earlier run.
@@ -207,7 +222,7 @@ def run_chunks(job: ChunkJob, out: Path, plan: list[tuple[int, int]], *, workers
     if progress is not None and reused:
         progress(reused_items, 0)
     if backend is not None:
-        backend.run(job, todo, parts, progress)
+        _run_on(backend, job, todo, parts, progress)
     elif workers == 1 or len(todo) <= 1:
         for i, n in todo:
             job.write(i, n, chunk_path(parts, i), progress)

@@ -355,7 +355,7 @@ def collect(
             this with ``workers > 1`` needs the ``if __name__ == "__main__":`` guard.
         resume: Continue an interrupted run from the chunks in ``OUT.parts/``.
         progress: Called as ``progress(accepted, rejected)`` with increments.
-        backend: A :class:`dlo_env.dataset.ray_backend.RayBackend` to make the chunks on Ray
+        backend: A :class:`dlo_env.core.ray_backend.RayBackend` to make the chunks on Ray
             instead of in ``workers`` local processes (same arrays).
 
     Returns:

@@ -16,7 +16,7 @@ from typing import Any
 
 import numpy as np
 
-from dlo_env.atomic import atomic_path
+from dlo_env.core.atomic import atomic_path
 from dlo_env.errors import InputError, MissingFileError
 
 #: array name -> (dtype, dims); a dim is an int (fixed) or a symbol shared across arrays.

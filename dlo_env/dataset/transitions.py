@@ -60,9 +60,9 @@ from typing import Any
 
 import numpy as np
 
-from dlo_env.atomic import file_digest
-from dlo_env.checks import fractions, positive, positive_ints
 from dlo_env.cord import MAX_PEGS, PEG_FAR, PEG_RADIUS, Cord, CordParams
+from dlo_env.core.atomic import file_digest
+from dlo_env.core.checks import fractions, positive, positive_ints
 from dlo_env.dataset.chunks import (
     ChunkJob,
     Progress,
@@ -567,7 +567,7 @@ def collect_transitions(
     interrupted run is continued with ``resume=True`` (nothing lost, nothing repeated).
     Workers are spawned, so a script calling this with ``workers > 1`` needs the
     ``if __name__ == "__main__":`` guard.
-    ``backend`` (a :class:`dlo_env.dataset.ray_backend.RayBackend`) makes the chunks on Ray.
+    ``backend`` (a :class:`dlo_env.core.ray_backend.RayBackend`) makes the chunks on Ray.
 
     Raises:
         ValueError: Bad arguments, an existing ``out``, or leftovers of another run.

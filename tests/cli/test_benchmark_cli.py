@@ -181,7 +181,7 @@ def test_agents_of_the_cords_section_alone_need_a_cord_suite(tmp_path, capsys):
 
 
 def test_a_fine_tuned_model_counts_the_data_of_the_model_it_started_from():
-    from dlo_bench.benchmark import training_data
+    from dlo_bench.loaded_agent import training_data
 
     base = {"env_steps": 1000, "data_transitions": 100,
             "sources": [{"digest": "a", "transitions": 60}, {"digest": "b", "transitions": 40}]}

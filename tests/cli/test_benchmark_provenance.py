@@ -10,7 +10,7 @@ from pathlib import Path
 
 import pytest
 
-import dlo_bench.benchmark as benchmark
+import dlo_bench.benchmark.provenance as provenance
 from dlo_bench.benchmark import CodeState, code_state, new_run_id
 from dlo_bench.benchmark_report import planning_time_ratios, ratio_lines
 from dlo_cli.main import main
@@ -66,7 +66,7 @@ def test_code_outside_a_checkout_of_its_own_has_no_state(clean_clone, tmp_path):
 
 def _dirty(monkeypatch) -> None:
     state = CodeState(Path("/repo"), "abc1234", ("dlo_cli/flags.py", "README.md"))
-    monkeypatch.setattr(benchmark, "code_state", lambda root=None: state)
+    monkeypatch.setattr(provenance, "code_state", lambda root=None: state)
 
 
 def test_benchmark_refuses_a_dirty_checkout_in_one_line_naming_allow_dirty(
@@ -84,7 +84,7 @@ def test_benchmark_refuses_a_dirty_checkout_in_one_line_naming_allow_dirty(
 
 
 def test_benchmark_outside_a_checkout_runs(monkeypatch, tmp_path):
-    monkeypatch.setattr(benchmark, "code_state", lambda root=None: None)
+    monkeypatch.setattr(provenance, "code_state", lambda root=None: None)
     out = tmp_path / "out"
     assert main(["benchmark", "--agent", "straight-line", "--env", "DLOEndpoint-v0",
                  "--difficulty", "1", "--episodes", "1", "--no-fidelity", "--out",
@@ -154,11 +154,11 @@ def test_run_ids_differ_and_sort_by_their_start():
 def test_every_cell_of_a_run_records_the_code_read_before_its_first_cell(tmp_path, monkeypatch):
     # A run writing into a tracked folder (--out benchmarks) dirties the tree as it goes: its
     # later cells must still record the commit that ran, not "+dirty" from its own output.
-    from dlo_bench import benchmark
+    import dlo_bench.benchmark.run as run
     from dlo_bench.benchmark import BenchmarkConfig, run_benchmark
 
     versions = iter(["abc1234", "abc1234+dirty", "abc1234+dirty"])
-    monkeypatch.setattr(benchmark, "code_version", lambda: next(versions))
+    monkeypatch.setattr(run, "code_version", lambda: next(versions))
     config = BenchmarkConfig(agents=("straight-line",), envs=("dlo_env/DLOEndpoint-v0",),
                              difficulties=(1, 2), thresholds=(0.02,), designed=(), episodes=1,
                              fidelity=False)

@@ -1,4 +1,4 @@
-"""Benchmark cells in local worker processes (dlo_env.dataset.process_backend, --jobs)."""
+"""Benchmark cells in local worker processes (dlo_env.core.process_backend, --jobs)."""
 
 from __future__ import annotations
 
@@ -9,7 +9,7 @@ import sys
 import pytest
 
 from dlo_cli.main import main
-from dlo_env.dataset.process_backend import ProcessBackend
+from dlo_env.core.process_backend import ProcessBackend
 
 
 def test_map_yields_every_result_with_its_index_and_raises_a_calls_error():
@@ -51,7 +51,7 @@ def test_workers_exit_when_their_parent_is_killed(tmp_path):
     pids = tmp_path / "worker.pid"
     script = (
         "import os, sys, time\n"
-        "from dlo_env.dataset.process_backend import ProcessBackend\n"
+        "from dlo_env.core.process_backend import ProcessBackend\n"
         "def work(path):\n"
         "    open(path, 'w').write(str(os.getpid()))\n"
         "    time.sleep(120)\n"

@@ -13,7 +13,7 @@ import pytest
 
 from dlo_bench.benchmark import BenchmarkConfig, run_benchmark
 from dlo_cli.main import main
-from dlo_env.dataset.ray_backend import RayBackend
+from dlo_env.core.ray_backend import RayBackend
 
 ray = pytest.importorskip("ray", reason='needs the ray extra: pip install -e ".[ray]"')
 

@@ -2,7 +2,7 @@ from __future__ import annotations
 
 import pytest
 
-from dlo_env.atomic import atomic_path, write_text_atomic
+from dlo_env.core.atomic import atomic_path, write_text_atomic
 
 
 def test_atomic_path_replaces_the_target_only_on_success(tmp_path):

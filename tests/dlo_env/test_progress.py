@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from dlo_env.progress import progress_bar
+from dlo_env.core.progress import progress_bar
 
 
 def test_piped_output_gets_a_line_per_tenth_not_a_redrawn_bar(capsys):

@@ -12,12 +12,12 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from dlo_env.core.ray_backend import RayBackend
 from dlo_env.dataset.chunks import ChunkJob, chunk_plan, run_chunks
 from dlo_env.dataset.collect import CollectConfig, collect
-from dlo_env.dataset.ray_backend import (
+from dlo_env.dataset.remote_chunks import (
     CHUNK_FOLDER_PREFIX,
     LOCK_FILE,
-    RayBackend,
     remove_orphan_chunk_folders,
 )
 from dlo_env.dataset.transitions import TransitionCollectConfig, collect_transitions

@@ -20,7 +20,7 @@ from planners import (
     PlannerPolicy,
     StraightLinePolicy,
 )
-from planners.episodes import JUMP_ERROR, EpisodicPolicy, gripper_reach
+from planners.episodic_policy import JUMP_ERROR, EpisodicPolicy, gripper_reach
 from planners.latent_tree import LatentTreePlanner, TreeConfig
 from tests.toy_models import ToyHeadModel
 

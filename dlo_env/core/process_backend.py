@@ -1,6 +1,6 @@
 """Run independent calls in worker processes of this machine (``dlo benchmark --jobs N``).
 
-:class:`ProcessBackend` has the ``map`` of :class:`dlo_env.dataset.ray_backend.RayBackend`,
+:class:`ProcessBackend` has the ``map`` of :class:`dlo_env.core.ray_backend.RayBackend`,
 so a command that hands its work units (benchmark cells) to a backend runs them on Ray or on
 the cores of one machine alike, without Ray installed. The workers are spawned (no state
 inherited from the parent) and each runs one call at a time; a worker whose parent has died
