@@ -19,6 +19,7 @@ from typing import Any
 from dlo_bench.benchmark.cells import CELLS_DIR, cell_name
 from dlo_bench.benchmark.config import CORD_AGENTS
 from dlo_bench.benchmark.rows import NEAR_REFERENCE
+from dlo_bench.cell_store import find_cell, read_cell
 from dlo_bench.report import (
     cell_label,
     headline_first,
@@ -364,9 +365,9 @@ def designed_panels(rows: list[dict[str, Any]], out_dir: str | os.PathLike,
         for r in designed:
             if (_suite(r), r["env_id"]) != (suite, env_id):
                 continue
-            path = (Path(out_dir) / CELLS_DIR /
-                    f"{cell_name(r['agent'], env_id, suite, r['threshold'])}.json")
-            data = json.loads(path.read_text()) if path.is_file() else {}
+            path = find_cell(Path(out_dir) / CELLS_DIR,
+                             cell_name(r["agent"], env_id, suite, r["threshold"]))
+            data = read_cell(path) if path is not None else {}
             if data.get("shapes"):
                 cells[r["agent"]] = data
         if not cells:

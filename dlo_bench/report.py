@@ -157,7 +157,15 @@ def write_evaluation(
                          for k, v in row.items()})
     csv_path, json_path = folder / f"{name}.csv", folder / f"{name}.json"
     write_text_atomic(csv_path, buffer.getvalue())
-    data = {
+    write_text_atomic(json_path, json.dumps(evaluation_data(evaluation, extra), indent=2) + "\n")
+    return csv_path, json_path
+
+
+def evaluation_data(evaluation: Evaluation, extra: dict[str, Any] | None = None
+                    ) -> dict[str, Any]:
+    """``evaluation`` as a JSON-ready dictionary (NaN as None): its summary, records and
+    fidelity profiles, then ``extra``'s entries."""
+    return json_ready({
         "summary": evaluation.summary,
         "records": [asdict(r) for r in evaluation.records],
         "fidelity_profiles": [
@@ -166,9 +174,7 @@ def write_evaluation(
             for p in evaluation.profiles
         ],
         **(extra or {}),
-    }
-    write_text_atomic(json_path, json.dumps(json_ready(data), indent=2) + "\n")
-    return csv_path, json_path
+    })
 
 
 def cell_label(row: dict[str, Any]) -> str:

@@ -4,7 +4,6 @@ saved cell is reused by, its parts of episodes, and loading and merging them.
 
 from __future__ import annotations
 
-import json
 import math
 from dataclasses import asdict
 from pathlib import Path
@@ -14,14 +13,17 @@ import numpy as np
 
 from dlo_bench.benchmark.config import SUITE_OF_DIFFICULTY, BenchmarkConfig
 from dlo_bench.benchmark.provenance import RUN_FACTS
+from dlo_bench.cell_store import LEGACY_SUFFIX, cell_path, find_cell, read_cell, write_cell
 from dlo_bench.evaluation import EpisodeRecord, Evaluation, FidelityProfile, divergence, summarise
 from dlo_bench.loaded_agent import LoadedAgent
-from dlo_bench.report import json_ready, threshold_label
+from dlo_bench.report import evaluation_data, json_ready, threshold_label
 from dlo_env.core.atomic import file_digest
 from dlo_env.envs import ENVIRONMENTS
+from dlo_env.errors import InputError
 from dlo_env.tasks import SUITES
 
-#: Subfolder of the output folder holding one CSV/JSON of episodes per cell.
+#: Subfolder of the output folder holding one file of episodes per cell (``.npz``,
+#: :mod:`dlo_bench.cell_store`).
 CELLS_DIR = "results_episodes"
 
 
@@ -63,17 +65,19 @@ def cell_key(config: BenchmarkConfig, agent: LoadedAgent, env_id: str,
             "settings": agent.settings}
 
 
-def _load_cell(path: Path, key: dict[str, Any], *, full: bool = False
+def _load_cell(folder: Path, name: str, key: dict[str, Any], *, full: bool = False
                ) -> tuple[Evaluation, dict[str, Any]] | None:
-    """A cell (or part of one) written by an earlier run with the same key: its evaluation and
-    run facts. ``full``: with the fidelity profiles, goals and rest shapes a part keeps."""
+    """Cell (or part) ``name`` of ``folder``, written by an earlier run with the same key: its
+    evaluation and run facts (None: no such cell, another key or an unreadable file).
+    ``full``: with the fidelity profiles, goals and rest shapes a part keeps."""
     from dataclasses import fields
 
-    if not path.is_file():
+    path = find_cell(folder, name)
+    if path is None:
         return None
     try:
-        data = json.loads(path.read_text())
-    except json.JSONDecodeError:
+        data = read_cell(path)
+    except InputError:
         return None
     if data.get("benchmark_key") != json_ready(key):
         return None
@@ -96,6 +100,16 @@ def _load_cell(path: Path, key: dict[str, Any], *, full: bool = False
     shapes = [[np.asarray(x, dtype=np.float32) for x in data.get(k, [])]
               for k in ("goals", "rest")]
     return Evaluation(records, summary, profiles, *shapes), facts
+
+
+def write_cell_of(evaluation: Evaluation, folder: Path, name: str, extra: dict[str, Any]
+                  ) -> Path:
+    """Write cell (or part) ``name`` of ``folder`` (:mod:`dlo_bench.cell_store`), replacing
+    the files an older version wrote for it (``.json`` and ``.csv``)."""
+    path = write_cell(cell_path(folder, name), evaluation_data(evaluation, extra))
+    for suffix in (LEGACY_SUFFIX, ".csv"):
+        (folder / f"{name}{suffix}").unlink(missing_ok=True)
+    return path
 
 
 #: Subfolder of ``CELLS_DIR`` holding the finished parts of cells not finished yet.

@@ -21,6 +21,7 @@ from dlo_bench.benchmark.cells import (
     merge_parts,
     part_name,
     split_episodes,
+    write_cell_of,
 )
 from dlo_bench.benchmark.config import (
     SUITE_OF_DIFFICULTY,
@@ -30,9 +31,10 @@ from dlo_bench.benchmark.config import (
 )
 from dlo_bench.benchmark.provenance import code_version, machine_label, new_run_id
 from dlo_bench.benchmark.rows import designed_tasks, peg_tasks, row_of
+from dlo_bench.cell_store import find_cell
 from dlo_bench.evaluation import Evaluation, evaluate, task_env_kwargs
 from dlo_bench.loaded_agent import LoadedAgent, load_agent, load_shape_model
-from dlo_bench.report import HEADLINE_THRESHOLD, write_evaluation
+from dlo_bench.report import HEADLINE_THRESHOLD
 from dlo_env.designed_suites import DESIGNED_SUITES
 from dlo_env.errors import InputError, MissingFileError
 from dlo_env.peg_suites import PEGGED_SUITES
@@ -163,10 +165,10 @@ class _Run:
         facts = {"wall_seconds": seconds, "commit": self.version, "run": self.run_id,
                  "machine": self.machine}
         if len(split_episodes(self.config.episodes, self.part)) > 1:
-            write_evaluation(result, self.parts_folder, part_name(cell.file_name, first, count),
-                             extra={"benchmark_key": cell.key, **facts,
-                                    "goals": [g.tolist() for g in result.goals],
-                                    "rest": [r.tolist() for r in result.rest_shapes]})
+            write_cell_of(result, self.parts_folder, part_name(cell.file_name, first, count),
+                          {"benchmark_key": cell.key, **facts,
+                           "goals": [g.tolist() for g in result.goals],
+                           "rest": [r.tolist() for r in result.rest_shapes]})
         self.done[k][first] = (result, facts)
         self.complete(k)
 
@@ -190,7 +192,7 @@ class _Run:
                                "families": [cell.suite] * len(made),
                                "pegs": [np.asarray(t.pegs).tolist() for t in made],
                                "peg_radius": [float(t.peg_radius) for t in made], **shapes}
-        write_evaluation(result, self.folder, cell.file_name, extra=extra)
+        write_cell_of(result, self.folder, cell.file_name, extra)
         self.rows[cell.slot] = {**row_of(cell.agent, cell.env_id, cell.suite, cell.threshold,
                                          result, self.config.episodes), **facts}
         if self.parts_folder.is_dir():  # its parts, also those of a run with another part size
@@ -211,7 +213,8 @@ def run_benchmark(config: BenchmarkConfig, out_dir: str | os.PathLike, *,
     Args:
         config: What to run.
         out_dir: Output folder; cells go to
-            ``out_dir/results_episodes/<agent>-<env>-<d<K> or suite>-<threshold>.csv/.json``.
+            ``out_dir/results_episodes/<agent>-<env>-<d<K> or suite>-<threshold>.npz``
+            (:mod:`dlo_bench.cell_store`).
         resume: Reuse cells already written by a run with the same settings.
         progress: Show progress bars.
         backend: None runs the cells one after the other in this process; a
@@ -287,14 +290,13 @@ def _add_cells(run: _Run, name: str, agents: dict[tuple[str, int], LoadedAgent],
                       f"({agent.missing})", flush=True)
             continue
         key = cell_key(config, agent, env_id, suite, threshold)
-        path = run.folder / f"{cell}.json"
-        loaded = _load_cell(path, key) if resume else None
+        loaded = _load_cell(run.folder, cell, key) if resume else None
         if loaded is not None:
             result, facts = loaded
             run.rows.append({**row_of(agent, env_id, suite, threshold, result,
                                       config.episodes), **facts})
             if run.progress:
-                print(f"{cell}: reused {path}", flush=True)
+                print(f"{cell}: reused {find_cell(run.folder, cell)}", flush=True)
             continue
         run.todo.append(PendingCell(len(run.rows), name, env_id, suite, threshold, agent, key))
         run.rows.append({})
@@ -317,8 +319,8 @@ def _parts_to_run(run: _Run, resume: bool) -> list[tuple[int, int, int]]:
     for k, cell in enumerate(run.todo):
         run.done[k] = {}
         for first, count in split_episodes(run.config.episodes, run.part):
-            path = run.parts_folder / f"{part_name(cell.file_name, first, count)}.json"
-            loaded = (_load_cell(path, cell.key, full=True) if resume and run.part is not None
+            loaded = (_load_cell(run.parts_folder, part_name(cell.file_name, first, count),
+                                 cell.key, full=True) if resume and run.part is not None
                       else None)
             if loaded is not None and len(loaded[0].records) == count:
                 run.done[k][first] = loaded

@@ -8,6 +8,7 @@ from pathlib import Path
 
 import pytest
 
+from dlo_bench.cell_store import read_cell
 from dlo_bench.paths import shipped_baseline
 from dlo_bench.report import threshold_label
 from dlo_cli.main import main
@@ -75,7 +76,7 @@ def test_quick_benchmark_writes_every_agent_and_difficulty(models, tmp_path, cap
     assert "## Success at 2 cm\n\n| agent | endpoint d1 | sample cost |" in table
     assert "Command: `dlo benchmark --quick --episodes 1" in table
     assert (out / "results.png").stat().st_size > 0
-    assert (out / "results_episodes" / "sac-her-endpoint-d1-2cm.csv").is_file()
+    assert (out / "results_episodes" / "sac-her-endpoint-d1-2cm.npz").is_file()
 
 
 def test_agents_without_a_model_are_reported_not_dropped(tmp_path, capsys):
@@ -237,8 +238,7 @@ def test_the_pegs_section_runs_among_pegs_with_the_rl_agents_trained_there(tmp_p
     assert "## Success" not in table and "## Pegs" in table
     assert "| bc | n/a |" in table.split("## Pegs")[1]
     assert "Cells where an agent cannot act (n/a):" in table
-    cell = json.loads((out / "results_episodes" / "straight-line-endpoint-route-2-2cm.json")
-                      .read_text())
+    cell = read_cell(out / "results_episodes" / "straight-line-endpoint-route-2-2cm.npz")
     from dlo_env.peg_suites import load_route_suite
 
     task = load_route_suite("route-2", limit=1)[0]
@@ -322,19 +322,14 @@ def test_committed_cells_keep_their_keys():
 
     folder = Path(__file__).resolve().parents[2] / "benchmarks" / "results_episodes"
     config = BenchmarkConfig(cords=DEFAULT_CORDS, pegs=DEFAULT_PEGS)
-    checked = 0
     for name, suite, threshold in (("straight-line", "linear-3", 0.01),
                                    ("latent-mpc", "linear-3", 0.01),
                                    ("physics-mpc", "linear-1", 0.02)):
-        path = folder / f"{name}-endpoint-d{suite[-1]}-{threshold_label(threshold, '')}.json"
-        if not path.is_file():
-            continue
+        path = folder / f"{name}-endpoint-d{suite[-1]}-{threshold_label(threshold, '')}.npz"
         with gym.make("dlo_env/DLOEndpoint-v0") as env:
             agent = load_agent(name, config, env)
         key = cell_key(config, agent, "dlo_env/DLOEndpoint-v0", suite, threshold)
-        assert json.loads(path.read_text())["benchmark_key"] == json_ready(key), path.name
-        checked += 1
-    assert checked
+        assert read_cell(path)["benchmark_key"] == json_ready(key), path.name
 
 
 def test_an_sb3_agent_runs_where_its_spaces_fit_and_is_n_a_elsewhere(tmp_path):

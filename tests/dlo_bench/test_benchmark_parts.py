@@ -2,8 +2,6 @@
 
 from __future__ import annotations
 
-import json
-
 import pytest
 
 from dlo_bench.agents import build_agent
@@ -14,6 +12,7 @@ from dlo_bench.benchmark import (
     run_benchmark,
     split_episodes,
 )
+from dlo_bench.cell_store import read_cell
 from dlo_bench.evaluation import evaluate
 
 TIMINGS = {"seconds", "planning_seconds"}
@@ -25,8 +24,7 @@ def _untimed(records: list[dict]) -> list[dict]:
 
 
 def _cells(folder) -> dict[str, dict]:
-    return {p.stem: json.loads(p.read_text())
-            for p in (folder / "results_episodes").glob("*.json")}
+    return {p.stem: read_cell(p) for p in (folder / "results_episodes").glob("*.npz")}
 
 
 def test_evaluate_from_a_first_episode_runs_those_episodes_of_the_whole():
@@ -59,10 +57,11 @@ def test_parts_of_another_part_size_are_deleted_with_their_cell(tmp_path):
                              thresholds=(0.02,), designed=(), episodes=2)
     stale = tmp_path / "results_episodes" / PARTS_DIR
     stale.mkdir(parents=True)
-    (stale / "straight-line-endpoint-d1-2cm.episodes-0-4.json").write_text("{}")
-    (stale / "other-cell.episodes-0-4.json").write_text("{}")
+    (stale / "straight-line-endpoint-d1-2cm.episodes-0-4.npz").write_text("{}")
+    (stale / "straight-line-endpoint-d1-2cm.episodes-0-4.json").write_text("{}")  # an older one
+    (stale / "other-cell.episodes-0-4.npz").write_text("{}")
     run_benchmark(config, tmp_path, progress=False, part=1)
-    assert [p.name for p in stale.iterdir()] == ["other-cell.episodes-0-4.json"]
+    assert [p.name for p in stale.iterdir()] == ["other-cell.episodes-0-4.npz"]
 
 
 def test_split_episodes_covers_the_cell_in_order():
@@ -98,8 +97,8 @@ def test_a_cell_in_parts_equals_the_whole_cell_and_resumes_from_its_finished_par
         run_benchmark(config, tmp_path / "parts", progress=False, part=2,
                       backend=_StopAfter(3))
     kept = sorted(p.name for p in (tmp_path / "parts" / "results_episodes" / PARTS_DIR)
-                  .glob("*.json"))
-    assert kept == ["latent-mpc-endpoint-d2-2cm.episodes-0-1.json"]
+                  .glob("*.npz"))
+    assert kept == ["latent-mpc-endpoint-d2-2cm.episodes-0-1.npz"]
     assert list(_cells(tmp_path / "parts")) == ["straight-line-endpoint-d2-2cm"]
     resumed = _StopAfter()
     rows = run_benchmark(config, tmp_path / "parts", progress=False, part=2, resume=True,
