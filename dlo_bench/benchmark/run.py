@@ -1,5 +1,4 @@
-"""The run: every cell evaluated, in this process or on a backend, and written as it finishes.
-"""
+"""The run: every cell evaluated, in this process or on a backend, written as it finishes."""
 
 from __future__ import annotations
 
