@@ -9,7 +9,7 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parents[1]
 #: The packages checked. dlo_cli is not yet: its collect commands import each other until they
 #: become ``dlo collect shapes|transitions`` subcommands.
-PACKAGES = ("dlo_env", "latent_model", "planners", "dlo_bench")
+PACKAGES = ("dlo_env", "latent_model", "planners", "dlo_bench", "dlo_cli")
 
 
 def _modules() -> dict[str, Path]:
