@@ -35,7 +35,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         DEFAULT_DIFFICULTIES,
         DEFAULT_PEGS,
         HEADLINE_THRESHOLD,
+        QUICK_DIFFICULTIES,
         QUICK_EPISODES,
+        QUICK_SECTIONS,
         BenchmarkConfig,
     )
     from dlo_env.peg_suites import PEGGED_SUITES
@@ -43,9 +45,11 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
     size = SPLIT_SIZES["test"]
     parser.add_argument("--quick", action="store_true",
-                        help=f"{QUICK_EPISODES} episodes of each cell at {HEADLINE_THRESHOLD} m "
-                             "only (unless --threshold says otherwise): a smoke test of every "
-                             "agent")
+                        help=f"a smoke run of every agent and section: {QUICK_EPISODES} "
+                             f"episode of each cell at {HEADLINE_THRESHOLD} m, of linear-"
+                             f"{' linear-'.join(map(str, QUICK_DIFFICULTIES))} and "
+                             + ", ".join(s for v in QUICK_SECTIONS.values() for s in v)
+                             + " (flags given say otherwise)")
     parser.add_argument("--episodes", default=None, type=number_in(
                             int, 1, size, expected=f"an integer from 1 to {size} (the tasks of "
                                                    "a test split)"),
@@ -75,7 +79,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help="designed suites run in every --env at the headline threshold "
                              "(1 cm; the first --threshold without it), scored direction-free "
                              "(default: " + " ".join(
-                                 BenchmarkConfig.designed) + "; none with --quick or "
+                                 BenchmarkConfig.designed) + "; " + " ".join(
+                                 QUICK_SECTIONS["designed"]) + " with --quick; none with "
                              "--difficulty; `--designed` alone: none)")
     from dlo_env.cord_suites import CORD_SUITES
 
@@ -86,8 +91,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                                  e.split("/")[-1] for e in BenchmarkConfig.cord_envs)
                              + " at the headline threshold by the agents of that section ("
                              + " ".join(BenchmarkConfig.cord_agents) + ") among --agent "
-                             "(default: " + " ".join(DEFAULT_CORDS) + "; none with "
-                             "--quick or --difficulty; `--cords` alone: none)")
+                             "(default: " + " ".join(DEFAULT_CORDS) + "; " + " ".join(
+                                 QUICK_SECTIONS["cords"]) + " with --quick; none with "
+                             "--difficulty; `--cords` alone: none)")
     parser.add_argument("--pegs", nargs="*", metavar="SUITE", default=None,
                         choices=tuple(PEGGED_SUITES),
                         help="suites with pegs of the pegs section (pegs-K: goals made among "
@@ -97,7 +103,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                              "--threshold without it), by --agent "
                              "(RL agents: those trained with pegs, BASELINES/ALGO-pegs and "
                              "ALGO-pegs-dual-endpoint) "
-                             "(default: " + " ".join(DEFAULT_PEGS) + "; none with --quick or "
+                             "(default: " + " ".join(DEFAULT_PEGS) + "; " + " ".join(
+                                 QUICK_SECTIONS["pegs"]) + " with --quick; none with "
                              "--difficulty; `--pegs` alone: none)")
     parser.add_argument("--baselines", default=BenchmarkConfig.baselines,
                         help="folder with one `dlo baseline` output folder per RL agent and "
@@ -174,16 +181,19 @@ def _command(args: argparse.Namespace, parser_defaults: dict) -> str:
 
 def section_suites(args: argparse.Namespace, flag: str = "designed") -> list[str]:
     """The designed (or with ``flag="cords"``, cord; ``"pegs"``, peg) suites to run:
-    ``--designed`` as given (alone: none); by default the config's, or none with ``--quick`` or
-    ``--difficulty`` (a smoke test, a subset of cells)."""
-    from dlo_bench.benchmark import DEFAULT_CORDS, DEFAULT_PEGS, BenchmarkConfig
+    ``--designed`` as given (alone: none); none with ``--difficulty`` (a subset of cells);
+    ``QUICK_SECTIONS``' with ``--quick``; by default the config's."""
+    from dlo_bench.benchmark import DEFAULT_CORDS, DEFAULT_PEGS, QUICK_SECTIONS, BenchmarkConfig
 
     given = getattr(args, flag)
     if given is not None:
         return list(dict.fromkeys(given))
-    defaults = {"designed": BenchmarkConfig.designed, "cords": DEFAULT_CORDS,
-                "pegs": DEFAULT_PEGS}[flag]
-    return [] if args.quick or args.difficulty is not None else list(defaults)
+    if args.difficulty is not None:
+        return []
+    if args.quick:
+        return list(QUICK_SECTIONS[flag])
+    return list({"designed": BenchmarkConfig.designed, "cords": DEFAULT_CORDS,
+                 "pegs": DEFAULT_PEGS}[flag])
 
 
 def split_agents(names: list[str], cords: bool) -> tuple[tuple[str, ...], tuple[str, ...]]:
@@ -210,6 +220,7 @@ def run(args: argparse.Namespace) -> int:
     from dlo_bench.benchmark import (
         HEADLINE_THRESHOLD,
         PEG_AGENTS,
+        QUICK_DIFFICULTIES,
         QUICK_EPISODES,
         BenchmarkConfig,
     )
@@ -226,7 +237,8 @@ def run(args: argparse.Namespace) -> int:
         QUICK_EPISODES if args.quick else BenchmarkConfig.episodes)
     config = BenchmarkConfig(
         agents=agents, cord_agents=cord_agents, envs=tuple(args.env),
-        difficulties=tuple(args.difficulty) if args.difficulty is not None else None,
+        difficulties=(tuple(args.difficulty) if args.difficulty is not None
+                      else QUICK_DIFFICULTIES if args.quick else None),
         thresholds=tuple(thresholds), designed=tuple(dict.fromkeys(designed)),
         cords=tuple(cords), pegs=tuple(pegs), peg_agents=peg_agents,
         episodes=episodes,

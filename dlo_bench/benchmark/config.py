@@ -39,8 +39,11 @@ DEFAULT_PEGS = tuple(PEGGED_SUITES)
 PEG_AGENTS = tuple(name for name, spec in AGENTS.items() if not spec.cords)
 #: The environments of the ``pegs`` section.
 PEG_ENVS = (ENDPOINT, DUAL_ENDPOINT)
-#: Episodes of every cell in ``--quick`` runs.
-QUICK_EPISODES = 2
+#: ``--quick``, a smoke run of every agent and section in a few minutes on two cores: one
+#: episode of each cell, at the headline threshold, of linear-1 and of one suite per section.
+QUICK_EPISODES = 1
+QUICK_DIFFICULTIES = (1,)
+QUICK_SECTIONS = {"designed": ("shapes-curves",), "cords": ("cords-1",), "pegs": ("pegs-1",)}
 
 
 @dataclass(frozen=True)

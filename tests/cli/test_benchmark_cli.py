@@ -292,7 +292,8 @@ def test_the_pegs_section_has_its_own_transition_model_and_rl_folders(tmp_path):
 
 @pytest.mark.parametrize(("flags", "expected"), [
     ([], ["pegs-1", "pegs-2", "pegs-3", "route-2", "route-3", "route-4"]),
-    (["--quick"], []),
+    (["--quick"], ["pegs-1"]),
+    (["--quick", "--difficulty", "1"], []),
     (["--difficulty", "1"], []),
     (["--difficulty"], []),
     (["--pegs"], []),
