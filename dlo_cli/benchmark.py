@@ -15,6 +15,7 @@ from dlo_cli.flags import (
     add_seed,
     add_transition_model,
     backend_of,
+    existing_path,
     number_in,
     positive_int,
     writable_folder,
@@ -114,10 +115,12 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     add_model(parser)
     add_transition_model(parser)
     parser.add_argument("--cords-transition-model", default=None, metavar="FILE",
+                        type=existing_path("transition model"),
                         help="transition model of several cords (dlo train transition "
                              "--cord-inputs), file or folder, for latent-mpc-adaptive (None: "
                              "the shipped latent_model/pretrained/transition-cords.pt)")
     parser.add_argument("--pegs-transition-model", default=None, metavar="FILE",
+                        type=existing_path("transition model"),
                         help="transition model of the pegs section's agents, file or folder (a "
                              "model that sees pegs: dlo train transition --peg-reach; "
                              "None: the shipped latent_model/pretrained/transition-pegs.pt)")
@@ -294,8 +297,9 @@ def run(args: argparse.Namespace) -> int:
         print(f"success at {threshold_label(t)}, judged at rest:")
         print("\n".join(success_table(rows, t)))
     for section in (cords_section(rows), pegs_section(rows)):
-        if section:
-            print("\n".join(line for line in section[4:] if line))  # the tables, not prose
+        tables = [line for line in section if line.startswith(("|", "**"))]  # not the prose
+        if tables:
+            print("\n".join(tables))
     print("\n".join(ratio_lines(rows)) or "planning time ratios not measured: physics-mpc did "
                                           "not run with a cheaper planner")
     missing = sorted({r["agent"] for r in rows if r["status"] == "missing"})

@@ -94,7 +94,8 @@ def run(args: argparse.Namespace) -> int:
             raise InputError(f"--heldout holds shapes of {heldout.shape[1]} points, --data of "
                              f"{data.shape[1]}")
     else:
-        print("no --heldout file: holding out 5% of --data (near duplicates leak; see README)")
+        print("no --heldout file: holding out 5% of --data (its near duplicates stay in "
+              "training; docs/shape_model.md collects --heldout with a seed of its own)")
         data, heldout = split_heldout(data, 0.05, args.seed)
     model_kw = {k: v for k, v in {"representation": args.representation, "width": args.width,
                                   "output": args.output,

@@ -8,7 +8,7 @@ from pathlib import Path
 import pytest
 
 
-@pytest.mark.parametrize("package", ["latent_model"])
+@pytest.mark.parametrize("package", ["latent_model", "dlo_env.dataset"])
 def test_a_package_docstring_names_every_module_of_its_package(package):
     module = importlib.import_module(package)
     names = sorted(p.stem for p in Path(module.__file__).parent.glob("*.py")

@@ -135,6 +135,10 @@ class BenchmarkConfig:
                              f"{tuple(ENVIRONMENTS)} (envs not empty), got {self.envs!r}, "
                              f"{self.cord_envs!r} and {self.peg_envs!r}",
                              field=("envs", "cord_envs", "peg_envs"))
+        unset = [e for e in self.envs if e not in DEFAULT_DIFFICULTIES]
+        if self.difficulties is None and unset:
+            raise InputError(f"envs {unset!r} have no default difficulties "
+                             "(DEFAULT_DIFFICULTIES): give difficulties", field="difficulties")
         if any(c not in CORD_SUITES for c in self.cords) or len(set(self.cords)) < len(
                 self.cords):
             raise InputError(f"cords must be distinct suites of {tuple(CORD_SUITES)}, "
@@ -176,7 +180,7 @@ class BenchmarkConfig:
             cells += [(env, SUITE_OF_DIFFICULTY[d], t) for t in self.thresholds
                       for env in self.envs
                       for d in (self.difficulties if self.difficulties is not None
-                                else DEFAULT_DIFFICULTIES.get(env, (1, 2, 3)))]
+                                else DEFAULT_DIFFICULTIES[env])]
             cells += [(env, suite, self.designed_threshold) for suite in self.designed
                       for env in self.envs]
         if (agent is None and self.cord_agents) or agent in self.cord_agents:

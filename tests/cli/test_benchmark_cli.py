@@ -353,3 +353,28 @@ def test_an_sb3_agent_runs_where_its_spaces_fit_and_is_n_a_elsewhere(tmp_path):
     shipped = rows[(f"sb3:{shipped_baseline('ppo')}", "endpoint")]
     assert shipped["status"] == "ok" and shipped["training_env_steps"] > 0
     assert "sb3--" in " ".join(p.name for p in (out / "results_episodes").iterdir())
+
+
+@pytest.mark.parametrize("flag", ["--cords-transition-model", "--pegs-transition-model"])
+def test_a_missing_section_transition_model_is_refused_before_the_run(flag, tmp_path, capsys):
+    code = main(["benchmark", "--agent", "straight-line", flag, str(tmp_path / "nope.pt"),
+                 "--allow-dirty", "--out", str(tmp_path / "bench")])
+    assert code == 2
+    assert f"argument {flag}: no transition model file or folder at" in capsys.readouterr().err
+    assert not (tmp_path / "bench").exists()
+
+
+def test_the_command_prints_the_sections_tables_and_none_of_their_prose(tmp_path, capsys,
+                                                                          monkeypatch):
+    import dlo_bench.benchmark_report as report
+
+    prose = ["## Pegs", "", "First line of prose.", "Second line of prose.",
+             "Third line of prose.", "",
+             "**endpoint, 1 cm**", "", "| agent | pegs-1 |", "|---|---|", "| x | 1% |", ""]
+    monkeypatch.setattr(report, "pegs_section", lambda rows: prose)
+    assert main(["benchmark", "--agent", "straight-line", "--difficulty", "1", "--env",
+                 "dlo_env/DLOEndpoint-v0", "--episodes", "1", "--threshold", "0.02",
+                 "--allow-dirty", "--out", str(tmp_path / "bench")]) == 0
+    printed = capsys.readouterr().out
+    assert "**endpoint, 1 cm**\n| agent | pegs-1 |\n|---|---|\n| x | 1% |" in printed
+    assert "prose" not in printed

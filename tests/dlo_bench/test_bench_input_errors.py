@@ -37,3 +37,15 @@ def test_a_missing_sb3_model_is_a_missing_file_error(tmp_path):
 
     with pytest.raises(MissingFileError):
         find_sb3(tmp_path / "nope")
+
+
+def test_an_environment_without_default_difficulties_is_refused_not_given_1_2_3(monkeypatch):
+    """The linear cells of an environment come from DEFAULT_DIFFICULTIES; one registered
+    without an entry there is refused in one line (it silently ran linear-1..3 before)."""
+    import dlo_bench.benchmark.config as config_module
+
+    monkeypatch.setitem(config_module.ENVIRONMENTS, "dlo_env/Other-v0", None)
+    with pytest.raises(InputError, match="no default difficulties"):
+        BenchmarkConfig(envs=("dlo_env/Other-v0",))
+    assert BenchmarkConfig(envs=("dlo_env/Other-v0",), difficulties=(1,)).cells()[0][:2] == (
+        "dlo_env/Other-v0", "linear-1")
