@@ -36,6 +36,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         DEFAULT_DIFFICULTIES,
         DEFAULT_PEGS,
         HEADLINE_THRESHOLD,
+        QUICK_DESIGNED_ENVS,
         QUICK_DIFFICULTIES,
         QUICK_EPISODES,
         QUICK_SECTIONS,
@@ -50,7 +51,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                              f"episode of each cell at {HEADLINE_THRESHOLD} m, of linear-"
                              f"{' linear-'.join(map(str, QUICK_DIFFICULTIES))} and "
                              + ", ".join(s for v in QUICK_SECTIONS.values() for s in v)
-                             + " (flags given say otherwise)")
+                             + " (the designed ones in " + " ".join(
+                                 e.split("/")[-1] for e in QUICK_DESIGNED_ENVS) + "; flags "
+                             "given say otherwise); with --jobs 2, about 3 minutes on 2 cores")
     parser.add_argument("--episodes", default=None, type=number_in(
                             int, 1, size, expected=f"an integer from 1 to {size} (the tasks of "
                                                    "a test split)"),
@@ -223,6 +226,7 @@ def run(args: argparse.Namespace) -> int:
     from dlo_bench.benchmark import (
         HEADLINE_THRESHOLD,
         PEG_AGENTS,
+        QUICK_DESIGNED_ENVS,
         QUICK_DIFFICULTIES,
         QUICK_EPISODES,
         BenchmarkConfig,
@@ -243,6 +247,8 @@ def run(args: argparse.Namespace) -> int:
         difficulties=(tuple(args.difficulty) if args.difficulty is not None
                       else QUICK_DIFFICULTIES if args.quick else None),
         thresholds=tuple(thresholds), designed=tuple(dict.fromkeys(designed)),
+        designed_envs=(tuple(e for e in QUICK_DESIGNED_ENVS if e in args.env) or None
+                       if args.quick and args.designed is None else None),
         cords=tuple(cords), pegs=tuple(pegs), peg_agents=peg_agents,
         episodes=episodes,
         seed=args.seed, baselines=args.baselines, model=args.model,

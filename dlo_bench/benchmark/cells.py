@@ -55,7 +55,8 @@ def cell_key(config: BenchmarkConfig, agent: LoadedAgent, env_id: str,
              suite: str, threshold: float) -> dict[str, Any]:
     """What a cell's result depends on; a saved cell is reused only when its key matches."""
     key = asdict(config)
-    for name in ("agents", "envs", "difficulties", "thresholds", "designed", "cords",
+    for name in ("agents", "envs", "difficulties", "thresholds", "designed", "designed_envs",
+                 "cords",
                  "cord_agents", "cord_envs", "cords_transition_model", "pegs", "peg_agents",
                  "peg_envs", "pegs_transition_model"):
         key.pop(name)  # the model file used is in the key by its digest

@@ -44,6 +44,8 @@ PEG_ENVS = (ENDPOINT, DUAL_ENDPOINT)
 QUICK_EPISODES = 1
 QUICK_DIFFICULTIES = (1,)
 QUICK_SECTIONS = {"designed": ("shapes-curves",), "cords": ("cords-1",), "pegs": ("pegs-1",)}
+#: ``--quick``'s environments of the designed suites (physics-mpc takes ~100 s per drawn goal).
+QUICK_DESIGNED_ENVS = (ENDPOINT,)
 
 
 @dataclass(frozen=True)
@@ -58,8 +60,10 @@ class BenchmarkConfig:
             linear cells.
         thresholds: Success thresholds, metres: every linear cell runs once at each (the
             environment's ``success_threshold``).
-        designed: Designed suites (``dlo_env.designed_suites``) run in every environment,
-            once, at the headline threshold (or the first of ``thresholds`` without it).
+        designed: Designed suites (``dlo_env.designed_suites``) run in every environment of
+            ``designed_envs``, once, at the headline threshold (or the first of ``thresholds``
+            without it).
+        designed_envs: The environments of the designed suites (None: ``envs``).
         cords: Cord suites (``dlo_env.cord_suites``: every task on its own held-out cord, not
             told to the agents) of the ``cords`` section, run at the designed threshold (none
             by default here; ``dlo benchmark`` runs ``DEFAULT_CORDS``).
@@ -95,6 +99,7 @@ class BenchmarkConfig:
     difficulties: tuple[int, ...] | None = None
     thresholds: tuple[float, ...] = THRESHOLDS
     designed: tuple[str, ...] = DEFAULT_DESIGNED
+    designed_envs: tuple[str, ...] | None = None
     cords: tuple[str, ...] = ()
     cord_agents: tuple[str, ...] = CORD_AGENTS
     cord_envs: tuple[str, ...] = CORD_ENVS
@@ -128,13 +133,14 @@ class BenchmarkConfig:
         if any(not registered(a) or agent_spec(a).cords for a in self.peg_agents):
             raise InputError(f"peg_agents must be some of {PEG_AGENTS}, "
                              f"got {self.peg_agents!r}", field="peg_agents")
-        bad_envs = [e for e in (*self.envs, *self.cord_envs, *self.peg_envs)
-                    if e not in ENVIRONMENTS]
+        bad_envs = [e for e in (*self.envs, *self.cord_envs, *self.peg_envs,
+                                *(self.designed_envs or ())) if e not in ENVIRONMENTS]
         if bad_envs or not self.envs:
-            raise InputError(f"envs, cord_envs and peg_envs must be some of "
+            raise InputError(f"envs, designed_envs, cord_envs and peg_envs must be some of "
                              f"{tuple(ENVIRONMENTS)} (envs not empty), got {self.envs!r}, "
-                             f"{self.cord_envs!r} and {self.peg_envs!r}",
-                             field=("envs", "cord_envs", "peg_envs"))
+                             f"{self.designed_envs!r}, {self.cord_envs!r} and "
+                             f"{self.peg_envs!r}",
+                             field=("envs", "designed_envs", "cord_envs", "peg_envs"))
         unset = [e for e in self.envs if e not in DEFAULT_DIFFICULTIES]
         if self.difficulties is None and unset:
             raise InputError(f"envs {unset!r} have no default difficulties "
@@ -182,7 +188,8 @@ class BenchmarkConfig:
                       for d in (self.difficulties if self.difficulties is not None
                                 else DEFAULT_DIFFICULTIES[env])]
             cells += [(env, suite, self.designed_threshold) for suite in self.designed
-                      for env in self.envs]
+                      for env in (self.envs if self.designed_envs is None
+                                  else self.designed_envs)]
         if (agent is None and self.cord_agents) or agent in self.cord_agents:
             # (no cells without cord suites)
             cells += [(env, suite, self.designed_threshold) for suite in self.cords
