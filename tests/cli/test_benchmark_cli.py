@@ -135,10 +135,12 @@ def test_the_cords_section_runs_its_agents_on_held_out_cords(tmp_path, capsys):
     agents of that section alone never run the linear cells; rows break success down by
     cord."""
     out = tmp_path / "bench"
+    empty = tmp_path / "no-model"  # a folder without transition.pt: the agent is missing
+    empty.mkdir()
     assert main(["benchmark", "--agent", "straight-line", "latent-tree", "latent-mpc-adaptive",
                  "--difficulty", "1", "--threshold", "0.02", "--cords", "cords-1",
                  "--designed", "--episodes", "7", "--env", "dlo_env/DLOEndpoint-v0",
-                 "--cords-transition-model", str(tmp_path / "none.pt"), "--allow-dirty",
+                 "--cords-transition-model", str(empty), "--allow-dirty",
                  "--out", str(out)]) == 0
     rows = json.loads((out / "results.json").read_text())
     assert [(r["agent"], r["suite"], r["status"]) for r in rows] == [
@@ -176,8 +178,8 @@ def test_a_config_made_in_code_runs_no_cords_section_unless_asked():
 
 
 def test_agents_of_the_cords_section_alone_need_a_cord_suite(tmp_path, capsys):
-    assert main(["benchmark", "--agent", "physics-mpc-true-cord", "--quick", "--allow-dirty",
-                 "--out", str(tmp_path)]) == 2
+    assert main(["benchmark", "--agent", "physics-mpc-true-cord", "--quick", "--cords",
+                 "--allow-dirty", "--out", str(tmp_path)]) == 2
     assert "add --cords SUITE" in capsys.readouterr().err
 
 

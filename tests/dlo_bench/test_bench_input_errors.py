@@ -13,7 +13,8 @@ from dlo_env.errors import InputError, MissingFileError
 @pytest.mark.parametrize("build, fields", [
     (lambda: BenchmarkConfig(thresholds=(0.01, 0.01)), ("thresholds",)),
     (lambda: BenchmarkConfig(episodes=0), ("episodes",)),
-    (lambda: BenchmarkConfig(envs=("dlo_env/Nope-v0",)), ("envs", "cord_envs", "peg_envs")),
+    (lambda: BenchmarkConfig(envs=("dlo_env/Nope-v0",)),
+     ("envs", "designed_envs", "cord_envs", "peg_envs")),
     (lambda: agent_spec("teleport"), ()),
 ])
 def test_a_benchmark_check_raises_an_input_error_naming_its_fields(build, fields):

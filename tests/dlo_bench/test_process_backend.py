@@ -2,12 +2,12 @@
 
 from __future__ import annotations
 
-import json
 import operator
 import sys
 
 import pytest
 
+from dlo_bench.cell_store import read_cell
 from dlo_cli.main import main
 from dlo_env.core.process_backend import ProcessBackend
 
@@ -27,8 +27,8 @@ def test_benchmark_cells_in_two_processes_equal_the_local_ones(tmp_path, capsys)
     assert main([*args, "--out", str(tmp_path / "one")]) == 0
     assert main([*args, "--out", str(tmp_path / "two"), "--jobs", "2"]) == 0
     for cell in ("straight-line-endpoint-d1-2cm", "straight-line-endpoint-d2-2cm"):
-        one, two = (json.loads((tmp_path / run / "results_episodes" / f"{cell}.json")
-                               .read_text()) for run in ("one", "two"))
+        one, two = (read_cell(tmp_path / run / "results_episodes" / f"{cell}.npz")
+                    for run in ("one", "two"))
         assert one["summary"]["success_rate"] == two["summary"]["success_rate"]
         assert [r["final_error"] for r in one["records"]] == \
             [r["final_error"] for r in two["records"]]

@@ -7,11 +7,10 @@ so the order and the process do not matter. (A task whose worker dies is run aga
 
 from __future__ import annotations
 
-import json
-
 import pytest
 
 from dlo_bench.benchmark import BenchmarkConfig, run_benchmark
+from dlo_bench.cell_store import read_cell
 from dlo_cli.main import main
 from dlo_env.core.ray_backend import RayBackend
 
@@ -43,8 +42,8 @@ def test_benchmark_cells_on_ray_equal_the_local_ones(local_ray, tmp_path):
     assert [{k: r[k] for k in SAME} for r in on_ray] == [{k: r[k] for k in SAME} for r in local]
     assert [r["status"] for r in local].count("missing") == 0  # every agent acts in both
     for r in (r for r in local if r["status"] == "ok"):
-        cell = f"{r['agent']}-{r['env']}-d2-2cm.json"
-        records = [json.loads((tmp_path / d / "results_episodes" / cell).read_text())["records"]
+        cell = f"{r['agent']}-{r['env']}-d2-2cm.npz"
+        records = [read_cell(tmp_path / d / "results_episodes" / cell)["records"]
                    for d in ("local", "ray")]
         assert [x["final_error"] for x in records[0]] == [x["final_error"] for x in records[1]]
 

@@ -10,6 +10,7 @@ import pytest
 from dlo_bench import reference
 from dlo_bench.benchmark import BenchmarkConfig, run_benchmark
 from dlo_bench.benchmark_report import designed_panels, results_markdown, write_results
+from dlo_bench.cell_store import read_cell
 from dlo_bench.reference import load_references, make_references, reference_file
 from dlo_env.designed_suites import designed_suite_seeds, designed_task
 from dlo_env.shapes import error
@@ -69,10 +70,8 @@ def test_designed_cells_report_families_beside_the_reference(tmp_path, monkeypat
     designed = [r for r in rows if r["cell"] == "shapes-curves"]
     assert len(designed) == 1 and designed[0]["difficulty"] is None
     row = designed[0]
-    assert (tmp_path / "out" / "results_episodes" /
-            "straight-line-endpoint-shapes-curves-1cm.json").is_file()
-    records = json.loads((tmp_path / "out" / "results_episodes" /
-                          "straight-line-endpoint-shapes-curves-1cm.json").read_text())["records"]
+    path = tmp_path / "out" / "results_episodes" / "straight-line-endpoint-shapes-curves-1cm.npz"
+    records = read_cell(path)["records"]
     errors = [r["rest_direction_free_error"] for r in records]
     summary = row["designed"]["all"]
     assert summary["episodes"] == 2
@@ -85,8 +84,7 @@ def test_designed_cells_report_families_beside_the_reference(tmp_path, monkeypat
     assert summary["near_reference"] == np.mean(  # over the tasks with a reference
         np.array(errors[:known]) <= np.array(ref_errors) + 0.005)
     assert sum(v["episodes"] for k, v in row["designed"].items() if k != "all") == 2
-    cell = json.loads((tmp_path / "out" / "results_episodes" /
-                       "straight-line-endpoint-shapes-curves-1cm.json").read_text())
+    cell = read_cell(path)
     shapes = cell["shapes"]
     assert len(shapes["goals"]) == len(shapes["rest"]) == len(shapes["families"]) == 2
     assert shapes["seeds"] == [int(s) for s in designed_suite_seeds("shapes-curves", "test")[:2]]
@@ -109,7 +107,8 @@ def test_designed_cells_report_families_beside_the_reference(tmp_path, monkeypat
 
 @pytest.mark.parametrize(("flags", "expected"), [
     ([], ["shapes-curves"]),
-    (["--quick"], []),
+    (["--quick"], ["shapes-curves"]),
+    (["--quick", "--difficulty", "1"], []),
     (["--difficulty", "1"], []),
     (["--quick", "--designed", "shapes-curves"], ["shapes-curves"]),
     (["--designed"], []),
