@@ -146,8 +146,9 @@ def find_sb3(path: str | os.PathLike) -> SB3Source:
         config = read_baseline_metadata(p)["config"]
         said = BaselineConfig.from_dict(config).algo
         algo, her = said.split("-")[0].upper(), said == "sac-her"
-        if weights.suffix == ".zip" and _zip_facts(weights) != (algo, her):
-            algo, her = _zip_facts(weights)
+        held = _zip_facts(weights) if weights.suffix == ".zip" else (algo, her)
+        if held != (algo, her):
+            algo, her = held
             raise InputError(f"{meta} says {said}, but model.zip holds a {algo}"
                              f"{' + HER' if her else ''} model")
         return SB3Source(str(path), weights, algo, her, "dlo baseline",
