@@ -15,6 +15,8 @@ steps/s are printed.
 Usage::
 
     python benchmarks/env_throughput.py [--steps 3000] [--repeats 3] [--vector-steps 300]
+
+``--vector-steps 0`` skips the async vector envs.
 """
 
 from __future__ import annotations
@@ -198,6 +200,10 @@ def main() -> None:
         if not isinstance(value, tuple):
             parser.add_argument(f"--{name.replace('_', '-')}", type=type(value), default=value)
     args = Args(**vars(parser.parse_args()))
+    for name, least in (("steps", 1), ("repeats", 1), ("vector_steps", 0)):
+        if getattr(args, name) < least:
+            parser.error(f"--{name.replace('_', '-')} must be >= {least}, "
+                         f"got {getattr(args, name)}")
     print(f"pymunk {pymunk.version}, gymnasium {gym.__version__}, numpy {np.__version__}, "
           f"{os.cpu_count()} CPUs; {args.steps} random steps, {args.repeats} repeats")
     print(f"load average at start: {os.getloadavg()[0]:.2f} (other processes share the cores)")
@@ -206,7 +212,8 @@ def main() -> None:
         ok &= single_env(env_id, args)
     print(f"floor env.step <= {FLOOR}x physics (both envs, bare and gym.make): "
           f"{'PASS' if ok else 'FAIL'}")
-    vector_envs("dlo_env/DLOEndpoint-v0", args)
+    if args.vector_steps:
+        vector_envs("dlo_env/DLOEndpoint-v0", args)
 
 
 if __name__ == "__main__":

@@ -27,7 +27,7 @@ import numpy as np
 import pymunk
 import pymunk.batch
 
-from dlo_env.core.checks import fractions, non_negative, positive, positive_ints
+from dlo_env.core.checks import all_finite, fractions, non_negative, positive, positive_ints
 from dlo_env.errors import InputError
 from dlo_env.shapes import TABLE_HALF, at_segment_length, validate_shape
 
@@ -433,10 +433,6 @@ class Cord:
         rows = np.frombuffer(self._buffer.float_buf(), dtype=np.float64).reshape(-1, width)
         return rows[: len(self.segments)]
 
-    def _body_state(self) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-        rows = self._read(self._MOTION, 6)
-        return rows[:, 0:2], rows[:, 2], rows[:, 3:5], rows[:, 5]
-
     @property
     def shape(self) -> np.ndarray:
         """Current shape, float32 ``(n, 2)``; inner points average the two joined ends."""
@@ -444,49 +440,77 @@ class Cord:
         rows = self._read(self._POSE, 3)
         return self._points(rows[:, 0:2], rows[:, 2]).astype(np.float32)
 
+    def _half_links(self, ang: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        # ang (..., n-1) -> the x and y of each link's centre-to-end vector, half * (cos, sin)
+        # (the products of ``half * np.stack([cos, sin], -1)``, without the stack's copies).
+        half = 0.5 * self.params.segment
+        hx, hy = np.cos(ang), np.sin(ang)
+        hx *= half
+        hy *= half
+        return hx, hy
+
+    @staticmethod
+    def _joined(centres: np.ndarray, half: np.ndarray) -> np.ndarray:
+        # The links' ends, ``centres -/+ half`` (..., n-1, k), as the points (..., n, k): the
+        # head is the first link's start, the tail the last link's end, an inner point the mean
+        # of the two ends it joins. Works column by column: positions and velocities alike.
+        starts, ends = centres - half, centres + half
+        out = np.empty(centres.shape[:-2] + (centres.shape[-2] + 1, centres.shape[-1]))
+        out[..., 0, :] = starts[..., 0, :]
+        out[..., -1, :] = ends[..., -1, :]
+        inner = out[..., 1:-1, :]
+        np.add(ends[..., :-1, :], starts[..., 1:, :], out=inner)
+        inner *= 0.5
+        return out
+
     def _points(self, pos: np.ndarray, ang: np.ndarray) -> np.ndarray:
         # pos (..., n-1, 2), ang (..., n-1) -> (..., n, 2); batched for recorded moves.
-        offset = 0.5 * self.params.segment * np.stack([np.cos(ang), np.sin(ang)], axis=-1)
-        starts, ends = pos - offset, pos + offset
-        points = np.empty(pos.shape[:-2] + (pos.shape[-2] + 1, 2))
-        points[..., 0, :] = starts[..., 0, :]
-        points[..., -1, :] = ends[..., -1, :]
-        points[..., 1:-1, :] = 0.5 * (ends[..., :-1, :] + starts[..., 1:, :])
-        return points
+        half = np.empty(pos.shape)
+        half[..., 0], half[..., 1] = self._half_links(ang)
+        return self._joined(pos, half)
+
+    def _point_rows(self, rows: np.ndarray) -> np.ndarray:
+        # (n-1, 6) body rows of the links' centres (x, y, angle, vx, vy, omega) -> (n, 6) rows
+        # of the points: x, y, -, vx, vy, - (columns 2 and 5 hold no point quantity). The rows
+        # are joined whole, contiguous, against what a link's end adds to them: the half link
+        # h under (x, y), the spin's velocity omega x h = (-omega hy, omega hx) under (vx, vy)
+        # (a sign flip of a product is exact: -(omega hy) is omega (-hy)), 0 elsewhere.
+        hx, hy = self._half_links(rows[:, 2])
+        omega = rows[:, 5]
+        arm = np.zeros(rows.shape)
+        arm[:, 0] = hx
+        arm[:, 1] = hy
+        spin_x = omega * hy
+        arm[:, 3] = np.negative(spin_x, out=spin_x)
+        arm[:, 4] = omega * hx
+        return self._joined(rows, arm)
 
     def point_velocities(self) -> np.ndarray:
         """Velocity of every point, ``(n, 2)`` m/s (inner points average the two ends)."""
         self._require_reset()
-        pos, ang, vel, omega = self._body_state()
-        return self._point_velocities(ang, vel, omega)
+        return self._point_rows(self._read(self._MOTION, 6))[:, 3:5].copy()
 
-    def _point_velocities(self, ang: np.ndarray, vel: np.ndarray, omega: np.ndarray
-                          ) -> np.ndarray:
-        half = 0.5 * self.params.segment
-        # The spin's contribution at each link's ends: omega x r, r = half * (cos, sin).
-        spin = np.empty_like(vel)
-        spin[:, 0] = omega * -(half * np.sin(ang))
-        spin[:, 1] = omega * (half * np.cos(ang))
-        v_start, v_end = vel - spin, vel + spin
-        out = np.empty((len(vel) + 1, 2))
-        out[0] = v_start[0]
-        out[-1] = v_end[-1]
-        out[1:-1] = 0.5 * (v_end[:-1] + v_start[1:])
-        return out
+    @staticmethod
+    def _largest_speed(points: np.ndarray) -> float:
+        # (n, 6) rows of ``_point_rows`` -> the largest point speed (vx^2 + vy^2 is the sum
+        # over a point's two velocity components, bit for bit).
+        vx, vy = points[:, 3], points[:, 4]
+        return math.sqrt(float((vx * vx + vy * vy).max()))
 
     def max_point_speed(self) -> float:
         """The fastest point's speed, m/s (the rest test of ``settle`` and the tasks)."""
-        v = self.point_velocities()
-        return math.sqrt(float((v * v).sum(axis=1).max()))
+        self._require_reset()
+        return self._largest_speed(self._point_rows(self._read(self._MOTION, 6)))
 
     def shape_and_speed(self) -> tuple[np.ndarray, float]:
         """``shape`` and ``max_point_speed()`` from one read of the bodies (the environments'
-        per-step read-out)."""
+        read-out after a reset or a settling)."""
         self._require_reset()
-        pos, ang, vel, omega = self._body_state()
-        v = self._point_velocities(ang, vel, omega)
-        speed = math.sqrt(float((v * v).sum(axis=1).max()))
-        return self._points(pos, ang).astype(np.float32), speed
+        return self._shape_and_speed(self._read(self._MOTION, 6))
+
+    def _shape_and_speed(self, rows: np.ndarray) -> tuple[np.ndarray, float]:
+        points = self._point_rows(rows)
+        return points[:, 0:2].astype(np.float32), self._largest_speed(points)
 
     def gripper_positions(self) -> dict[str, np.ndarray]:
         """Positions of the grippers that are attached, by end name."""
@@ -504,7 +528,7 @@ class Cord:
             d = head if name == "head" else tail
             if d is not None:
                 moves[i] = np.asarray(d, dtype=np.float64).reshape(2)
-        if not np.isfinite(moves).all():
+        if not all_finite(moves):
             bad = int(np.flatnonzero(~np.isfinite(moves).all(axis=1))[0])
             raise InputError(f"{names[bad]} displacement must be finite, got "
                              f"{moves[bad].tolist()}")
@@ -535,20 +559,47 @@ class Cord:
             The recorded shapes, float32 ``(m, n, 2)`` (``m = 0`` when not recording).
         """
         self._require_reset()
+        steps, names, targets = self._start_move(head, tail)
+        recorded = self._run(steps, record_every)
+        self._stop_grippers(names, targets)
+        return recorded
+
+    def move_and_read(self, head: np.ndarray | None = None, tail: np.ndarray | None = None
+                      ) -> tuple[np.ndarray, float]:
+        """``move(head, tail)``, then ``shape_and_speed()`` of the cord it leaves, from the
+        read of the bodies that ends the move (the environments' step: one read, not two).
+
+        Returns:
+            The shape, float32 ``(n, 2)``, and the fastest point's speed, m/s.
+        """
+        self._require_reset()
+        steps, names, targets = self._start_move(head, tail)
+        rows = self._steps(steps)
+        self._stop_grippers(names, targets)
+        return self._shape_and_speed(rows)
+
+    def _start_move(self, head: np.ndarray | None, tail: np.ndarray | None
+                    ) -> tuple[int, list[str], np.ndarray]:
+        # Set the held grippers going towards their targets; the physics steps the move lasts,
+        # the held ends and their targets (k, 2).
         p = self.params
         names, starts, targets = self._targets(head, tail)
-        travel = targets - starts
-        longest = float(np.sqrt((travel * travel).sum(axis=1)).max(initial=0.0))
+        # One or two ends: their travel in Python floats, the same IEEE arithmetic as numpy's
+        # on (k, 2) arrays (x * x + y * y is the sum over an end's two axes) at less call cost.
+        travel = (targets - starts).tolist()
+        longest = max((math.sqrt(x * x + y * y) for x, y in travel), default=0.0)
         periods = max(1, math.ceil(longest / (p.max_speed * p.dt) - 1e-9))
-        velocity = (travel / (periods * p.dt)).tolist()
-        for name, v in zip(names, velocity):
-            self.grippers[name].velocity = (v[0], v[1])
-        recorded = self._run(periods * p.substeps, record_every)
+        duration = periods * p.dt
+        for name, (x, y) in zip(names, travel):
+            self.grippers[name].velocity = (x / duration, y / duration)
+        return periods * p.substeps, names, targets
+
+    def _stop_grippers(self, names: list[str], targets: np.ndarray) -> None:
+        # The grippers stop exactly at their targets.
         for name, target in zip(names, targets.tolist()):
             g = self.grippers[name]
             g.velocity = (0.0, 0.0)
             g.position = (target[0], target[1])
-        return recorded
 
     def wait(self, periods: int = 1, record_every: int = 0) -> np.ndarray:
         """Let time pass with the grippers still, for ``periods`` control periods."""
@@ -579,14 +630,12 @@ class Cord:
 
     def _run(self, steps: int, record_every: int) -> np.ndarray:
         p = self.params
+        if record_every <= 0:
+            self._steps(steps)
+            return np.empty((0, p.n_points, 2), dtype=np.float32)
         h = p.dt / p.substeps
         space = self.space
         assert space is not None
-        if record_every <= 0:
-            for _ in range(steps):
-                space.step(h)
-            self._keep_on_table()
-            return np.empty((0, p.n_points, 2), dtype=np.float32)
         # Copy the raw poses while stepping and turn them into points once per move: a
         # recorded shape then costs one batch read instead of a full ``shape`` conversion.
         poses = np.empty((steps // record_every, len(self.segments), 3))
@@ -594,11 +643,20 @@ class Cord:
         for i in range(1, steps + 1):
             space.step(h)
             if i % record_every == 0:
-                poses[k] = self._keep_on_table()
+                poses[k] = self._keep_on_table()[:, 0:3]
                 k += 1
         if steps % record_every:
             self._keep_on_table()
         return self._points(poses[..., 0:2], poses[..., 2]).astype(np.float32)
+
+    def _steps(self, steps: int) -> np.ndarray:
+        # ``steps`` physics steps, then the rim check: the body rows it leaves, (n-1, 6).
+        space = self.space
+        assert space is not None
+        h = self.params.dt / self.params.substeps
+        for _ in range(steps):
+            space.step(h)
+        return self._keep_on_table()
 
     def _peg_shift(self, rows: np.ndarray, passes: int = 5) -> np.ndarray:
         """``(n - 1, 2)`` shifts of the links that move every point out of the pegs.
@@ -635,22 +693,31 @@ class Cord:
         ever leaves the table or lies inside a peg.
 
         Returns:
-            ``(n - 1, 3)`` poses (x, y, angle) of the links after the correction.
+            ``(n - 1, 6)`` rows of the links after the correction: pose (x, y, angle) and
+            motion (vx, vy, omega), the read-out of the move it ends.
         """
-        rows = self._read(self._POSE, 3).copy()
+        rows = self._read(self._MOTION, 6).copy()
         near_rim = np.abs(rows[:, 0:2]).max() >= TABLE_HALF - 0.5 * self.params.segment
         if not near_rim and not len(self._pegs):
             return rows  # no link reaches the rim: the common case, checked cheaply
-        offset = 0.5 * self.params.segment * np.stack([np.cos(rows[:, 2]), np.sin(rows[:, 2])], 1)
-        ends = np.stack([rows[:, 0:2] - offset, rows[:, 0:2] + offset], axis=1)  # (n-1, 2, 2)
+        pos = rows[:, 0:2]
+        half = np.empty(pos.shape)
+        half[:, 0], half[:, 1] = self._half_links(rows[:, 2])
+        ends = np.empty((len(rows), 2, 2))  # (n-1, 2, 2): each link's start and end
+        np.subtract(pos, half, out=ends[:, 0])
+        np.add(pos, half, out=ends[:, 1])
         shift = np.zeros((len(rows), 2))
         if len(self._pegs):
             shift = self._peg_shift(rows)
             ends = ends + shift[:, None, :]
-        if near_rim or shift.any():
-            lim = TABLE_HALF - RIM_GUARD
+        lim = TABLE_HALF - RIM_GUARD
+        # Only an end past the rim moves its link back (its shift is 0 otherwise): most links
+        # near the rim are inside it, so this test spares the shifts' array work.
+        if (near_rim or shift.any()) and np.abs(ends).max() > lim:
             shift = shift + (np.clip(-lim - ends, 0.0, None).max(axis=1)
                              - np.clip(ends - lim, 0.0, None).max(axis=1))  # (n-1, 2)
+        elif not len(self._pegs):
+            return rows
         for i in np.flatnonzero(np.abs(shift).sum(axis=1)):
             body = self.segments[i]
             x, y = body.position
