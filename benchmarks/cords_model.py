@@ -7,9 +7,13 @@ cord-conditioned model trains near), and on a file of the default cord when ``--
 names one. A model of one cord predicts every cord as its own; a model of several cords
 (``cord_inputs``) is told each move's cord. The floors of a model of several cords on the test
 cords (``FLOORS``: 0.3 cm one end, 0.5 cm both) are checked on the mean over all test cords.
+``--other`` adds a file of moves of other cords, each cord reported on its own row (for
+example the letters' cord, ``dlo_env.designed_suites.LETTERS_CORD``, collected with ``dlo
+collect transitions --randomize bending_stiffness=0.003:0.003 friction=0.6:0.6
+mass=0.3:0.3``).
 
     python benchmarks/cords_model.py --model FILE [FILE ...] --data data/cords-test-22.npz
-        [--default data/transitions-heldout.npz] [--out runs/cords-model]
+        [--default data/transitions-heldout.npz] [--other FILE] [--out runs/cords-model]
 """
 
 from __future__ import annotations
@@ -108,9 +112,10 @@ def summary(e: np.ndarray, grasp: np.ndarray) -> dict[str, dict[str, float]]:
     return out
 
 
-def report(model: TransitionModel, data: TransitionDataset, default: TransitionDataset | None
-           ) -> dict[str, object]:
-    """Per test cord, over all test cords, and on the default cord: ``summary`` rows."""
+def report(model: TransitionModel, data: TransitionDataset, default: TransitionDataset | None,
+           other: TransitionDataset | None = None) -> dict[str, object]:
+    """Per test cord, over all test cords, on the default cord and on each cord of ``other``:
+    ``summary`` rows."""
     e = errors(model, data)
     cords = cord_index(data)
     rows: dict[str, object] = {}
@@ -122,6 +127,14 @@ def report(model: TransitionModel, data: TransitionDataset, default: TransitionD
     rows["test cords"] = summary(e[on_test], data.grasp[on_test])
     if default is not None:
         rows["default cord"] = summary(errors(model, default), default.grasp)
+    if other is not None:
+        e = errors(model, other)
+        cords, which = np.unique(np.asarray(other.params, dtype=np.float64), axis=0,
+                                 return_inverse=True)
+        for i, cord in enumerate(cords):
+            sel = which.reshape(-1) == i
+            label = ", ".join(f"{k} {v:g}" for k, v in zip(PARAM_COLUMNS, cord))
+            rows[f"cord ({label})"] = summary(e[sel], other.grasp[sel])
     return rows
 
 
@@ -142,6 +155,9 @@ def main() -> None:
                              "--test-cords)")
     parser.add_argument("--default", default=None,
                         help="moves of the default cord (dlo collect transitions)")
+    parser.add_argument("--other", default=None,
+                        help="moves of other cords, each reported on its own (dlo collect "
+                             "transitions --randomize NAME=V:V ...)")
     parser.add_argument("--speed", type=int, default=0,
                         help="time each model over this many calls (0: no timing)")
     parser.add_argument("--batch", type=int, default=1024, help="moves per timed call")
@@ -158,10 +174,11 @@ def main() -> None:
         raise SystemExit(f"--data must hold moves of the test cords (dlo collect "
                          f"transitions --test-cords), got none in {args.data}")
     default = load_transitions(args.default) if args.default else None
+    other = load_transitions(args.other) if args.other else None
     results = []
     for path in args.model:
         model = TransitionModel.load_or_pretrained(path or None, device="cpu")
-        rows = report(model, data, default)
+        rows = report(model, data, default, other)
         name = path or "shipped one-cord model"
         results.append({"model": name, "digest": file_digest(
             Path(path) / "transition.pt" if path and Path(path).is_dir() else path)

@@ -5,15 +5,18 @@
 ``dlo_env.goals`` lays the cord in a drawing and lets it come to rest; a drawing whose rest
 shape lies more than ``goals.MAX_CHANGE`` (3 cm, mean point distance) from it is refused. This
 prints that distance for every letter and curve family (default parameters, centred, the head
-held) on cords of several bending stiffnesses: which designed goals a cord can rest in.
+held) on cords of several bending stiffnesses and on the cord of ``shapes-letters``
+(``dlo_env.designed_suites.LETTERS_CORD``): which designed goals a cord can rest in.
 """
 
 from __future__ import annotations
 
 import argparse
+from dataclasses import replace
 
 from dlo_env import goals
 from dlo_env.cord import CordParams
+from dlo_env.designed_suites import LETTERS_CORD
 from dlo_env.shapes import error
 
 if __name__ == "__main__":
@@ -25,11 +28,12 @@ if __name__ == "__main__":
               **goals.CURVES}
     print("cm the rest shape lies from the drawing (* refused: over "
           f"{100 * goals.MAX_CHANGE:.0f} cm)")
-    print(f"{'goal':<12}" + "".join(f"{s:>10g}" for s in args.stiffness))
+    cords = {f"{s:g}": CordParams(bending_stiffness=s) for s in args.stiffness}
+    cords["letters"] = replace(CordParams(), **LETTERS_CORD)
+    print(f"{'goal':<12}" + "".join(f"{name:>10}" for name in cords))
     for name, make in makers.items():
         cells = []
-        for stiffness in args.stiffness:
-            params = CordParams(bending_stiffness=stiffness)
+        for params in cords.values():
             change = float(error(make(params=params, max_change=10.0),
                                  make(params=params, relax=False)))
             cells.append(f"{100 * change:>9.1f}{'*' if change > goals.MAX_CHANGE else ' '}")

@@ -66,6 +66,9 @@ class AgentSpec:
         cords: Whether it is an agent of cords that differ: its transition model is by default
             the shipped model of several cords, and the benchmark runs it in its ``cords``
             section only (the cord suites, ``dlo_env.cord_suites``).
+        told_cord: Whether, in an environment made on another cord than the default one (a
+            designed suite's own cord, ``gym.make(..., params=...)``), it plans on the shipped
+            model of several cords told that cord (:func:`uses_cords_model`).
         train: How its trained model or policy is made, for messages about a missing one
             (``{env}``: the environment id).
         no_pegs: Why it cannot act where pegs are observed ("": it can).
@@ -80,6 +83,7 @@ class AgentSpec:
     shape_model: bool = False
     transition_model: bool = False
     cords: bool = False
+    told_cord: bool = False
     train: str = ""
     no_pegs: str = ""
     defaults: Mapping[str, Any] = field(default_factory=dict)
@@ -93,6 +97,20 @@ def observes_pegs(env: Any) -> bool:
     """Whether ``env`` observes pegs (``max_pegs > 0``): its RL agents are those trained
     there (``dlo baseline --max-pegs``)."""
     return int(getattr(env.unwrapped, "max_pegs", 0)) > 0
+
+
+def uses_cords_model(spec: AgentSpec, env: Any) -> bool:
+    """Whether agent ``spec`` plans on the model of several cords in ``env``: an agent of
+    cords that differ, or one told the environment's cord where that is not the default
+    cord (the environment's ``params``, not an episode's ``options["params"]``)."""
+    from dlo_env.cord import CordParams
+    from dlo_env.dataset.transitions import PARAM_COLUMNS
+
+    default = CordParams()
+    params = env.unwrapped.params
+    return spec.cords or (spec.told_cord and any(
+        not math.isclose(getattr(params, k), getattr(default, k), rel_tol=1e-9)
+        for k in PARAM_COLUMNS))
 
 
 def train_command(spec: AgentSpec, env: Any) -> str:
@@ -156,6 +174,7 @@ def model_files(name: str, env: Any, model: Any = None, transition_model: Any = 
     from dlo_bench.paths import shape_model_file, transition_model_file
 
     spec = agent_spec(name)
+    cords = uses_cords_model(spec, env)
     files = []
     if spec.extra == "rl":  # the folder _sb3 and _bc load
         folder = Path(spec.defaults.get("baseline") or shipped_baseline(
@@ -164,8 +183,8 @@ def model_files(name: str, env: Any, model: Any = None, transition_model: Any = 
     for wanted, given, file in (
             (spec.shape_model, model, shape_model_file),
             (spec.transition_model, transition_model,
-             lambda p: transition_model_file(p, cords=spec.cords,
-                                             pegs=observes_pegs(env) and not spec.cords))):
+             lambda p: transition_model_file(p, cords=cords,
+                                             pegs=observes_pegs(env) and not cords))):
         if wanted:
             files.append(str(file(given)) if given is None or isinstance(given, (str, Path))
                          else f"<{type(given).__name__} passed in>")
@@ -236,9 +255,11 @@ def _physics_mpc(env: Any, options: AgentOptions) -> Policy:
 def _latent_mpc(env: Any, options: AgentOptions) -> Policy:
     from planners.latent_mpc import LatentMPCConfig, LatentMPCPolicy
 
+    cords = uses_cords_model(AGENTS["latent-mpc"], env)
     return LatentMPCPolicy.for_env(env, LatentMPCConfig(seed=options.seed),
-                                   model=load_transition_model(options.transition_model,
-                                                               pegs=observes_pegs(env)))
+                                   model=load_transition_model(
+                                       options.transition_model, cords=cords,
+                                       pegs=observes_pegs(env) and not cords))
 
 
 def _grad_mpc(env: Any, options: AgentOptions) -> Policy:
@@ -351,7 +372,7 @@ AGENTS: dict[str, AgentSpec] = {spec.name: spec for spec in (
               _physics_mpc, environments=(ENDPOINT, DUAL_ENDPOINT)),
     AgentSpec("latent-mpc", "CEM over straight moves scored by the learned transition model",
               _latent_mpc, environments=(ENDPOINT, DUAL_ENDPOINT), extra="model",
-              transition_model=True),
+              transition_model=True, told_cord=True),
     AgentSpec("grad-mpc", "straight-move plans descended by gradient steps through the "
               "differentiable transition model", _grad_mpc,
               environments=(ENDPOINT, DUAL_ENDPOINT), extra="model", transition_model=True,

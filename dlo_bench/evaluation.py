@@ -349,10 +349,11 @@ def task_env_kwargs(difficulty: int | None = None, suite: str | None = None
                     ) -> dict[str, Any]:
     """``gym.make`` keyword arguments of the environment a suite's (or a difficulty's) tasks
     run in: episodes of ``dlo_env.tasks.suite_max_steps`` / ``difficulty_max_steps`` steps;
-    a designed suite's drawn goals get ``DESIGNED_MAX_STEPS`` steps and are scored
-    direction-free."""
+    a designed suite's drawn goals get ``DESIGNED_MAX_STEPS`` steps, are scored
+    direction-free and run on the suite's cord (``params``; the agents built on the
+    environment are told it)."""
     from dlo_env.cord_suites import CORD_SUITES
-    from dlo_env.designed_suites import DESIGNED_MAX_STEPS, DESIGNED_SUITES
+    from dlo_env.designed_suites import DESIGNED_MAX_STEPS, DESIGNED_SUITES, designed_suite_cord
     from dlo_env.peg_suites import PEGGED_SUITES, SUITE_MAX_PEGS
     from dlo_env.tasks import difficulty_max_steps, suite_max_steps
 
@@ -362,7 +363,9 @@ def task_env_kwargs(difficulty: int | None = None, suite: str | None = None
         return {"max_episode_steps": difficulty_max_steps(PEGGED_SUITES[suite]),
                 "max_pegs": SUITE_MAX_PEGS}
     if suite in DESIGNED_SUITES:
-        return {"max_episode_steps": DESIGNED_MAX_STEPS, "success_metric": "direction_free_error"}
+        cord = designed_suite_cord(suite)
+        return {"max_episode_steps": DESIGNED_MAX_STEPS, "success_metric": "direction_free_error",
+                **({} if cord is None else {"params": cord})}
     if suite in CORD_SUITES:
         return {"max_episode_steps": difficulty_max_steps(CORD_SUITES[suite])}
     if suite is not None:

@@ -17,6 +17,7 @@ from dlo_bench.agents import (
     model_files,
     observes_pegs,
     train_command,
+    uses_cords_model,
 )
 from dlo_bench.paths import baseline_folder_name, shipped_baseline
 from dlo_bench.policy_file import weights_file
@@ -128,7 +129,8 @@ def load_agent(name: str, config: BenchmarkConfig, env: Any,
                            models=(str(weights_file(folder)),))
     options: dict[str, Any] = {"seed": config.seed}
     costs, steps = [], None
-    path = (config.cords_transition_model if spec.cords
+    cords = uses_cords_model(spec, env)
+    path = (config.cords_transition_model if cords
             else config.pegs_transition_model if pegs else config.transition_model)
     if spec.shape_model:
         if shape_model is None:
@@ -140,7 +142,7 @@ def load_agent(name: str, config: BenchmarkConfig, env: Any,
         costs.append(f"{_steps(shapes)} simulated shapes" if shapes else "simulated shapes")
     if spec.transition_model:
         try:
-            transition = load_transition_model(path, cords=spec.cords, pegs=pegs and not spec.cords)
+            transition = load_transition_model(path, cords=cords, pegs=pegs and not cords)
         except (FileNotFoundError, ValueError) as exc:
             return LoadedAgent(name, None, missing=str(exc).splitlines()[0])
         options.update(transition_model=transition)

@@ -64,8 +64,13 @@ def _stroke(*parts: Sequence[Sequence[float]] | np.ndarray) -> np.ndarray:
     return np.concatenate([np.asarray(p, dtype=np.float64).reshape(-1, 2) for p in parts])
 
 
+#: The gap left between the ends of the letter O, as a share of its circle: the ends meet, a
+#: little apart (two held ends need room for their grippers).
+O_GAP = 1 / 40
+
 #: Each letter as one stroke (x right, y up, about a unit box; M and W three times as wide: a
-#: cord of 20 points cannot rest in their narrow corners), drawn without lifting the pen.
+#: cord of 20 points cannot rest in their narrow corners), drawn without lifting the pen; O is
+#: a ring from its top whose ends meet.
 LETTERS: dict[str, np.ndarray] = {
     "C": _arc((0.5, 0.5), 0.5, np.radians(50), np.radians(310)),
     "J": _stroke([[1.0, 1.0]], _arc((0.6, 0.4), 0.4, 0.0, -np.pi)),
@@ -77,6 +82,7 @@ LETTERS: dict[str, np.ndarray] = {
     "V": _stroke([[0.0, 1.0], [0.5, 0.0], [1.0, 1.0]]),
     "W": _stroke([[0.0, 1.0], [0.8, 0.0], [1.6, 0.7], [2.4, 0.0], [3.2, 1.0]]),
     "Z": _stroke([[0.0, 1.0], [1.0, 1.0], [0.0, 0.0], [1.0, 0.0]]),
+    "O": _arc((0.5, 0.5), 0.5, 0.5 * np.pi, 0.5 * np.pi + 2 * np.pi * (1 - O_GAP), 64),
 }
 
 
@@ -232,17 +238,25 @@ def polyline(
     return rest
 
 
-def letter(name: str, **pose: object) -> np.ndarray:
-    """A letter of :data:`LETTERS` (C, J, L, M, S, U, V, W, Z) as a goal: :func:`polyline`'s
+def letter(name: str, aspect: float = 1.0, **pose: object) -> np.ndarray:
+    """A letter of :data:`LETTERS` (C, J, L, M, S, U, V, W, Z, O) as a goal: :func:`polyline`'s
     keyword arguments place and relax it.
 
+    Args:
+        name: The letter.
+        aspect: Its width is drawn ``aspect`` times as wide (its height unchanged). The cord's
+            length sets a letter's size: its proportions are what a drawing chooses.
+
     Raises:
-        ValueError: For a letter not in ``LETTERS``, or as :func:`polyline`.
+        ValueError: For a letter not in ``LETTERS``, an aspect not in [0.25, 4], or as
+            :func:`polyline`.
     """
     key = str(name).upper()
     if key not in LETTERS:
         raise InputError(f"name must be one of the letters {', '.join(LETTERS)}, got {name!r}")
-    return polyline(LETTERS[key], **pose)  # type: ignore[arg-type]
+    if not (_real(aspect) and 0.25 <= aspect <= 4):
+        raise InputError(f"aspect must be a number in [0.25, 4], got {aspect!r}")
+    return polyline(LETTERS[key] * np.array([aspect, 1.0]), **pose)  # type: ignore[arg-type]
 
 
 def arc(span: float = np.pi, **pose: object) -> np.ndarray:

@@ -19,6 +19,7 @@ from __future__ import annotations
 
 import math
 import os
+from collections.abc import Mapping
 from dataclasses import asdict, dataclass, replace
 from importlib import resources
 from numbers import Integral
@@ -203,7 +204,22 @@ def padded_pegs(pegs: Any, count: int) -> np.ndarray:
 ARCHITECTURES = ("mlp", "chain")
 
 
+def trained_ranges(info: Mapping[str, Any]) -> dict[str, tuple[float, float]]:
+    """The parameter ranges a transition model's training data were drawn from (``dlo collect
+    transitions --randomize``), the union over its files (``info["sources"]``, else
+    ``info["data"]``); empty when none was randomised."""
+    sources = info.get("sources") or [{"collect": info.get("data") or {}}]
+    out: dict[str, tuple[float, float]] = {}
+    for source in sources:
+        for name, (low, high) in ((source.get("collect") or {}).get("randomize") or {}).items():
+            lo, hi = out.get(name, (low, high))
+            out[name] = (min(lo, low), max(hi, high))
+    return out
+
+
 @dataclass(frozen=True)
+
+
 class TransitionModelConfig:
     """Architecture of the transition model and the setting it was trained for.
 
@@ -478,10 +494,24 @@ class TransitionModel(nn.Module):
 
     def check_env_cord(self, params: CordParams) -> None:
         """Raise a one-line ``ValueError`` unless this model predicts an environment's cord
-        ``params``: its points and length, and for a model of one cord (without
-        ``cord_inputs``) its stiffness, friction and mass too."""
+        ``params``: its points, and for a model of one cord (without ``cord_inputs``) its
+        length, stiffness, friction and mass too; a model of several cords takes a cord inside
+        the ranges its moves were drawn from (:func:`trained_ranges`; its length when none
+        is recorded)."""
         own = self.cord_params
-        if (params.n_points, params.length) != (own.n_points, own.length):
+        ranges = trained_ranges(getattr(self, "info", None) or {}) if self.config.cord_inputs \
+            else {}
+        outside = [f"{k}={getattr(params, k)!r} outside {low!r}..{high!r}"
+                   for k, (low, high) in ranges.items()
+                   if not low * (1 - 1e-9) <= getattr(params, k) <= high * (1 + 1e-9)]
+        if outside:
+            raise InputError(f"the transition model was trained on cords of other parameters "
+                             f"than the environment's: {', '.join(outside)}: train a model "
+                             "on ranges that hold this cord (dlo collect transitions "
+                             "--randomize)")
+        length_known = "length" in ranges
+        if params.n_points != own.n_points or (
+                not length_known and params.length != own.length):
             raise InputError(
                 f"the transition model was trained for a cord of {own.n_points} points "
                 f"and {own.length} m, but the environment's cord has {params.n_points} "

@@ -28,6 +28,7 @@ from dlo_env.dataset.transitions import PARAM_COLUMNS
 from dlo_env.errors import InputError
 from dlo_env.randomize import DEFAULT_RANGES, check_randomize
 from dlo_env.shapes import cord_length, error
+from latent_model.transition_model import trained_ranges
 from planners.latent_mpc import LatentMPCConfig, LatentMPCPolicy
 
 
@@ -61,19 +62,6 @@ class AdaptConfig:
             raise InputError(f"AdaptConfig.rounds must be an int >= 0, got {self.rounds!r}")
         if self.ranges is not None:
             check_randomize(self.ranges, "AdaptConfig.ranges")
-
-
-def trained_ranges(info: Mapping[str, Any]) -> dict[str, tuple[float, float]]:
-    """The parameter ranges a transition model's training data were drawn from (``dlo collect
-    transitions --randomize``), the union over its files (``info["sources"]``, else
-    ``info["data"]``); empty when none was randomised."""
-    sources = info.get("sources") or [{"collect": info.get("data") or {}}]
-    out: dict[str, tuple[float, float]] = {}
-    for source in sources:
-        for name, (low, high) in ((source.get("collect") or {}).get("randomize") or {}).items():
-            lo, hi = out.get(name, (low, high))
-            out[name] = (min(lo, low), max(hi, high))
-    return out
 
 
 @dataclass

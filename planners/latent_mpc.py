@@ -87,12 +87,20 @@ class LatentMPCPolicy(CEMPolicy):
             the policy holds still within it and stops planning at ``config.stop_fraction``
             of it.
         config: CEM budget.
+        cord: The cord a model of several cords (``config.cord_inputs``) is told, its
+            predictions made for it; None: the model's own cord (``for_env`` tells such a model
+            the environment's cord).
     """
 
     def __init__(self, model: Any, grasp: str = "head", success_threshold: float = 0.02,
                  config: LatentMPCConfig | None = None, *,
-                 success_metric: str = "error") -> None:
+                 success_metric: str = "error", cord: Any = None) -> None:
         self.model = model
+        if cord is not None and not getattr(model.config, "cord_inputs", False):
+            raise InputError("cord is told to a transition model of several cords "
+                             "(TransitionModelConfig.cord_inputs); this model predicts one cord")
+        #: The cord told to the model (``predict``'s ``params``), or None.
+        self.cord = cord
         config = config if config is not None else LatentMPCConfig()
         total = model.config.members
         if config.members is not None and config.members > total:
@@ -114,8 +122,9 @@ class LatentMPCPolicy(CEMPolicy):
 
             model = TransitionModel.load_or_pretrained(device="cpu")
         base = getattr(env, "unwrapped", env)
+        told = {"cord": base.params} if getattr(model.config, "cord_inputs", False) else {}
         policy = cls(model, grasp=base.grasp, success_threshold=base.success_threshold,
-                     config=config, success_metric=base.success_metric)
+                     config=config, success_metric=base.success_metric, **told)
         policy.check_env(env)
         policy.peg_radius = base.peg_radius  # of the pegs it will observe
         return policy
@@ -160,8 +169,10 @@ class LatentMPCPolicy(CEMPolicy):
         return self._distance(shapes, goal) + cfg.spread_weight * spread
 
     def _predict(self, shapes: np.ndarray, moves: np.ndarray, **kw: Any) -> Any:
-        """The model's prediction of ``moves`` from ``shapes`` (its default cord), the grippers
-        stopping at the observed pegs."""
+        """The model's prediction of ``moves`` from ``shapes`` (for the told cord, else the
+        model's own), the grippers stopping at the observed pegs."""
+        if self.cord is not None and "params" not in kw:
+            kw = {**kw, "params": self.cord}
         pegs = getattr(self, "_pegs", None)
         if pegs is not None and len(pegs):
             kw = {**kw, "pegs": pegs, "peg_radius": getattr(self, "peg_radius", None)}

@@ -67,8 +67,17 @@ def test_a_drawing_the_cord_cannot_rest_in_is_refused_saying_why():
         goals.polyline([[i % 2, 0] for i in range(41)])  # a scribble finer than a segment
 
 
+def test_the_letter_o_is_a_ring_whose_ends_meet_and_aspect_widens_a_letter():
+    o = goals.letter("O", params=SOFT, relax=False)
+    segment = SOFT.length / (SOFT.n_points - 1)
+    assert np.linalg.norm(o[-1] - o[0]) < segment
+    narrow, wide = (goals.letter("U", aspect=a, params=SOFT, relax=False) for a in (0.8, 1.25))
+    assert np.ptp(wide[:, 0]) / np.ptp(wide[:, 1]) > np.ptp(narrow[:, 0]) / np.ptp(narrow[:, 1])
+
+
 @pytest.mark.parametrize(("call", "match"), [
-    (lambda: goals.letter("Q"), "name must be one of the letters C, J, L, M, S, U, V, W, Z"),
+    (lambda: goals.letter("U", aspect=0.1), r"aspect must be a number in \[0.25, 4\]"),
+    (lambda: goals.letter("Q"), "name must be one of the letters C, J, L, M, S, U, V, W, Z, O"),
     (lambda: goals.polyline([[0.0, 0.0]]), r"points must be a \(k, 2\) polyline with k >= 2"),
     (lambda: goals.polyline([[0.0, 0.0], [np.nan, 1.0]]), "points must be finite"),
     (lambda: goals.polyline([[1.0, 1.0], [1.0, 1.0]]), "must not all be the same point"),

@@ -116,3 +116,37 @@ def test_a_model_trained_on_another_stiffness_is_refused_in_one_line(tmp_path):
     LatentMPCPolicy.for_env(env, model=model)
     several = TransitionModel(replace(TINY, cord_inputs=True), device="cpu")
     LatentMPCPolicy.for_env(env, model=several)  # a model of several cords sees the cord
+
+
+def test_a_model_of_several_cords_is_told_the_environments_cord_within_its_ranges():
+    from dlo_env.designed_suites import designed_suite_cord
+
+    model = TransitionModel.load_or_pretrained(device="cpu", cords=True)
+    letters = designed_suite_cord("shapes-letters")
+    env = gym.make("dlo_env/DLOEndpoint-v0", params=letters)
+    policy = LatentMPCPolicy.for_env(env, model=model)
+    assert policy.cord == letters
+    shape = env.reset(seed=0)[0]["achieved_goal"].reshape(-1, 2)
+    move = np.array([[0.1, 0.0]], dtype=np.float32)
+    told = policy._predict(shape[None], move)
+    np.testing.assert_array_equal(told, model.predict(shape[None], "head", move, params=letters))
+    assert not np.allclose(told, model.predict(shape[None], "head", move))  # default cord
+    softer = gym.make("dlo_env/DLOEndpoint-v0", params=replace(letters, bending_stiffness=0.001))
+    with pytest.raises(ValueError, match=r"trained on cords of other parameters than the "
+                       r"environment's: bending_stiffness=0\.001 outside 0\.003\.\.0\.03"):
+        LatentMPCPolicy.for_env(softer, model=model)
+    with pytest.raises(ValueError, match="cord is told to a transition model of several cords"):
+        LatentMPCPolicy(TransitionModel(TINY, device="cpu"), cord=letters)
+
+
+def test_latent_mpc_plans_on_the_model_of_several_cords_where_the_env_has_another_cord():
+    from dlo_bench.agents import model_files
+    from dlo_env.designed_suites import designed_suite_cord
+
+    letters = gym.make("dlo_env/DLODualEndpoint-v0", params=designed_suite_cord("shapes-letters"))
+    policy = build_agent("latent-mpc", letters)
+    assert policy.model.config.cord_inputs and policy.cord == letters.unwrapped.params
+    assert model_files("latent-mpc", letters)[0].endswith("transition-cords.pt")
+    default = gym.make("dlo_env/DLODualEndpoint-v0")
+    assert build_agent("latent-mpc", default).cord is None
+    assert model_files("latent-mpc", default)[0].endswith("transition.pt")
