@@ -146,10 +146,12 @@ def load_shape_model(model: ShapeSurrogate | str | Path | None) -> ShapeSurrogat
     return _loaded_or_file(model, ShapeSurrogate, load, "shape model", "dlo train")
 
 
-def load_transition_model(model: Any, cords: bool = False, pegs: bool = False) -> Any:
+def load_transition_model(model: Any, cords: bool = False, pegs: bool = False,
+                          cord: Any = None) -> Any:
     """``model`` itself when it is loaded, else ``TransitionModel.load_or_pretrained(model,
-    cords=cords, pegs=pegs)`` (when ``model`` is None, ``cords``: the shipped model of several
-    cords, ``pegs``: the shipped model that sees pegs).
+    cords=cords, pegs=pegs, cord=cord)`` (when ``model`` is None, ``cords``: the shipped model
+    of several cords, or the one fine-tuned for ``cord``; ``pegs``: the shipped model that sees
+    pegs).
 
     Raises:
         FileNotFoundError: Saying "no transition model" and where, when the file is missing.
@@ -157,8 +159,8 @@ def load_transition_model(model: Any, cords: bool = False, pegs: bool = False) -
     from latent_model import TransitionModel
 
     return _loaded_or_file(model, TransitionModel,
-                           lambda m: TransitionModel.load_or_pretrained(m, device="cpu",
-                                                                       cords=cords, pegs=pegs),
+                           lambda m: TransitionModel.load_or_pretrained(
+                               m, device="cpu", cords=cords, pegs=pegs, cord=cord),
                            "transition model", "dlo train transition"
                            + (" --cord-inputs" if cords else " --peg-reach" if pegs else ""))
 
@@ -184,7 +186,8 @@ def model_files(name: str, env: Any, model: Any = None, transition_model: Any = 
             (spec.shape_model, model, shape_model_file),
             (spec.transition_model, transition_model,
              lambda p: transition_model_file(p, cords=cords,
-                                             pegs=observes_pegs(env) and not cords))):
+                                             pegs=observes_pegs(env) and not cords,
+                                             cord=env.unwrapped.params))):
         if wanted:
             files.append(str(file(given)) if given is None or isinstance(given, (str, Path))
                          else f"<{type(given).__name__} passed in>")
@@ -259,7 +262,8 @@ def _latent_mpc(env: Any, options: AgentOptions) -> Policy:
     return LatentMPCPolicy.for_env(env, LatentMPCConfig(seed=options.seed),
                                    model=load_transition_model(
                                        options.transition_model, cords=cords,
-                                       pegs=observes_pegs(env) and not cords))
+                                       pegs=observes_pegs(env) and not cords,
+                                       cord=env.unwrapped.params))
 
 
 def _grad_mpc(env: Any, options: AgentOptions) -> Policy:

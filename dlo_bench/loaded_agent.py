@@ -142,7 +142,8 @@ def load_agent(name: str, config: BenchmarkConfig, env: Any,
         costs.append(f"{_steps(shapes)} simulated shapes" if shapes else "simulated shapes")
     if spec.transition_model:
         try:
-            transition = load_transition_model(path, cords=cords, pegs=pegs and not cords)
+            transition = load_transition_model(path, cords=cords, pegs=pegs and not cords,
+                                               cord=env.unwrapped.params)
         except (FileNotFoundError, ValueError) as exc:
             return LoadedAgent(name, None, missing=str(exc).splitlines()[0])
         options.update(transition_model=transition)

@@ -10,6 +10,7 @@ from __future__ import annotations
 import os
 from importlib import resources
 from pathlib import Path
+from typing import Any
 
 from dlo_env.errors import InputError
 
@@ -57,15 +58,15 @@ def shape_model_file(path: str | os.PathLike | None) -> Path:
 
 
 def transition_model_file(path: str | os.PathLike | None, cords: bool = False,
-                          pegs: bool = False) -> Path:
+                          pegs: bool = False, cord: Any = None) -> Path:
     """The file of a transition model: ``path`` (a file, or a folder holding
     ``transition.pt``), or when None the shipped ``latent_model/pretrained/transition.pt``
-    (``transition-cords.pt`` with ``cords``: the model of several cords;
-    ``transition-pegs.pt`` with ``pegs``: the model that sees pegs)."""
+    (``transition-cords.pt`` with ``cords``: the model of several cords, or the one fine-tuned
+    for ``cord``; ``transition-pegs.pt`` with ``pegs``: the model that sees pegs)."""
     from latent_model.transition_model import MODEL_FILE, pretrained_file
 
     if not path:
-        name = pretrained_file(cords, pegs)
+        name = pretrained_file(cords, pegs, cord)
         return Path(str(resources.files("latent_model") / "pretrained" / name))
     p = Path(path)
     return p / MODEL_FILE if p.is_dir() else p

@@ -42,6 +42,7 @@ from dlo_env.cord import (
 from dlo_env.core.checks import non_negative, positive, positive_ints
 from dlo_env.core.deprecation import renamed_argument
 from dlo_env.dataset.transitions import PARAM_COLUMNS
+from dlo_env.designed_suites import LETTERS_CORD
 from dlo_env.errors import InputError
 from dlo_env.shapes import TABLE_HALF, unflatten
 from dlo_env.tasks import DEFAULT_MAX_STEP
@@ -73,12 +74,27 @@ CORDS_MODEL_FILE = "transition-cords.pt"
 PEGS_MODEL_FILE = "transition-pegs.pt"
 
 
-def pretrained_file(cords: bool = False, pegs: bool = False) -> str:
+#: Shipped models of several cords fine-tuned for one cord, each loaded instead of
+#: ``CORDS_MODEL_FILE`` for its cord: file -> the cord (``CordParams`` fields; the others the
+#: default cord's). The letters cord of ``shapes-letters`` lies in a corner of the ranges the
+#: model of several cords trained on.
+CORD_MODEL_FILES: dict[str, Mapping[str, float]] = {"transition-letters.pt": LETTERS_CORD}
+
+
+def pretrained_file(cords: bool = False, pegs: bool = False,
+                    cord: CordParams | None = None) -> str:
     """The name of a shipped model in ``pretrained/``: the default cord's on the empty table,
-    the model of several cords (``cords``) or the one that sees pegs (``pegs``)."""
+    the model of several cords (``cords``; for ``cord``, the one fine-tuned for it in
+    :data:`CORD_MODEL_FILES` where there is one) or the one that sees pegs (``pegs``)."""
     if cords and pegs:
         raise InputError("no shipped transition model is both of several cords and of pegs: "
                          "give cords=True or pegs=True, or a model file")
+    if cords and cord is not None:
+        default = CordParams()
+        for name, fields in CORD_MODEL_FILES.items():
+            if all(math.isclose(getattr(cord, k), fields.get(k, getattr(default, k)),
+                                rel_tol=1e-9) for k in PARAM_COLUMNS):
+                return name
     return CORDS_MODEL_FILE if cords else PEGS_MODEL_FILE if pegs else MODEL_FILE
 #: Predictions per network call in ``predict`` (keeps activations in cache).
 PREDICT_CHUNK = 4096
@@ -1004,28 +1020,31 @@ class TransitionModel(nn.Module):
 
     @classmethod
     def load_pretrained(cls, device: str | torch.device = "auto", *,
-                        cords: bool = False, pegs: bool = False) -> TransitionModel:
+                        cords: bool = False, pegs: bool = False,
+                        cord: CordParams | None = None) -> TransitionModel:
         """The shipped model for the default cord (``latent_model/pretrained/transition.pt``),
         with ``cords`` the shipped model of several cords (``transition-cords.pt``,
-        ``predict(params=...)``), with ``pegs`` the one that sees pegs (``transition-pegs.pt``,
-        ``predict(pegs=...)``)."""
-        name = pretrained_file(cords, pegs)
+        ``predict(params=...)``; with ``cord``, the one fine-tuned for that cord where one
+        ships, :data:`CORD_MODEL_FILES`), with ``pegs`` the one that sees pegs
+        (``transition-pegs.pt``, ``predict(pegs=...)``)."""
+        name = pretrained_file(cords, pegs, cord)
         with resources.as_file(resources.files("latent_model") / "pretrained" / name) as p:
             return cls.load(p, device)
 
     @classmethod
     def load_or_pretrained(cls, path: str | os.PathLike | None = None,
                            device: str | torch.device = "auto", *,
-                           cords: bool = False, pegs: bool = False) -> TransitionModel:
+                           cords: bool = False, pegs: bool = False,
+                           cord: CordParams | None = None) -> TransitionModel:
         """``load(path)`` when a path is given (not ``None`` or ""), else
-        ``load_pretrained(cords=cords, pegs=pegs)``.
+        ``load_pretrained(cords=cords, pegs=pegs, cord=cord)``.
 
         The one call for code whose model argument defaults to the shipped model (a CLI flag,
         an agent option): ``load_pretrained()`` always loads the shipped file, ``load(path)``
         always the given one.
         """
         return cls.load(path, device) if path else cls.load_pretrained(device, cords=cords,
-                                                                       pegs=pegs)
+                                                                       pegs=pegs, cord=cord)
 
     def extra_repr(self) -> str:
         c = self.config

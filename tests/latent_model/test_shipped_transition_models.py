@@ -36,3 +36,24 @@ def test_the_planners_pick_the_model_that_sees_pegs_where_pegs_are_observed(name
 
     assert model_of(build_agent(name, with_pegs)).config.peg_reach > 0
     assert model_of(build_agent(name, plain)).config.peg_reach == 0
+
+
+def test_the_model_fine_tuned_for_the_letters_cord_ships_and_latent_mpc_takes_it_there():
+    from dlo_env.cord import CordParams
+    from dlo_env.designed_suites import designed_suite_cord
+    from latent_model.transition_model import CORD_MODEL_FILES, CORDS_MODEL_FILE
+
+    letters = designed_suite_cord("shapes-letters")
+    name = pretrained_file(cords=True, cord=letters)
+    assert name in CORD_MODEL_FILES and name != CORDS_MODEL_FILE
+    assert pretrained_file(cords=True, cord=CordParams()) == CORDS_MODEL_FILE
+    assert pretrained_file(cord=letters) == "transition.pt"  # a one-cord model: no cord picked
+    path = transition_model_file(None, cords=True, cord=letters)
+    assert path.name == name and path.stat().st_size < 5e6
+    model = TransitionModel.load_pretrained("cpu", cords=True, cord=letters)
+    assert model.config.cord_inputs and model.mean_net is not None
+    model.check_env_cord(letters)
+    env = gym.make("dlo_env/DLOEndpoint-v0", params=letters)
+    policy = build_agent("latent-mpc", env)
+    assert policy.cord == letters
+    assert policy.model.config == model.config

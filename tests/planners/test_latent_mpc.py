@@ -146,7 +146,7 @@ def test_latent_mpc_plans_on_the_model_of_several_cords_where_the_env_has_anothe
     letters = gym.make("dlo_env/DLODualEndpoint-v0", params=designed_suite_cord("shapes-letters"))
     policy = build_agent("latent-mpc", letters)
     assert policy.model.config.cord_inputs and policy.cord == letters.unwrapped.params
-    assert model_files("latent-mpc", letters)[0].endswith("transition-cords.pt")
+    assert model_files("latent-mpc", letters)[0].endswith("transition-letters.pt")
     default = gym.make("dlo_env/DLODualEndpoint-v0")
     assert build_agent("latent-mpc", default).cord is None
     assert model_files("latent-mpc", default)[0].endswith("transition.pt")
