@@ -54,6 +54,11 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help="the environment's success_threshold, judged on the cord at rest "
                              "(the planners take their stopping rules from it); the default, "
                              "0.01, is the README table's, the environments' own is 0.02")
+    parser.add_argument("--peg-friction", type=number_in(float, 0.0, 2.0, expected="a friction "
+                                                         "coefficient in [0, 2]"),
+                        default=None, metavar="MU",
+                        help="friction between the cord and the pegs (the environments' "
+                             "peg_friction; default: frictionless pegs, as every suite)")
     add_model(parser)
     add_transition_model(parser)
     add_planner_flags(parser)
@@ -92,6 +97,8 @@ def evaluate_row(agent: str, difficulty: int | None, suite: str | None,
     # The agent is built for, and evaluated in, one environment: its threshold and success
     # metric, and (for an agent told the cord, such as physics-mpc-true-cord) its cord.
     env_kwargs = {**task_env_kwargs(difficulty, suite), "success_threshold": settings["threshold"]}
+    if settings.get("peg_friction") is not None:
+        env_kwargs["peg_friction"] = settings["peg_friction"]
     with gym.make(settings["env_id"], **env_kwargs) as env:
         policy = build_agent(agent, env, model=model, seed=settings["seed"],
                              transition_model=settings["transition_model"],
@@ -145,7 +152,8 @@ def run(args: argparse.Namespace) -> int:
     labels = [(agent, label) for agent in args.agent for _, _, label in rows]
     out = Path(writable_folder(args.out))
     print(f"success: the cord at rest within {100 * args.threshold:g} cm of the goal "
-          f"(--threshold {args.threshold:g})")
+          f"(--threshold {args.threshold:g})" + (f"; pegs with friction {args.peg_friction:g}"
+                                                 if args.peg_friction is not None else ""))
     for agent in args.agent:
         if agent.startswith(SB3_PREFIX):
             from dlo_bench.sb3_models import find_sb3

@@ -79,6 +79,8 @@ class CordParams:
         max_speed: Largest gripper speed, m/s.
         rim_margin: Grippers stay this far inside the table edge, metres.
         max_span: With both ends grasped, the grippers stay at most ``max_span * length`` apart.
+        peg_friction: Coulomb friction coefficient between the cord and the pegs (0: the pegs
+            are frictionless). A cord wrapped round a peg then holds by the capstan effect.
     """
 
     n_points: int = 20
@@ -97,10 +99,12 @@ class CordParams:
     max_speed: float = 0.2
     rim_margin: float = 0.02
     max_span: float = 0.9
+    peg_friction: float = 0.0
 
     def __post_init__(self) -> None:
         positive(self, "length", "mass", "gravity", "inertia_scale", "dt", "max_speed")
-        non_negative(self, "friction", "bending_stiffness", "bending_damping", "rim_margin")
+        non_negative(self, "friction", "bending_stiffness", "bending_damping", "rim_margin",
+                     "peg_friction")
         fractions(self, "velocity_retention", "joint_error_bias", "max_span")
         if self.n_points < 3:
             raise InputError(f"CordParams.n_points must be >= 3, got {self.n_points!r}")
@@ -305,6 +309,8 @@ class Cord:
             start = centre + half * direction
             link = pymunk.Segment(body, (-half, 0.0), (half, 0.0), LINK_RADIUS)
             link.filter = shape_filter
+            if p.peg_friction > 0:  # a contact's friction is the product of its shapes'
+                link.friction = 1.0  # the rim's walls have none: only the pegs' counts
             space.add(body, link)
             slide = pymunk.PivotJoint(static, body, (0.0, 0.0), (0.0, 0.0))
             slide.max_bias = 0.0
@@ -355,6 +361,7 @@ class Cord:
         assert self.space is not None
         for x, y in self._pegs.tolist():
             peg = pymunk.Circle(self.space.static_body, self.peg_radius, offset=(x, y))
+            peg.friction = self.params.peg_friction
             self.space.add(peg)
             self._peg_shapes.append(peg)
 
@@ -515,6 +522,12 @@ class Cord:
     def gripper_positions(self) -> dict[str, np.ndarray]:
         """Positions of the grippers that are attached, by end name."""
         return {k: np.array(g.position) for k, g in self.grippers.items()}
+
+    def gripper_forces(self) -> dict[str, float]:
+        """The force each attached gripper exerted on its end in the last physics step,
+        newtons (its joint's impulse over the step), by end name."""
+        h = self.params.dt / self.params.substeps
+        return {k: float(j.impulse) / h for k, j in self._grip_joints.items()}
 
     # ----------------------------------------------------------------- motion
     def _targets(self, head: np.ndarray | None, tail: np.ndarray | None

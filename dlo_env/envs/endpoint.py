@@ -132,6 +132,7 @@ class DLOEndpointEnv(CordGoalEnv):
         randomize=None,          # e.g. {"bending_stiffness": (0.003, 0.03)}: a cord per episode
         max_pegs=0,              # most pegs on the table (0: none, and the observation above)
         peg_radius=0.02,         # metres
+        peg_friction=None,       # cord-peg friction (None: params' own, 0: frictionless pegs)
         render_mode=None,        # or "rgb_array", "human"
     )
     ```

@@ -90,6 +90,9 @@ class CordGoalEnv(GoalReward, gym.Env[dict[str, np.ndarray], np.ndarray]):
             empty table). A drawn task places 0 to ``max_pegs`` pegs near its start, and the
             observation holds ``max_pegs`` peg slots (centres, then a mask).
         peg_radius: Radius of every peg, metres.
+        peg_friction: Friction coefficient between the cord and the pegs: ``params`` with
+            ``CordParams.peg_friction`` set (None: ``params``' own, 0 for the default cord:
+            frictionless pegs).
         render_mode: ``None``, ``"rgb_array"`` or ``"human"``.
     """
 
@@ -110,6 +113,7 @@ class CordGoalEnv(GoalReward, gym.Env[dict[str, np.ndarray], np.ndarray]):
         randomize: dict[str, tuple[float, float]] | None = None,
         max_pegs: int = 0,
         peg_radius: float = PEG_RADIUS,
+        peg_friction: float | None = None,
         render_mode: str | None = None,
     ) -> None:
         check_goal_args(params=params, max_step=max_step, reward_type=reward_type,
@@ -117,6 +121,8 @@ class CordGoalEnv(GoalReward, gym.Env[dict[str, np.ndarray], np.ndarray]):
                         judge_at_rest=judge_at_rest, max_pegs=max_pegs, render_mode=render_mode,
                         render_modes=self.metadata["render_modes"])
         self.params = params if params is not None else CordParams()
+        if peg_friction is not None:
+            self.params = replace(self.params, peg_friction=peg_friction)
         self.max_step = float(max_step)
         self.reward_type = reward_type
         self.success_threshold = float(success_threshold)

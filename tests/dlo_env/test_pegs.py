@@ -221,3 +221,31 @@ def test_a_vector_env_with_pegs_steps():
     assert obs["observation"].shape == (2, 42 + 6)
     obs, *_ = envs.step(np.zeros((2, 2), dtype=np.float32))
     envs.close()
+
+
+def test_pegs_with_friction_hold_a_wrapped_cord_by_the_capstan_effect():
+    from dataclasses import replace
+
+    from scripts import load_script
+
+    capstan = load_script("benchmarks/peg_capstan.py")
+    force = {}
+    for mu in (0.0, 0.3):
+        params = replace(capstan.CordParams(), friction=0.0, peg_friction=mu)
+        angle, low = capstan.slide_force(params, 2, 1.0, towards=True)
+        _, high = capstan.slide_force(params, 2, 1.0, towards=False)
+        force[mu] = (low, high)
+    assert 1.5 < angle < 1.7  # a quarter turn: two links round the 2 cm peg
+    assert abs(force[0.0][0] - 1.0) < 0.05 and abs(force[0.0][1] - 1.0) < 0.05  # no friction
+    low, high = force[0.3]  # the capstan equation: exp(-0.3 angle) = 0.62, exp(0.3 angle) = 1.62
+    assert 0.55 < low < 0.75 and 1.35 < high < 1.75
+
+
+def test_peg_friction_is_an_option_of_the_environments_and_zero_by_default():
+    env = gym.make("dlo_env/DLODualEndpoint-v0", max_pegs=2, peg_friction=0.3)
+    assert env.unwrapped.params.peg_friction == 0.3
+    assert gym.make("dlo_env/DLOEndpoint-v0").unwrapped.params.peg_friction == 0.0
+    env.reset(seed=0)
+    assert all(shape.friction == 0.3 for shape in env.unwrapped.cord._peg_shapes)
+    with pytest.raises(ValueError, match="CordParams.peg_friction must be >= 0"):
+        gym.make("dlo_env/DLOEndpoint-v0", peg_friction=-0.1)
