@@ -99,18 +99,21 @@ def observes_pegs(env: Any) -> bool:
     return int(getattr(env.unwrapped, "max_pegs", 0)) > 0
 
 
-def uses_cords_model(spec: AgentSpec, env: Any) -> bool:
-    """Whether agent ``spec`` plans on the model of several cords in ``env``: an agent of
-    cords that differ, or one told the environment's cord where that is not the default
-    cord (the environment's ``params``, not an episode's ``options["params"]``)."""
+def told_cord(spec: AgentSpec, env: Any) -> Any:
+    """The cord agent ``spec`` is told in ``env``: the environment's ``params`` (not an
+    episode's ``options["params"]``) where it is not the default cord and the agent is told
+    it (``told_cord``), else None."""
     from dlo_env.cord import CordParams
-    from dlo_env.dataset.transitions import PARAM_COLUMNS
+    from dlo_env.dataset.transitions import same_cord
 
-    default = CordParams()
     params = env.unwrapped.params
-    return spec.cords or (spec.told_cord and any(
-        not math.isclose(getattr(params, k), getattr(default, k), rel_tol=1e-9)
-        for k in PARAM_COLUMNS))
+    return params if spec.told_cord and not same_cord(params, CordParams()) else None
+
+
+def uses_cords_model(spec: AgentSpec, env: Any) -> bool:
+    """Whether agent ``spec`` plans on a model of several cords in ``env``: an agent of
+    cords that differ, or one told the environment's cord (:func:`told_cord`)."""
+    return spec.cords or told_cord(spec, env) is not None
 
 
 def train_command(spec: AgentSpec, env: Any) -> str:
@@ -187,7 +190,7 @@ def model_files(name: str, env: Any, model: Any = None, transition_model: Any = 
             (spec.transition_model, transition_model,
              lambda p: transition_model_file(p, cords=cords,
                                              pegs=observes_pegs(env) and not cords,
-                                             cord=env.unwrapped.params))):
+                                             cord=told_cord(spec, env)))):
         if wanted:
             files.append(str(file(given)) if given is None or isinstance(given, (str, Path))
                          else f"<{type(given).__name__} passed in>")
@@ -258,12 +261,13 @@ def _physics_mpc(env: Any, options: AgentOptions) -> Policy:
 def _latent_mpc(env: Any, options: AgentOptions) -> Policy:
     from planners.latent_mpc import LatentMPCConfig, LatentMPCPolicy
 
-    cords = uses_cords_model(AGENTS["latent-mpc"], env)
+    spec = AGENTS["latent-mpc"]
+    cords = uses_cords_model(spec, env)
     return LatentMPCPolicy.for_env(env, LatentMPCConfig(seed=options.seed),
                                    model=load_transition_model(
                                        options.transition_model, cords=cords,
                                        pegs=observes_pegs(env) and not cords,
-                                       cord=env.unwrapped.params))
+                                       cord=told_cord(spec, env)))
 
 
 def _grad_mpc(env: Any, options: AgentOptions) -> Policy:

@@ -16,6 +16,7 @@ from dlo_bench.agents import (
     load_transition_model,
     model_files,
     observes_pegs,
+    told_cord,
     train_command,
     uses_cords_model,
 )
@@ -143,7 +144,7 @@ def load_agent(name: str, config: BenchmarkConfig, env: Any,
     if spec.transition_model:
         try:
             transition = load_transition_model(path, cords=cords, pegs=pegs and not cords,
-                                               cord=env.unwrapped.params)
+                                               cord=told_cord(spec, env))
         except (FileNotFoundError, ValueError) as exc:
             return LoadedAgent(name, None, missing=str(exc).splitlines()[0])
         options.update(transition_model=transition)

@@ -57,8 +57,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--peg-friction", type=number_in(float, 0.0, 2.0, expected="a friction "
                                                          "coefficient in [0, 2]"),
                         default=None, metavar="MU",
-                        help="friction between the cord and the pegs (the environments' "
-                             "peg_friction; default: frictionless pegs, as every suite)")
+                        help="friction between the cord and the pegs, for suites with pegs "
+                             "(the environments' peg_friction; default: frictionless pegs, as "
+                             "every suite)")
     add_model(parser)
     add_transition_model(parser)
     add_planner_flags(parser)

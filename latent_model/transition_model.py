@@ -41,7 +41,7 @@ from dlo_env.cord import (
 )
 from dlo_env.core.checks import non_negative, positive, positive_ints
 from dlo_env.core.deprecation import renamed_argument
-from dlo_env.dataset.transitions import PARAM_COLUMNS
+from dlo_env.dataset.transitions import PARAM_COLUMNS, same_cord
 from dlo_env.designed_suites import LETTERS_CORD
 from dlo_env.errors import InputError
 from dlo_env.shapes import TABLE_HALF, unflatten
@@ -90,10 +90,8 @@ def pretrained_file(cords: bool = False, pegs: bool = False,
         raise InputError("no shipped transition model is both of several cords and of pegs: "
                          "give cords=True or pegs=True, or a model file")
     if cords and cord is not None:
-        default = CordParams()
         for name, fields in CORD_MODEL_FILES.items():
-            if all(math.isclose(getattr(cord, k), fields.get(k, getattr(default, k)),
-                                rel_tol=1e-9) for k in PARAM_COLUMNS):
+            if same_cord(cord, replace(CordParams(), **fields)):
                 return name
     return CORDS_MODEL_FILE if cords else PEGS_MODEL_FILE if pegs else MODEL_FILE
 #: Predictions per network call in ``predict`` (keeps activations in cache).
@@ -234,8 +232,6 @@ def trained_ranges(info: Mapping[str, Any]) -> dict[str, tuple[float, float]]:
 
 
 @dataclass(frozen=True)
-
-
 class TransitionModelConfig:
     """Architecture of the transition model and the setting it was trained for.
 

@@ -115,8 +115,9 @@ class AdaptiveLatentMPCPolicy(LatentMPCPolicy):
     @classmethod
     def for_env(cls, env: object, config: LatentMPCConfig | None = None, model: Any = None,
                 adapt: AdaptConfig | None = None) -> AdaptiveLatentMPCPolicy:
-        """Build the policy for a ``dlo_env`` environment (the cord's parameters are not read:
-        they are what the policy fits)."""
+        """Build the policy for a ``dlo_env`` environment. The cord's parameters are not told
+        to the model, they are what the policy fits; the environment's own cord must lie in the
+        model's training ranges (``TransitionModel.check_env_cord``)."""
         if model is None:
             raise InputError("model is required: a transition model of several cords "
                              "(TransitionModel.load_pretrained(cords=True) is the shipped one)")

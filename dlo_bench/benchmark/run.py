@@ -256,31 +256,39 @@ def run_benchmark(config: BenchmarkConfig, out_dir: str | os.PathLike, *,
     return run.rows
 
 
+def _agent_env(env_id: str, suite: str) -> tuple[str, int, Any]:
+    """What an agent is built for in a cell: the environment, the peg slots it observes and
+    its cord (a designed suite's own, else None)."""
+    kwargs = task_env_kwargs(suite=suite)
+    return env_id, kwargs.get("max_pegs", 0), kwargs.get("params")
+
+
 def _loaded_agents(config: BenchmarkConfig, name: str, shape_model: ShapeSurrogate | None,
-                   why: str) -> dict[tuple[str, int], LoadedAgent]:
-    """Agent ``name`` loaded once per environment and number of peg slots it observes in the
-    cells of ``config``; ``why`` says why the shape model is missing (when it is)."""
+                   why: str) -> dict[tuple[str, int, Any], LoadedAgent]:
+    """Agent ``name`` loaded once per environment, number of peg slots and cord of the cells of
+    ``config`` (:func:`_agent_env`); ``why`` says why the shape model is missing (when it
+    is)."""
     import gymnasium as gym
 
-    agents: dict[tuple[str, int], LoadedAgent] = {}
-    for env_id, pegs in dict.fromkeys((env, task_env_kwargs(suite=suite).get("max_pegs", 0))
-                                      for env, suite, _ in config.cells(name)):
-        with gym.make(env_id, max_pegs=pegs) as env:
+    agents: dict[tuple[str, int, Any], LoadedAgent] = {}
+    for made in dict.fromkeys(_agent_env(env, suite) for env, suite, _ in config.cells(name)):
+        env_id, pegs, params = made
+        with gym.make(env_id, max_pegs=pegs, params=params) as env:
             agent = load_agent(name, config, env, shape_model)
         if agent.missing.startswith("no shape model") and why:
             agent = LoadedAgent(name, None, missing=f"no shape model: {why}")
-        agents[env_id, pegs] = agent
+        agents[made] = agent
     return agents
 
 
-def _add_cells(run: _Run, name: str, agents: dict[tuple[str, int], LoadedAgent],
+def _add_cells(run: _Run, name: str, agents: dict[tuple[str, int, Any], LoadedAgent],
                resume: bool) -> None:
     """The rows of agent ``name``'s cells: where it is missing, its row says so; a cell
     written by an earlier run with the same key is reused (``resume``); every other cell gets an
     empty row and a place in ``run.todo``."""
     config = run.config
     for env_id, suite, threshold in config.cells(name):
-        agent = agents[env_id, task_env_kwargs(suite=suite).get("max_pegs", 0)]
+        agent = agents[_agent_env(env_id, suite)]
         cell = cell_name(name, env_id, suite, threshold)
         if agent.policy is None:
             run.rows.append(row_of(agent, env_id, suite, threshold, None, 0))

@@ -90,9 +90,9 @@ class CordGoalEnv(GoalReward, gym.Env[dict[str, np.ndarray], np.ndarray]):
             empty table). A drawn task places 0 to ``max_pegs`` pegs near its start, and the
             observation holds ``max_pegs`` peg slots (centres, then a mask).
         peg_radius: Radius of every peg, metres.
-        peg_friction: Friction coefficient between the cord and the pegs: ``params`` with
-            ``CordParams.peg_friction`` set (None: ``params``' own, 0 for the default cord:
-            frictionless pegs).
+        peg_friction: Friction coefficient between the cord and the pegs: every episode's cord
+            with ``CordParams.peg_friction`` set, also one of ``options["params"]`` (None:
+            each cord's own, 0 for the default cord: frictionless pegs).
         render_mode: ``None``, ``"rgb_array"`` or ``"human"``.
     """
 
@@ -121,6 +121,8 @@ class CordGoalEnv(GoalReward, gym.Env[dict[str, np.ndarray], np.ndarray]):
                         judge_at_rest=judge_at_rest, max_pegs=max_pegs, render_mode=render_mode,
                         render_modes=self.metadata["render_modes"])
         self.params = params if params is not None else CordParams()
+        #: The pegs' friction the environment was made with (None: each cord's own).
+        self._peg_friction = peg_friction
         if peg_friction is not None:
             self.params = replace(self.params, peg_friction=peg_friction)
         self.max_step = float(max_step)
@@ -304,7 +306,10 @@ class CordGoalEnv(GoalReward, gym.Env[dict[str, np.ndarray], np.ndarray]):
         """The episode's cord: ``options["params"]``, a draw (only when randomising), or the
         environment's. A given task, start or goal keeps its own length."""
         if "params" in options:
-            return check_params(options.pop("params"), self.params)
+            params = check_params(options.pop("params"), self.params)
+            # the environment's pegs keep their friction when a task brings its cord
+            return (params if self._peg_friction is None
+                    else replace(params, peg_friction=self._peg_friction))
         if not self.randomize:
             return self.params
         params = draw_params(self.params, self.randomize, self.np_random)

@@ -53,7 +53,12 @@ def test_the_model_fine_tuned_for_the_letters_cord_ships_and_latent_mpc_takes_it
     model = TransitionModel.load_pretrained("cpu", cords=True, cord=letters)
     assert model.config.cord_inputs and model.mean_net is not None
     model.check_env_cord(letters)
+    from latent_model.transition_model import trained_ranges
+
     env = gym.make("dlo_env/DLOEndpoint-v0", params=letters)
     policy = build_agent("latent-mpc", env)
     assert policy.cord == letters
-    assert policy.model.config == model.config
+    point = {k: (v, v) for k, v in CORD_MODEL_FILES[name].items()}
+    assert trained_ranges(policy.model.info) == trained_ranges(model.info) == point
+    adaptive = build_agent("latent-mpc-adaptive", env)  # fits the cord: the model of them all
+    assert trained_ranges(adaptive.model.info)["bending_stiffness"] == (0.003, 0.03)

@@ -137,6 +137,10 @@ def test_a_model_of_several_cords_is_told_the_environments_cord_within_its_range
         LatentMPCPolicy.for_env(softer, model=model)
     with pytest.raises(ValueError, match="cord is told to a transition model of several cords"):
         LatentMPCPolicy(TransitionModel(TINY, device="cpu"), cord=letters)
+    rough = LatentMPCPolicy.for_env(gym.make("dlo_env/DLOEndpoint-v0", params=letters,
+                                             max_pegs=2, peg_friction=0.3), model=model)
+    assert rough.cord == letters  # told what the model predicts: not the pegs' friction
+    rough.predict(gym.make("dlo_env/DLOEndpoint-v0", params=letters).reset(seed=1)[0])
 
 
 def test_latent_mpc_plans_on_the_model_of_several_cords_where_the_env_has_another_cord():
