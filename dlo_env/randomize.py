@@ -15,6 +15,7 @@ from __future__ import annotations
 import math
 from collections.abc import Mapping
 from dataclasses import replace
+from typing import Any
 
 import numpy as np
 
@@ -144,3 +145,16 @@ def draw_params(base: CordParams, randomize: Mapping[str, tuple[float, float]],
         else:
             values[key] = float(rng.uniform(low, high))
     return replace(base, **values)
+
+
+def trained_ranges(info: Mapping[str, Any]) -> dict[str, tuple[float, float]]:
+    """The parameter ranges a transition model's training data were drawn from (``dlo collect
+    transitions --randomize``), the union over its files (``info["sources"]``, else
+    ``info["data"]``); empty when none was randomised."""
+    sources = info.get("sources") or [{"collect": info.get("data") or {}}]
+    out: dict[str, tuple[float, float]] = {}
+    for source in sources:
+        for name, (low, high) in ((source.get("collect") or {}).get("randomize") or {}).items():
+            lo, hi = out.get(name, (low, high))
+            out[name] = (min(lo, low), max(hi, high))
+    return out

@@ -44,6 +44,7 @@ from dlo_env.core.deprecation import renamed_argument
 from dlo_env.dataset.transitions import PARAM_COLUMNS, same_cord
 from dlo_env.designed_suites import LETTERS_CORD
 from dlo_env.errors import InputError
+from dlo_env.randomize import trained_ranges
 from dlo_env.shapes import TABLE_HALF, unflatten
 from dlo_env.tasks import DEFAULT_MAX_STEP
 from latent_model.chain_network import EnsembleChainNet
@@ -216,19 +217,6 @@ def padded_pegs(pegs: Any, count: int) -> np.ndarray:
 
 #: The ensemble designs of ``TransitionModelConfig.architecture``.
 ARCHITECTURES = ("mlp", "chain")
-
-
-def trained_ranges(info: Mapping[str, Any]) -> dict[str, tuple[float, float]]:
-    """The parameter ranges a transition model's training data were drawn from (``dlo collect
-    transitions --randomize``), the union over its files (``info["sources"]``, else
-    ``info["data"]``); empty when none was randomised."""
-    sources = info.get("sources") or [{"collect": info.get("data") or {}}]
-    out: dict[str, tuple[float, float]] = {}
-    for source in sources:
-        for name, (low, high) in ((source.get("collect") or {}).get("randomize") or {}).items():
-            lo, hi = out.get(name, (low, high))
-            out[name] = (min(lo, low), max(hi, high))
-    return out
 
 
 @dataclass(frozen=True)

@@ -26,9 +26,8 @@ import numpy as np
 from dlo_env.core.checks import positive_ints
 from dlo_env.dataset.transitions import PARAM_COLUMNS
 from dlo_env.errors import InputError
-from dlo_env.randomize import DEFAULT_RANGES, check_randomize
+from dlo_env.randomize import DEFAULT_RANGES, check_randomize, trained_ranges
 from dlo_env.shapes import cord_length, error
-from latent_model.transition_model import trained_ranges
 from planners.latent_mpc import LatentMPCConfig, LatentMPCPolicy
 
 

@@ -33,10 +33,13 @@ def _check_training(recipe, info, name, scale=1.0):
     assert info["data_transitions"] == sum(max(1, round(n * scale)) for _, n, _ in trained)
     collected = [TransitionCollectConfig(**settings).to_json() for *_, settings in trained]
     defaults = TransitionCollectConfig().to_json()  # of options newer than a file
+    def full(recorded):  # options and cord fields newer than a file at their defaults
+        return {**defaults, **recorded, "cord": {**defaults["cord"], **recorded.get("cord", {})}}
+
     if "sources" in info:  # models trained since each file's settings are recorded
-        assert [{**defaults, **src["collect"]} for src in info["sources"]] == collected
+        assert [full(src["collect"]) for src in info["sources"]] == collected
     else:  # before, only the first file's
-        assert {**defaults, **info["data"]} == collected[0]
+        assert full(info["data"]) == collected[0]
     want = {**asdict(TransitionTrainConfig()), **settings,
             "steps": max(1, round(settings["steps"] * scale))}
     saved = dict(info["train_config"])
