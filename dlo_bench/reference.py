@@ -28,7 +28,7 @@ from typing import Any
 import numpy as np
 
 from dlo_env.core.atomic import write_text_atomic
-from dlo_env.designed_suites import designed_suite_cord, designed_suite_seeds, designed_task
+from dlo_env.designed_suites import designed_suite_seeds, designed_task
 from dlo_env.errors import InputError
 from planners.physics_mpc import PhysicsMPCConfig
 
@@ -70,10 +70,12 @@ def search_task(env_id: str, suite: str, seed: int, *, config: PhysicsMPCConfig 
     from planners.physics_mpc import PhysicsMPCPolicy
 
     t0 = time.perf_counter()
-    cord = designed_suite_cord(suite)
-    with gym.make(env_id, success_threshold=stop, success_metric="direction_free_error",
-                  max_episode_steps=max_steps, **({} if cord is None else {"params": cord})
-                  ) as env:
+    from dlo_bench.evaluation import task_env_kwargs
+
+    # the suite's environment (its cord, direction-free scoring), with the search's budget
+    kwargs = {**task_env_kwargs(suite=suite), "success_threshold": stop,
+              "max_episode_steps": max_steps}
+    with gym.make(env_id, **kwargs) as env:
         task = designed_task(suite, seed, env.unwrapped.cord.grasp)
         obs, _ = env.reset(options=task.options())
         policy = PhysicsMPCPolicy.for_env(env, config)

@@ -97,11 +97,6 @@ FORMAT_VERSION = 3
 READABLE_VERSIONS = (1, 2, 3)
 #: The cord parameters of every transition, the columns of ``params``.
 PARAM_COLUMNS = ("length", "bending_stiffness", "friction", "mass")
-
-
-def same_cord(a: CordParams, b: CordParams) -> bool:
-    """Whether two cords have the same ``PARAM_COLUMNS`` (what a transition model is told)."""
-    return all(math.isclose(getattr(a, k), getattr(b, k), rel_tol=1e-9) for k in PARAM_COLUMNS)
 #: Names of the grasp codes in ``grasp``.
 GRASP_NAMES = ("head", "tail", "both")
 
@@ -122,6 +117,11 @@ _ARRAYS = {
 ARRAY_NAMES = tuple(_ARRAYS)
 #: The arrays added after version 1, by the version that added them.
 _SINCE = {"params": 2, "pegs": 3, "peg_count": 3}
+
+
+def same_cord(a: CordParams, b: CordParams) -> bool:
+    """Whether two cords have the same ``PARAM_COLUMNS`` (what a transition model is told)."""
+    return all(math.isclose(getattr(a, k), getattr(b, k), rel_tol=1e-9) for k in PARAM_COLUMNS)
 
 
 @dataclass(frozen=True)
