@@ -49,6 +49,10 @@ class CEMConfig:
         stop_fraction: Stop iterating once the best predicted error is at most this fraction
             of the policy's ``success_threshold`` (the environment's; 0: always run every
             iteration).
+        offer_straight: Score, in every iteration, the plan that moves every held end straight
+            to where the goal has it (in as few equal moves as ``max_move`` allows, then still;
+            with direction-free scoring, to either end of the goal) beside the samples: a warm
+            start drops it after the first plan.
         seed: Seed of the sampling.
     """
 
@@ -64,6 +68,7 @@ class CEMConfig:
     far_error: float = 0.03
     far_grasps: tuple[str, ...] = tuple(GRASP_ENDS)
     stop_fraction: float = 0.0
+    offer_straight: bool = False
     seed: int = 0
 
     def __post_init__(self) -> None:
@@ -196,27 +201,56 @@ class CEMPolicy(EpisodicPolicy):
         if cfg.focus > 0:
             near = cfg.focus * float(self._distance(shape, goal))
             std[:] = min(cfg.init_std, max(cfg.min_std, near))
-        best_plan, best_err = mean.copy(), math.inf
+        offers = (self._straight_plans(shape, goal, moves) if cfg.offer_straight
+                  else np.empty((0,) + dims))[:cfg.samples - 1]
+        kept = max(1, self.keep)  # the best plans scored so far, for _choose
+        pool, pool_errors = np.empty((0,) + dims), np.empty(0)
         for _ in range(cfg.iterations):
             candidates = mean + std * self._rng.standard_normal((cfg.samples,) + dims)
             candidates[0] = mean  # always re-score the current mean
+            candidates[1:1 + len(offers)] = offers
             norms = np.linalg.norm(candidates, axis=-1, keepdims=True)
             candidates *= np.minimum(1.0, cfg.max_move / np.maximum(norms, 1e-12))
             errors = self._score(shape, goal, candidates)
             self.stats.rollouts += cfg.samples
             order = np.argsort(errors)
-            if errors[order[0]] < best_err:
-                best_err, best_plan = float(errors[order[0]]), candidates[order[0]].copy()
-            if best_err <= cfg.stop_fraction * self.success_threshold:
+            pool = np.concatenate([pool, candidates[order[:kept]]])
+            pool_errors = np.concatenate([pool_errors, errors[order[:kept]]])
+            best = np.argsort(pool_errors, kind="stable")[:kept]
+            pool, pool_errors = pool[best], pool_errors[best]
+            if pool_errors[0] <= cfg.stop_fraction * self.success_threshold:
                 break
             elite = candidates[order[: cfg.elites]]
             mean, std = elite.mean(axis=0), elite.std(axis=0) + 1e-3
+        best_plan, best_err = self._choose(shape, goal, pool, pool_errors)
         # Next call starts from the rest of this plan (shifted), the usual MPC warm start.
         self._mean = np.concatenate([best_plan[1:], np.zeros((1,) + dims[1:])])
         self.stats.plans += 1
         self.stats.seconds += time.perf_counter() - t0
         self.stats.predicted_errors.append(best_err)
         return best_plan, best_err
+
+    #: How many of the best plans scored ``_choose`` picks from (1: the best one).
+    keep = 1
+
+    def _choose(self, shape: np.ndarray, goal: np.ndarray, plans: np.ndarray,
+                errors: np.ndarray) -> tuple[np.ndarray, float]:
+        """The plan to execute among the ``keep`` best scored ``plans`` (best first) and its
+        error: the best one (a subclass may check them further)."""
+        return plans[0].copy(), float(errors[0])
+
+    def _straight_plans(self, shape: np.ndarray, goal: np.ndarray, moves: int) -> np.ndarray:
+        """``(k, moves, ends, 2)``: the held end(s) straight to the goal's in as few equal
+        moves as ``max_move`` allows (at most ``moves``), then still; towards the reversed goal
+        too when plans are scored direction-free."""
+        goals = [goal] + ([goal[::-1]] if self.success_metric == "direction_free_error" else [])
+        plans = np.zeros((len(goals), moves, len(self.ends), 2))
+        for i, g in enumerate(goals):
+            span = self._end_points(g) - self._end_points(shape)
+            k = min(moves, max(1, math.ceil(float(np.linalg.norm(span, axis=-1).max())
+                                            / self.config.max_move)))
+            plans[i, :k] = span / k
+        return plans
 
     def horizon(self, shape: np.ndarray, goal: np.ndarray) -> int:
         """Moves of the plan from ``shape``: ``config.far_moves`` while farther than

@@ -46,6 +46,12 @@ class LatentMPCConfig(CEMConfig):
         inextensible: Score with predictions moved onto rest-length segments
             (``TransitionModel.predict(inextensible=True)``, more accurate). Off: the setting
             the defaults were tuned and benchmarked with, before the projection existed.
+        verify: The best plans (by the model) whose first move is simulated on the observed
+            cord (the simulator, with the observed pegs) before one is executed: each is
+            scored by the model's prediction of its other moves from the simulated shape.
+            0: none, the model's best plan. The simulation counts in the planning time.
+        verify_settle: Control periods simulated with the grippers still after a verified
+            move.
     """
 
     moves: int = 3
@@ -63,11 +69,13 @@ class LatentMPCConfig(CEMConfig):
     spread_weight: float = 0.0
     settle_actions: int = 3
     inextensible: bool = False
+    verify: int = 0
+    verify_settle: int = 2
 
     def __post_init__(self) -> None:
         super().__post_init__()
         non_negative(self, "spread_weight")
-        non_negative_ints(self, "settle_actions")
+        non_negative_ints(self, "settle_actions", "verify", "verify_settle")
         if self.members is not None:
             positive_ints(self, "members")
         if self.spread_weight > 0 and self.members == 1:
@@ -143,6 +151,7 @@ class LatentMPCPolicy(CEMPolicy):
                      config=config, success_metric=base.success_metric, **told)
         policy.check_env(env)
         policy.peg_radius = base.peg_radius  # of the pegs it will observe
+        policy.sim_params = base.params  # the cord its verification simulates
         return policy
 
     def check_env(self, env: object) -> None:
@@ -162,6 +171,41 @@ class LatentMPCPolicy(CEMPolicy):
         """Forget the plan and the pegs last observed (see ``CEMPolicy.reset``)."""
         super().reset()
         self._pegs: np.ndarray | None = None
+
+    @property
+    def keep(self) -> int:  # type: ignore[override]
+        """The best plans ``_choose`` verifies (``config.verify``), at least one."""
+        return max(1, self.config.verify)
+
+    def _choose(self, shape: np.ndarray, goal: np.ndarray, plans: np.ndarray,
+                errors: np.ndarray) -> tuple[np.ndarray, float]:
+        """With ``config.verify``, the plan whose simulated first move, followed by its other
+        moves as the model predicts them, ends nearest the goal; else the model's best."""
+        if not self.config.verify:
+            return super()._choose(shape, goal, plans, errors)
+        from planners.physics_mpc import fitted_cord, simulate
+
+        sim = getattr(self, "_sim", None)
+        params = getattr(self, "sim_params", None) or self.cord or self.model.cord_params
+        if sim is None:
+            from dlo_env.cord import PEG_RADIUS, Cord
+
+            sim = Cord(params, grasp=self.grasp,
+                       peg_radius=getattr(self, "peg_radius", None) or PEG_RADIUS)
+        pegs = self._pegs if self._pegs is not None else np.zeros((0, 2))
+        if not np.array_equal(pegs, sim.pegs):
+            sim.set_pegs(pegs)
+        sim, start = fitted_cord(sim, params, shape)
+        self._sim = sim
+        shapes = np.stack([simulate(sim, start, plan[:1], self.ends, self.config.verify_settle)
+                           for plan in plans])
+        for k in range(1, plans.shape[1]):
+            moves = plans[:, k].reshape(len(plans), -1)
+            shapes = self._predict(shapes, moves, members=self.members,
+                                   inextensible=self.config.inextensible)
+        scores = np.asarray(self._distance(shapes, goal), dtype=np.float64)
+        best = int(np.argmin(scores))
+        return plans[best].copy(), float(scores[best])
 
     def _act(self, obs: CordObservation) -> np.ndarray:
         """Plan with the pegs the observation shows (their stop rule on the grippers), then act

@@ -77,6 +77,32 @@ def unstretched(shape: np.ndarray) -> np.ndarray:
     return onto_table(rebuilt)  # back onto the table where the rebuilt cord pokes over the rim
 
 
+def simulate(cord: Cord, shape: np.ndarray, plan: np.ndarray, ends: tuple[str, ...],
+             settle_periods: int) -> np.ndarray:
+    """The shape at the end of ``plan`` ``(moves, ends, 2)`` of the held ``ends``, simulated on
+    ``cord`` reset to ``shape``, after ``settle_periods`` control periods with the grippers
+    still."""
+    cord.reset(shape)
+    for move in plan:
+        cord.move(**{end: move[i] for i, end in enumerate(ends)})
+    cord.wait(settle_periods)
+    return cord.shape
+
+
+def fitted_cord(cord: Cord, params: CordParams, shape: np.ndarray) -> tuple[Cord, np.ndarray]:
+    """A cord of ``params`` that can simulate from the observed ``shape`` (``cord`` itself
+    when it is one, else a new one with its grasp and pegs), and the shape to reset it to: a
+    taut cord ``unstretched``, and a cord of another length than ``params.length`` (by more
+    than ``LENGTH_TOLERANCE``) simulated at its observed length."""
+    shape = unstretched(shape)
+    length = cord_length(shape)
+    if abs(length - params.length) > LENGTH_TOLERANCE * params.length:
+        params = replace(params, length=length)
+    if params != cord.params:
+        cord = Cord(params, grasp=cord.grasp, pegs=cord.pegs, peg_radius=cord.peg_radius)
+    return cord, shape
+
+
 class PhysicsMPCPolicy(CEMPolicy):
     """CEM model-predictive control with the cord simulator as the model.
 
@@ -144,14 +170,7 @@ class PhysicsMPCPolicy(CEMPolicy):
     def plan(self, shape: np.ndarray, goal: np.ndarray) -> tuple[np.ndarray, float]:
         """Simulate the cord at its observed length when that differs from ``params``'s (a
         taut cord ``unstretched`` first), then plan (CEM over straight moves)."""
-        shape = unstretched(shape)
-        length = cord_length(shape)
-        params = self.params
-        if abs(length - params.length) > LENGTH_TOLERANCE * params.length:
-            params = replace(params, length=length)
-        if params != self._cord.params:
-            self._cord = Cord(params, grasp=self.grasp, pegs=self._cord.pegs,
-                              peg_radius=self._cord.peg_radius)
+        self._cord, shape = fitted_cord(self._cord, self.params, shape)
         return super().plan(shape, goal)
 
     def _act(self, obs: CordObservation) -> np.ndarray:
@@ -162,12 +181,7 @@ class PhysicsMPCPolicy(CEMPolicy):
 
     def _rollout(self, shape: np.ndarray, plan: np.ndarray) -> np.ndarray:
         """Simulate one candidate ``(moves, ends, 2)`` from ``shape``; return the final shape."""
-        cord = self._cord
-        cord.reset(shape)
-        for move in plan:
-            cord.move(**{end: move[i] for i, end in enumerate(self.ends)})
-        cord.wait(self.config.settle_periods)
-        return cord.shape
+        return simulate(self._cord, shape, plan, self.ends, self.config.settle_periods)
 
     def _score(self, shape: np.ndarray, goal: np.ndarray, candidates: np.ndarray) -> np.ndarray:
         """Each candidate simulated on a fresh copy of the cord."""

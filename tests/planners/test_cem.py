@@ -128,3 +128,44 @@ def test_far_moves_lengthen_the_horizon_only_far_from_the_goal_and_for_their_gra
 def test_far_grasps_are_checked(value):
     with pytest.raises(ValueError, match="far_grasps"):
         CEMConfig(far_grasps=value)
+
+
+def test_offer_straight_scores_the_straight_plan_in_every_iteration():
+    shape, goal = _shapes(0.05)  # the head is 5 cm from the goal's: one move reaches it
+    policy = Recording(CEMConfig(samples=8, elites=2, iterations=3, moves=3,
+                                 offer_straight=True))
+    policy.plan(shape, goal)
+    straight = np.zeros((3, 1, 2))
+    straight[0, 0] = goal[0] - shape[0]
+    for batch in policy.batches:
+        np.testing.assert_allclose(batch[1], straight)
+    # A far goal is reached in as many equal moves as max_move needs; direction-free scoring
+    # is offered the reversed goal too.
+    far = goal + np.array([0.6, 0.0])
+    plans = Recording(CEMConfig(moves=3, max_move=0.25))._straight_plans(shape, far, 3)
+    np.testing.assert_allclose(plans[0], [[[0.2, -0.05 / 3]]] * 3)
+    free = Recording(CEMConfig(moves=3))
+    free.success_metric = "direction_free_error"
+    assert len(free._straight_plans(shape, goal, 3)) == 2
+    # Off (the default): candidate 1 is a sample.
+    policy = Recording(CEMConfig(samples=8, elites=2, iterations=1, moves=3))
+    policy.plan(shape, goal)
+    assert not np.allclose(policy.batches[0][1], straight)
+
+
+def test_choose_is_offered_the_best_plans_scored_best_first():
+    class Keeping(Recording):
+        keep = 3
+
+        def _choose(self, shape, goal, plans, errors):
+            self.offered = (plans.copy(), errors.copy())
+            return plans[-1].copy(), float(errors[-1])
+
+    policy = Keeping(CEMConfig(samples=16, elites=4, iterations=2))
+    plan, err = policy.plan(*_shapes(0.05))
+    plans, errors = policy.offered
+    assert len(plans) == 3 and np.all(np.diff(errors) >= 0)
+    scored = np.concatenate(policy.batches)
+    best = np.sort(np.linalg.norm(scored.reshape(len(scored), -1), axis=1) + 1.0)[:3]
+    np.testing.assert_allclose(errors, best)
+    assert err == errors[-1] and np.array_equal(plan, plans[-1])

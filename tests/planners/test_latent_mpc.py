@@ -154,3 +154,32 @@ def test_latent_mpc_plans_on_the_model_of_several_cords_where_the_env_has_anothe
     default = gym.make("dlo_env/DLODualEndpoint-v0")
     assert build_agent("latent-mpc", default).cord is None
     assert model_files("latent-mpc", default)[0].endswith("transition.pt")
+
+
+def test_verify_executes_the_plan_whose_simulated_first_move_ends_nearest():
+    from dlo_env.cord import Cord
+    from dlo_env.shapes import error
+    from planners.physics_mpc import simulate
+
+    env = gym.make("dlo_env/DLOEndpoint-v0")
+    obs, _ = env.reset(seed=3)
+    config = LatentMPCConfig(samples=16, elites=4, iterations=2, moves=1, far_moves=0,
+                             verify=3)
+    policy = LatentMPCPolicy.for_env(env, config, model=TransitionModel(TINY, device="cpu"))
+    assert policy.keep == 3
+    offered = {}
+    choose = policy._choose
+
+    def spy(shape, goal, plans, errors):
+        offered["plans"] = plans.copy()
+        return choose(shape, goal, plans, errors)
+
+    policy._choose = spy
+    shape, goal = obs["achieved_goal"].reshape(-1, 2), obs["desired_goal"].reshape(-1, 2)
+    plan, err = policy.plan(shape.astype(np.float64), goal.astype(np.float64))
+    cord = Cord(env.unwrapped.params)
+    simulated = [error(simulate(cord, shape, p, ("head",), config.verify_settle), goal)
+                 for p in offered["plans"]]
+    assert len(simulated) == 3
+    assert err == pytest.approx(min(simulated), abs=1e-4)
+    assert np.array_equal(plan, offered["plans"][int(np.argmin(simulated))])
