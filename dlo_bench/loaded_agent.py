@@ -22,6 +22,7 @@ from dlo_bench.agents import (
 )
 from dlo_bench.paths import baseline_folder_name, shipped_baseline
 from dlo_bench.policy_file import weights_file
+from planners.cem import settings_repr
 from planners.interfaces import Policy, ShapeSurrogate
 
 if TYPE_CHECKING:
@@ -57,11 +58,12 @@ class LoadedAgent:
 
 def policy_settings(policy: Any) -> str:
     """The settings of a planner (``repr`` of its config, and of its tree's), "" without any:
-    a change of an agent's defaults makes its saved cells stale."""
-    parts = [repr(getattr(policy, "config", ""))]
+    a change of an agent's defaults makes its saved cells stale (``planners.cem.LATER``
+    fields at their defaults are left out)."""
+    parts = [settings_repr(getattr(policy, "config", ""))]
     planner = getattr(policy, "planner", None)
     if planner is not None:
-        parts.append(repr(getattr(planner, "config", "")))
+        parts.append(settings_repr(getattr(planner, "config", "")))
     for name in ("replan_every", "moves_per_plan", "partial_plans"):
         if hasattr(policy, name):
             parts.append(f"{name}={getattr(policy, name)!r}")

@@ -11,14 +11,14 @@ from the observed shape (closed loop) until the goal is reached.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
 
 from dlo_env.core.checks import non_negative, non_negative_ints, positive_ints
 from dlo_env.errors import InputError
-from planners.cem import CEMConfig, CEMPolicy
+from planners.cem import LATER, CEMConfig, CEMPolicy
 from planners.observation import CordObservation
 
 
@@ -69,8 +69,8 @@ class LatentMPCConfig(CEMConfig):
     spread_weight: float = 0.0
     settle_actions: int = 3
     inextensible: bool = False
-    verify: int = 0
-    verify_settle: int = 2
+    verify: int = field(default=0, metadata=LATER)
+    verify_settle: int = field(default=2, metadata=LATER)
 
     def __post_init__(self) -> None:
         super().__post_init__()

@@ -169,3 +169,16 @@ def test_choose_is_offered_the_best_plans_scored_best_first():
     best = np.sort(np.linalg.norm(scored.reshape(len(scored), -1), axis=1) + 1.0)[:3]
     np.testing.assert_allclose(errors, best)
     assert err == errors[-1] and np.array_equal(plan, plans[-1])
+
+
+def test_settings_leave_later_fields_out_at_their_defaults():
+    from planners.cem import settings_repr
+    from planners.latent_mpc import LatentMPCConfig
+
+    plain = settings_repr(LatentMPCConfig())
+    assert "offer_straight" not in plain and "verify" not in plain
+    assert plain.startswith("LatentMPCConfig(moves=3, samples=256,") and "seed=0" in plain
+    changed = settings_repr(LatentMPCConfig(offer_straight=True, verify=2))
+    assert "offer_straight=True" in changed and "verify=2" in changed
+    assert "verify_settle" not in changed
+    assert settings_repr("x") == repr("x")
