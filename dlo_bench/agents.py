@@ -259,11 +259,12 @@ def _physics_mpc(env: Any, options: AgentOptions) -> Policy:
 
 
 def _latent_mpc(env: Any, options: AgentOptions) -> Policy:
-    from planners.latent_mpc import LatentMPCConfig, LatentMPCPolicy
+    from planners.latent_mpc import PEGS_SETTINGS, LatentMPCConfig, LatentMPCPolicy
 
     spec = AGENTS["latent-mpc"]
     cords = uses_cords_model(spec, env)
-    return LatentMPCPolicy.for_env(env, LatentMPCConfig(seed=options.seed),
+    among_pegs = PEGS_SETTINGS if observes_pegs(env) else {}
+    return LatentMPCPolicy.for_env(env, LatentMPCConfig(seed=options.seed, **among_pegs),
                                    model=load_transition_model(
                                        options.transition_model, cords=cords,
                                        pegs=observes_pegs(env) and not cords,

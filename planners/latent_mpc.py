@@ -83,6 +83,15 @@ class LatentMPCConfig(CEMConfig):
                              "of one member is zero), got members=1")
 
 
+#: What latent-mpc changes where pegs are observed (``dlo_bench.build_agent`` and the
+#: benchmark's pegs section): the straight plan to the goal's ends is scored in every
+#: iteration. Chosen on the train splits of pegs-1/-2/-3 and route-2 at 1 cm, 50 tasks each
+#: (``benchmarks/tune_planner.py``, docs/history.md): 184 against 181 of 200 tasks with one
+#: end held, 168 against 154 with both; simulating the three best plans' first moves
+#: (``verify=3``) gained nothing at about twice the time.
+PEGS_SETTINGS: dict[str, Any] = {"offer_straight": True}
+
+
 class LatentMPCPolicy(CEMPolicy):
     """CEM model-predictive control on the learned transition model.
 

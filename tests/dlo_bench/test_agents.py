@@ -222,3 +222,14 @@ def test_a_planner_built_among_pegs_refuses_an_observation_without_peg_slots_nam
         assert "\n" not in str(info.value)
     with pytest.raises(ValueError, match="give it that environment, not its id"):
         build_agent("physics-mpc-true-cord", ENDPOINT)
+
+
+def test_latent_mpc_offers_the_straight_plan_where_pegs_are_observed_only():
+    from planners.latent_mpc import PEGS_SETTINGS
+
+    with gym.make("dlo_env/DLOEndpoint-v0", max_pegs=4) as env:
+        among = build_agent("latent-mpc", env).config
+    with gym.make("dlo_env/DLOEndpoint-v0") as env:
+        empty = build_agent("latent-mpc", env).config
+    assert PEGS_SETTINGS and all(getattr(among, k) == v for k, v in PEGS_SETTINGS.items())
+    assert not empty.offer_straight and among.samples == empty.samples
