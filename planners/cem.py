@@ -25,7 +25,6 @@ from planners.episodic_policy import EpisodicPolicy
 from planners.interfaces import EpisodeStats
 from planners.observation import CordObservation
 
-
 #: ``metadata`` of a config field added after the benchmark's cells were recorded, whose default
 #: keeps the planner as it was: ``settings_repr`` leaves it out at that default, so the cells
 #: stay valid.
