@@ -72,6 +72,9 @@ class AgentSpec:
         train: How its trained model or policy is made, for messages about a missing one
             (``{env}``: the environment id).
         no_pegs: Why it cannot act where pegs are observed ("": it can).
+        network: Whether it acts by a distilled network (``planners.distilled``): the file or
+            folder ``options.baseline``, or the shipped one for the environment
+            (:func:`dlo_bench.paths.distilled_file`).
         defaults: ``AgentOptions`` fields this agent sets differently.
     """
 
@@ -86,6 +89,7 @@ class AgentSpec:
     told_cord: bool = False
     train: str = ""
     no_pegs: str = ""
+    network: bool = False
     defaults: Mapping[str, Any] = field(default_factory=dict)
 
 
@@ -168,14 +172,15 @@ def load_transition_model(model: Any, cords: bool = False, pegs: bool = False,
                            + (" --cord-inputs" if cords else " --peg-reach" if pegs else ""))
 
 
-def model_files(name: str, env: Any, model: Any = None, transition_model: Any = None
-                ) -> list[str]:
+def model_files(name: str, env: Any, model: Any = None, transition_model: Any = None,
+                baseline: str | Path | None = None) -> list[str]:
     """The model files agent ``name`` plans or acts with in ``env``: its shape model
     (``model``, a path or None for the shipped one), its transition model
     (``transition_model``; None: the shipped one it loads there, the model that sees pegs where
     pegs are observed) and a trained policy's weights (``weights_file`` of its ``sb3:`` folder
-    or of the shipped one for the environment), for the provenance of its results. A model
-    passed already loaded is named by its type."""
+    or of the shipped one for the environment) or distilled network (``baseline``, or the
+    shipped one), for the provenance of its results. A model passed already loaded is named by
+    its type."""
     from dlo_bench.paths import shape_model_file, transition_model_file
 
     spec = agent_spec(name)
@@ -185,6 +190,8 @@ def model_files(name: str, env: Any, model: Any = None, transition_model: Any = 
         folder = Path(spec.defaults.get("baseline") or shipped_baseline(
             name, env.unwrapped.spec.id, pegs=observes_pegs(env)))
         files.append(str(folder if folder.suffix == ".zip" else weights_file(folder)))
+    if spec.network:
+        files.append(str(_network_file(spec, env, baseline or spec.defaults.get("baseline"))))
     for wanted, given, file in (
             (spec.shape_model, model, shape_model_file),
             (spec.transition_model, transition_model,
@@ -276,6 +283,28 @@ def _grad_mpc(env: Any, options: AgentOptions) -> Policy:
 
     return GradMPCPolicy.for_env(env, GradMPCConfig(seed=options.seed),
                                  model=load_transition_model(options.transition_model))
+
+
+def _network_file(spec: AgentSpec, env: Any, given: str | Path | None) -> Path:
+    """The distilled network agent ``spec`` acts by in ``env``: ``given`` (a file, or a folder
+    holding ``distilled.pt``) or the shipped one for the environment."""
+    from dlo_bench.paths import distilled_file
+
+    if given is None:
+        return distilled_file(spec.name, env.unwrapped.spec.id)
+    path = Path(given)
+    return path / distilled_file(spec.name).name if path.is_dir() else path
+
+
+def _distilled(env: Any, options: AgentOptions) -> Policy:
+    from planners.distilled import DistilledPolicy, MoveNetwork
+
+    spec = AGENTS["latent-mpc-distilled"]
+    path = _network_file(spec, env, options.baseline)
+    if not path.is_file():
+        raise MissingFileError(f"no network of {spec.name} for {env.unwrapped.spec.id} at "
+                               f"{path}: make one with `{train_command(spec, env)}`")
+    return DistilledPolicy.for_env(env, MoveNetwork.load(path))
 
 
 def _latent_mpc_adaptive(env: Any, options: AgentOptions) -> Policy:
@@ -386,6 +415,11 @@ AGENTS: dict[str, AgentSpec] = {spec.name: spec for spec in (
               "differentiable transition model", _grad_mpc,
               environments=(ENDPOINT, DUAL_ENDPOINT), extra="model", transition_model=True,
               no_pegs="its differentiable step (CordDynamics) models the empty table"),
+    AgentSpec("latent-mpc-distilled", "a network distilled from latent-mpc by DAgger in the "
+              "surrogate: one network call per plan, no search", _distilled,
+              environments=(ENDPOINT, DUAL_ENDPOINT), extra="model", network=True,
+              train="dlo distil --env {env}",
+              no_pegs="it was distilled in the surrogate, which models the empty table"),
     AgentSpec("ppo", "the shipped PPO baseline (Stable-Baselines3)", _sb3("ppo"),
               environments=(ENDPOINT, DUAL_ENDPOINT), extra="rl",
               train="dlo baseline --algo ppo --env {env}"),

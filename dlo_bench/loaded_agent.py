@@ -154,13 +154,20 @@ def load_agent(name: str, config: BenchmarkConfig, env: Any,
         costs.insert(0, "unknown (the model does not record its data)" if not steps
                      else f"{_steps(steps)} env steps" + (f" ({_steps(moves)} moves)" if moves
                                                            else ""))
+    if spec.network:  # a distilled network: the baselines folder's, or the shipped one
+        options.update(baseline=_baseline_folder(name, config, env_id) if config.baselines
+                       else None)
     try:
         policy = build_agent(name, env, **options)
     except ValueError as exc:  # e.g. a model made for another cord
         return LoadedAgent(name, None, missing=str(exc).splitlines()[0])
+    if spec.network:
+        steps, cost = policy.training_cost()
+        costs.append(cost)
     return LoadedAgent(name, policy, training_env_steps=steps,
                        sample_cost=" + ".join(costs) or "none (no learned model)",
-                       models=tuple(model_files(name, env, config.model, path)),
+                       models=tuple(model_files(name, env, config.model, path,
+                                                      options.get("baseline"))),
                        settings=policy_settings(policy))
 
 

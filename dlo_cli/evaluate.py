@@ -18,6 +18,7 @@ from dlo_cli.flags import (
     add_seed,
     add_transition_model,
     backend_of,
+    existing_path,
     number_in,
     writable_folder,
 )
@@ -62,6 +63,10 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                              "every suite)")
     add_model(parser)
     add_transition_model(parser)
+    parser.add_argument("--network", type=existing_path("distilled network"), default=None,
+                        help="distilled network file, or folder holding distilled.pt, for "
+                             "latent-mpc-distilled (None: the shipped one for --env; `dlo "
+                             "distil` makes one)")
     add_planner_flags(parser)
     add_backend(parser, "this process, one row after the other")
     add_out(parser, "evaluate", "<agent>-<difficulty>.csv/.json and summary.json")
@@ -100,17 +105,20 @@ def evaluate_row(agent: str, difficulty: int | None, suite: str | None,
     env_kwargs = {**task_env_kwargs(difficulty, suite), "success_threshold": settings["threshold"]}
     if settings.get("peg_friction") is not None:
         env_kwargs["peg_friction"] = settings["peg_friction"]
+    network = ({"baseline": settings["network"]}
+               if agent_spec(agent).network and settings.get("network") else {})
     with gym.make(settings["env_id"], **env_kwargs) as env:
         policy = build_agent(agent, env, model=model, seed=settings["seed"],
                              transition_model=settings["transition_model"],
                              replan_every=settings["replan_every"],
-                             max_seconds=settings["max_seconds"])
+                             max_seconds=settings["max_seconds"], **network)
         result = evaluate(policy, env, difficulty=difficulty, suite=suite,
                           episodes=settings["episodes"], seed=settings["seed"],
                           split=settings["split"], agent=agent,
                           fidelity=not settings["no_fidelity"], progress=settings["progress"])
         result.summary["models"] = model_files(agent, env, settings["model"],
-                                               settings["transition_model"])
+                                               settings["transition_model"],
+                                               network.get("baseline"))
         return result
 
 
@@ -173,7 +181,7 @@ def run(args: argparse.Namespace) -> int:
                                    model))
     else:
         quiet = {**settings, "progress": False, **{  # the tasks may run in another folder
-            k: str(Path(settings[k]).resolve()) for k in ("model", "transition_model")
+            k: str(Path(settings[k]).resolve()) for k in ("model", "transition_model", "network")
             if settings.get(k)}}
         for k, result in backend.map(evaluate_row, [(*c, quiet) for c in calls]):
             finish(k, result)

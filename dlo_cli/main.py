@@ -44,6 +44,8 @@ COMMANDS: dict[str, tuple[str | dict[str, tuple[str, str]], str]] = {
     "finetune": ("dlo_cli.finetune", "additional training on shapes the model cannot represent"),
     "evaluate": ("dlo_cli.evaluate", "score agents on random tasks or named suites"),
     "baseline": ("dlo_cli.baseline", "train a Stable-Baselines3 baseline"),
+    "distil": ("dlo_cli.distil", "distil latent-mpc into a network by DAgger in the surrogate "
+                                 "(the agent latent-mpc-distilled)"),
     "benchmark": ("dlo_cli.benchmark", "run every agent on the test suites, one table"),
     "reference": ("dlo_cli.reference", "the reference errors of a designed suite's test "
                                        "tasks, by a long-budget physics search"),

@@ -1,11 +1,17 @@
-"""latent-mpc-distilled: a network that proposes latent-mpc's next straight move in one call.
+"""latent-mpc-distilled: a network that proposes latent-mpc's plan in one call.
 
 The network sees the cord and the goal in a frame attached to the cord (origin at the head,
 x-axis from the head towards the cord's centroid), so it turns and shifts with the task by
-construction, and answers with the first move of the plan latent-mpc would make from there
-(``dlo_bench.distillation`` trains it by DAgger in the surrogate). The policy executes that move
-as latent-mpc executes its plans (``split_move`` actions, then zero actions while the cord comes
-to rest) and asks again: a millisecond-scale decision instead of a search.
+construction, and answers with the plan of straight moves latent-mpc would make from there,
+planning afresh (``dlo_bench.distillation`` trains it by DAgger in the surrogate). The policy
+executes the whole plan, each move as latent-mpc executes its moves (``split_move`` actions,
+then zero actions while the cord comes to rest), and asks again from the cord at rest: a
+millisecond-scale decision instead of a search.
+
+Why the whole plan: a fresh plan spreads the way to the goal over its moves, so executing only
+its first move and asking again from there approaches the goal by a fraction of the way per
+decision (latent-mpc itself carries its plan over from one call to the next, which a
+network of the state alone cannot).
 """
 
 from __future__ import annotations
@@ -28,7 +34,11 @@ from planners.latent_mpc import LatentMPCConfig
 
 #: Marks a distilled policy file.
 FORMAT = "dlo-distilled-policy"
-FORMAT_VERSION = 1
+FORMAT_VERSION = 2
+
+#: Moves of a plan shorter than this (metres, every end) are not executed: the network's
+#: rendering of a still move.
+MIN_MOVE = 0.002
 
 
 @dataclass(frozen=True)
@@ -40,6 +50,8 @@ class DistilledConfig:
         n_points: Points of the cord.
         width: Hidden units per layer.
         depth: Hidden layers.
+        moves: Straight moves of a plan (latent-mpc's longest horizon; shorter plans end in
+            still moves).
         move_scale: Moves are output in units of this, metres.
         max_step: The environments' ``max_step``, metres.
     """
@@ -48,13 +60,14 @@ class DistilledConfig:
     n_points: int = 20
     width: int = 256
     depth: int = 3
+    moves: int = 5
     move_scale: float = 0.2
     max_step: float = DEFAULT_MAX_STEP
 
     @property
     def outputs(self) -> int:
-        """Numbers of one move: 2 per held end."""
-        return 2 * len(GRASP_ENDS[self.grasp])
+        """Numbers of one plan: 2 per held end and move."""
+        return 2 * len(GRASP_ENDS[self.grasp]) * self.moves
 
 
 def cord_frame(shapes: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -78,19 +91,20 @@ def features(shapes: np.ndarray, goals: np.ndarray) -> tuple[np.ndarray, np.ndar
                            axis=1).astype(np.float32), rotation)
 
 
-def to_world(moves: np.ndarray, rotation: np.ndarray) -> np.ndarray:
-    """Moves ``(B, ends * 2)`` in the cords' frames -> world ``(B, ends, 2)``."""
-    m = moves.reshape(len(moves), -1, 2)
-    return np.einsum("bji,bej->bei", rotation, m)
+def to_world(plans: np.ndarray, rotation: np.ndarray, ends: int) -> np.ndarray:
+    """Plans ``(B, moves * ends * 2)`` in the cords' frames -> world ``(B, moves, ends, 2)``."""
+    m = plans.reshape(len(plans), -1, ends, 2)
+    return np.einsum("bji,bmej->bmei", rotation, m)
 
 
-def to_frame(moves: np.ndarray, rotation: np.ndarray) -> np.ndarray:
-    """World moves ``(B, ends, 2)`` -> ``(B, ends * 2)`` in the cords' frames."""
-    return np.einsum("bij,bej->bei", rotation, moves).reshape(len(moves), -1)
+def to_frame(plans: np.ndarray, rotation: np.ndarray) -> np.ndarray:
+    """World plans ``(B, moves, ends, 2)`` -> ``(B, moves * ends * 2)`` in the cords'
+    frames."""
+    return np.einsum("bij,bmej->bmei", rotation, plans).reshape(len(plans), -1)
 
 
 class MoveNetwork(nn.Module):
-    """An MLP from ``features`` to a move in the cord's frame (units of ``move_scale``)."""
+    """An MLP from ``features`` to a plan in the cord's frame (units of ``move_scale``)."""
 
     def __init__(self, config: DistilledConfig) -> None:
         super().__init__()
@@ -106,11 +120,11 @@ class MoveNetwork(nn.Module):
         return self.net(x)
 
     @torch.no_grad()
-    def moves(self, shapes: np.ndarray, goals: np.ndarray) -> np.ndarray:
-        """World moves ``(B, ends, 2)`` (metres) from cords and goals ``(B, n, 2)``."""
+    def plans(self, shapes: np.ndarray, goals: np.ndarray) -> np.ndarray:
+        """World plans ``(B, moves, ends, 2)`` (metres) from cords and goals ``(B, n, 2)``."""
         x, rotation = features(shapes, goals)
         out = self(torch.from_numpy(x)).numpy() * self.config.move_scale
-        return to_world(out, rotation)
+        return to_world(out, rotation, len(GRASP_ENDS[self.config.grasp]))
 
     def save(self, path: str | os.PathLike, info: dict[str, Any] | None = None) -> Path:
         """Write the network (float32 weights, its config and ``info``) atomically."""
@@ -165,14 +179,30 @@ class DistilledPolicy(CEMPolicy):
         return cls(network, base.success_threshold, base.params,
                    success_metric=base.success_metric)
 
+    def training_cost(self) -> tuple[int, str]:
+        """The real-env steps the network trained on (0: all in the surrogate) and its
+        sample cost in words, from its file's ``info``."""
+        info = getattr(self.network, "info", {})
+        plans, moves = info.get("expert_plans"), info.get("surrogate_moves")
+        steps = int(info.get("real_env_steps", 0))
+        if plans is None:
+            return steps, "unknown (the network does not record it)"
+        return steps, (f"{steps} env steps + {int(moves):,} surrogate moves "
+                       f"({int(plans):,} latent-mpc plans)")
+
     def plan(self, shape: np.ndarray, goal: np.ndarray) -> tuple[np.ndarray, float]:
-        """The network's move ``(1, ends, 2)``; its error is not predicted (NaN)."""
+        """The network's plan ``(moves, ends, 2)``; its error is not predicted (NaN)."""
         t0 = time.perf_counter()
-        move = self.network.moves(shape[None].astype(np.float32), goal[None].astype(np.float32))
+        plan = self.network.plans(shape[None].astype(np.float32),
+                                  goal[None].astype(np.float32))[0]
         self.stats.plans += 1
         self.stats.seconds += time.perf_counter() - t0
-        return move.astype(np.float64), float("nan")
+        return plan.astype(np.float64), float("nan")
 
     def _execute(self, plan: np.ndarray) -> list[np.ndarray]:
+        """Every move of the plan longer than ``MIN_MOVE`` (the first one when none is), each
+        followed by zero actions while the cord comes to rest."""
         zero = np.zeros(2 * len(self.ends), dtype=np.float32)
-        return self._actions(plan[:1]) + [zero] * self.config.settle_actions
+        kept = [m for m in plan if np.linalg.norm(m, axis=-1).max() > MIN_MOVE] or [plan[0]]
+        return [a for m in kept for a in self._actions(m[None]) + [zero] *
+                self.config.settle_actions]

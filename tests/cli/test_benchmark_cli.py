@@ -14,7 +14,7 @@ from dlo_bench.report import threshold_label
 from dlo_cli.main import main
 
 AGENTS = ["straight-line", "latent-tree", "latent-tree-closed", "latent-tree-kino", "physics-mpc",
-          "latent-mpc", "grad-mpc", "ppo",
+          "latent-mpc", "grad-mpc", "latent-mpc-distilled", "ppo",
           "sac-her", "ppo-surrogate", "bc"]
 ROW_KEYS = {"agent", "difficulty", "success_rate", "median_error", "seconds_per_episode",
             "training_env_steps", "status"}
@@ -38,6 +38,7 @@ def models(tmp_path_factory):
     ShapeModel(ModelConfig(), Normalisation(), device="cpu").save(root / "shape.pt")
     shutil.copytree(shipped_baseline("bc"), root / "bc")  # trained offline: no extra needed
     shutil.copytree(shipped_baseline("ppo-surrogate"), root / "ppo-surrogate")
+    shutil.copytree(shipped_baseline("latent-mpc-distilled"), root / "latent-mpc-distilled")
     return root
 
 
@@ -71,6 +72,7 @@ def test_quick_benchmark_writes_every_agent_and_difficulty(models, tmp_path, cap
     assert costs["sac-her"] == "256 env steps"
     assert "env steps" in costs["latent-mpc"] and "simulated shapes" in costs["latent-tree"]
     assert costs["physics-mpc"].startswith("none")
+    assert costs["latent-mpc-distilled"].startswith("0 env steps + ")  # all in the surrogate
     table = (out / "results.md").read_text()
     assert "| physics-mpc | endpoint | linear-1 | 2 cm | 1 |" in table and "Machine:" in table
     assert "## Success at 2 cm\n\n| agent | endpoint d1 | sample cost |" in table
