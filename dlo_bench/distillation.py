@@ -101,17 +101,12 @@ def _roll_out(dynamics: Any, shapes: np.ndarray, plans: np.ndarray) -> np.ndarra
     return state.numpy()
 
 
-def mirrored(x: np.ndarray) -> np.ndarray:
-    """Features or labels (interleaved x, y in the cord's frame) reflected about the x-axis."""
-    out = x.copy()
-    out[:, 1::2] *= -1
-    return out
-
-
 def _fit(net: MoveNetwork, x: np.ndarray, y: np.ndarray, config: DistillConfig,
          rng: np.random.Generator) -> float:
     """Train ``net`` on every label (and its mirror image); the last epoch's mean loss."""
     import torch
+
+    from planners.distilled import mirrored
 
     if config.mirror:
         x, y = np.concatenate([x, mirrored(x)]), np.concatenate([y, mirrored(y)])

@@ -52,6 +52,8 @@ class DistilledConfig:
         depth: Hidden layers.
         moves: Straight moves of a plan (latent-mpc's longest horizon; shorter plans end in
             still moves).
+        symmetric: Answer with the mean of the plan for the task and the mirrored plan for
+            its mirror image, so that the policy is exactly mirror-symmetric.
         move_scale: Moves are output in units of this, metres.
         max_step: The environments' ``max_step``, metres.
     """
@@ -61,6 +63,7 @@ class DistilledConfig:
     width: int = 256
     depth: int = 3
     moves: int = 5
+    symmetric: bool = True
     move_scale: float = 0.2
     max_step: float = DEFAULT_MAX_STEP
 
@@ -89,6 +92,14 @@ def features(shapes: np.ndarray, goals: np.ndarray) -> tuple[np.ndarray, np.ndar
     goal = np.einsum("bij,bnj->bni", rotation, goals - origin[:, None])
     return (np.concatenate([cord.reshape(len(shapes), -1), goal.reshape(len(shapes), -1)],
                            axis=1).astype(np.float32), rotation)
+
+
+def mirrored(x: np.ndarray) -> np.ndarray:
+    """Features or plans (interleaved x, y in the cord's frame) reflected about the frame's
+    x-axis: those of the mirror image of the task (the table's physics is mirror-symmetric)."""
+    out = x.copy()
+    out[:, 1::2] *= -1
+    return out
 
 
 def to_world(plans: np.ndarray, rotation: np.ndarray, ends: int) -> np.ndarray:
@@ -123,8 +134,13 @@ class MoveNetwork(nn.Module):
     def plans(self, shapes: np.ndarray, goals: np.ndarray) -> np.ndarray:
         """World plans ``(B, moves, ends, 2)`` (metres) from cords and goals ``(B, n, 2)``."""
         x, rotation = features(shapes, goals)
-        out = self(torch.from_numpy(x)).numpy() * self.config.move_scale
-        return to_world(out, rotation, len(GRASP_ENDS[self.config.grasp]))
+        if self.config.symmetric:
+            both = self(torch.from_numpy(np.concatenate([x, mirrored(x)]))).numpy()
+            out = 0.5 * (both[:len(x)] + mirrored(both[len(x):]))
+        else:
+            out = self(torch.from_numpy(x)).numpy()
+        return to_world(out * self.config.move_scale, rotation,
+                        len(GRASP_ENDS[self.config.grasp]))
 
     def save(self, path: str | os.PathLike, info: dict[str, Any] | None = None) -> Path:
         """Write the network (float32 weights, its config and ``info``) atomically."""

@@ -8,7 +8,7 @@ import pytest
 
 import dlo_env  # noqa: F401  (registers the environments)
 from dlo_bench.agents import build_agent
-from dlo_bench.distillation import STATE_FILE, DistillConfig, distil, mirrored
+from dlo_bench.distillation import STATE_FILE, DistillConfig, distil
 from planners.distilled import (
     MIN_MOVE,
     DistilledConfig,
@@ -16,6 +16,7 @@ from planners.distilled import (
     MoveNetwork,
     cord_frame,
     features,
+    mirrored,
     to_frame,
     to_world,
 )
@@ -75,6 +76,19 @@ def test_a_run_resumes_after_its_last_round_and_refuses_another_config(tmp_path)
     assert [r["round"] for r in MoveNetwork.load(path).info["rounds"]] == [0, 1]
     with pytest.raises(ValueError, match="another distillation"):
         distil(DistillConfig(**{**config.__dict__, "width": 8}), tmp_path, log=lambda _: None)
+
+
+def test_a_symmetric_network_answers_a_mirrored_task_with_the_mirrored_plan():
+    rng = np.random.default_rng(2)
+    shapes = np.cumsum(rng.normal(scale=0.02, size=(3, 20, 2)), axis=1).astype(np.float32)
+    goals = shapes + rng.normal(scale=0.05, size=(3, 1, 2)).astype(np.float32)
+    flip = np.array([1.0, -1.0], dtype=np.float32)
+    net = MoveNetwork(DistilledConfig(width=8))
+    assert np.allclose(net.plans(shapes * flip, goals * flip), net.plans(shapes, goals) * flip,
+                       atol=1e-6)
+    net = MoveNetwork(DistilledConfig(width=8, symmetric=False))  # an untrained one is not
+    assert not np.allclose(net.plans(shapes * flip, goals * flip),
+                           net.plans(shapes, goals) * flip, atol=1e-3)
 
 
 def test_the_policy_executes_every_real_move_of_the_plan_each_followed_by_rest():
