@@ -74,7 +74,7 @@ class AgentSpec:
         no_pegs: Why it cannot act where pegs are observed ("": it can).
         network: Whether it acts by a distilled network (``planners.distilled``): the file or
             folder ``options.baseline``, or the shipped one for the environment
-            (:func:`dlo_bench.paths.distilled_file`).
+            (``dlo_bench/pretrained/<name>[-dual-endpoint]/distilled.pt``).
         defaults: ``AgentOptions`` fields this agent sets differently.
     """
 
@@ -288,12 +288,11 @@ def _grad_mpc(env: Any, options: AgentOptions) -> Policy:
 def _network_file(spec: AgentSpec, env: Any, given: str | Path | None) -> Path:
     """The distilled network agent ``spec`` acts by in ``env``: ``given`` (a file, or a folder
     holding ``distilled.pt``) or the shipped one for the environment."""
-    from dlo_bench.paths import distilled_file
+    from dlo_bench.distillation import NETWORK_FILE
 
-    if given is None:
-        return distilled_file(spec.name, env.unwrapped.spec.id)
-    path = Path(given)
-    return path / distilled_file(spec.name).name if path.is_dir() else path
+    path = Path(given) if given is not None else shipped_baseline(spec.name,
+                                                                   env.unwrapped.spec.id)
+    return path / NETWORK_FILE if path.is_dir() or given is None else path
 
 
 def _distilled(env: Any, options: AgentOptions) -> Policy:

@@ -155,8 +155,7 @@ def load_agent(name: str, config: BenchmarkConfig, env: Any,
                      else f"{_steps(steps)} env steps" + (f" ({_steps(moves)} moves)" if moves
                                                            else ""))
     if spec.network:  # a distilled network: the baselines folder's, or the shipped one
-        options.update(baseline=_baseline_folder(name, config, env_id) if config.baselines
-                       else None)
+        options.update(baseline=_baseline_folder(name, config, env_id))
     try:
         policy = build_agent(name, env, **options)
     except ValueError as exc:  # e.g. a model made for another cord

@@ -46,14 +46,6 @@ def shipped_baseline(name: str, env_id: str = "dlo_env/DLOEndpoint-v0",
     return PRETRAINED_BASELINES / baseline_folder_name(name, env_id, pegs)
 
 
-def distilled_file(name: str, env_id: str = "dlo_env/DLOEndpoint-v0") -> Path:
-    """The shipped network of the distilled agent ``name`` for ``env_id``:
-    ``dlo_bench/pretrained/<name>[-dual-endpoint]/distilled.pt``."""
-    from dlo_bench.distillation import NETWORK_FILE
-
-    return PRETRAINED_BASELINES / baseline_folder_name(name, env_id) / NETWORK_FILE
-
-
 def shape_model_file(path: str | os.PathLike | None) -> Path:
     """The file of a shape model: ``path`` (a file, or a folder holding ``model.pt``), or the
     shipped ``latent_model/pretrained/model.pt`` when None or empty."""
