@@ -99,6 +99,15 @@ def save_interpolation_png(
     return _save(fig, path, dpi=110)
 
 
+def _bar_style(i: int) -> dict[str, Any]:
+    """The ``i``-th agent's bars: the ten colours of matplotlib's cycle, hatched from the
+    eleventh agent on, so that no two agents look alike."""
+    style: dict[str, Any] = {"color": f"C{i % 10}"}
+    if i >= 10:
+        style.update(hatch="//" if i < 20 else "..", edgecolor="white", linewidth=0)
+    return style
+
+
 def plot_results(rows: list[dict[str, Any]], png: str | os.PathLike) -> None:
     """Bar charts of success rate, median error at rest and seconds per episode (missing rows
     skipped), at the headline threshold when the rows have several."""
@@ -123,7 +132,8 @@ def plot_results(rows: list[dict[str, Any]], png: str | os.PathLike) -> None:
             for cell in cells:
                 v = by.get((agent, cell), {}).get(key)
                 values.append(np.nan if v is None else v * scale)
-            ax.bar(x + (i - (len(agents) - 1) / 2) * width, values, width, label=agent)
+            ax.bar(x + (i - (len(agents) - 1) / 2) * width, values, width, label=agent,
+                   **_bar_style(i))
         ax.set_xticks(x, [c.replace(" ", "\n", 1) for c in cells], fontsize=8)  # env, cell
         ax.set_ylabel(label)
         if log:
