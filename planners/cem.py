@@ -238,6 +238,8 @@ class CEMPolicy(EpisodicPolicy):
             elite = candidates[order[: cfg.elites]]
             mean, std = elite.mean(axis=0), elite.std(axis=0) + 1e-3
         best_plan, best_err = self._choose(shape, goal, pool, pool_errors)
+        if best_err > cfg.stop_fraction * self.success_threshold:
+            best_plan, best_err = self._refine(shape, goal, best_plan, best_err)
         # Next call starts from the rest of this plan (shifted), the usual MPC warm start.
         self._mean = np.concatenate([best_plan[1:], np.zeros((1,) + dims[1:])])
         self.stats.plans += 1
@@ -253,6 +255,13 @@ class CEMPolicy(EpisodicPolicy):
         """The plan to execute among the ``keep`` best scored ``plans`` (best first) and its
         error: the best one (a subclass may check them further)."""
         return plans[0].copy(), float(errors[0])
+
+    def _refine(self, shape: np.ndarray, goal: np.ndarray, plan: np.ndarray, error: float
+                ) -> tuple[np.ndarray, float]:
+        """The plan to execute, given the search's ``plan`` and its ``error`` where that is not
+        predicted within ``stop_fraction`` of the threshold: ``plan`` itself (a subclass may
+        improve it)."""
+        return plan, error
 
     def _straight_plans(self, shape: np.ndarray, goal: np.ndarray, moves: int) -> np.ndarray:
         """``(k, moves, ends, 2)``: the held end(s) straight to the goal's in as few equal

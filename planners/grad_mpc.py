@@ -11,7 +11,6 @@ With ``cem_iterations`` the gradient's best plan also seeds a short CEM search (
 
 from __future__ import annotations
 
-import math
 import time
 from dataclasses import dataclass
 from typing import Any
@@ -20,6 +19,7 @@ import numpy as np
 
 from dlo_env.core.checks import non_negative_ints, positive, positive_ints
 from dlo_env.errors import InputError
+from planners.gradient_search import clip_moves, descend
 from planners.latent_mpc import LatentMPCConfig, LatentMPCPolicy
 
 
@@ -87,7 +87,6 @@ class GradMPCPolicy(LatentMPCPolicy):
         Returns:
             The best plan ``(moves, ends, 2)`` (metres) and its predicted error.
         """
-        import torch
 
         cfg = self.config
         t0 = time.perf_counter()
@@ -109,25 +108,12 @@ class GradMPCPolicy(LatentMPCPolicy):
         # A move of exactly zero leaves the cord where it is, so it has no gradient: nudge it.
         still = np.linalg.norm(start, axis=-1, keepdims=True) == 0
         start = np.where(still, cfg.min_std * self._rng.standard_normal(start.shape), start)
-        plans = torch.tensor(self._clip(start), dtype=torch.float32, requires_grad=True)
-        origin = torch.from_numpy(shape.astype(np.float32)).expand(cfg.samples, -1, -1)
-        target = torch.from_numpy(goal.astype(np.float32))
-        optimizer = torch.optim.Adam([plans], lr=cfg.learning_rate)
-        best_plan, best_err = mean, math.inf
-        for step in range(cfg.grad_steps + 1):
-            errors = self._rollout_errors(origin, plans, target)
-            err = errors.detach().numpy()
-            i = int(np.argmin(err))
-            if err[i] < best_err:
-                best_err, best_plan = float(err[i]), plans.detach()[i].numpy().astype(np.float64)
-            self.stats.rollouts += cfg.samples
-            if best_err <= cfg.stop_fraction * self.success_threshold or step == cfg.grad_steps:
-                break
-            optimizer.zero_grad()
-            errors.sum().backward()
-            optimizer.step()
-            with torch.no_grad():
-                plans.copy_(torch.from_numpy(self._clip(plans.detach().numpy())))
+        best_plan, best_err, rollouts = descend(
+            self.dynamics, shape, goal, start, steps=cfg.grad_steps,
+            learning_rate=cfg.learning_rate, max_move=cfg.max_move,
+            stop_error=cfg.stop_fraction * self.success_threshold,
+            direction_free=self.success_metric == "direction_free_error")
+        self.stats.rollouts += rollouts
         if cfg.cem_iterations and best_err > cfg.stop_fraction * self.success_threshold:
             best_plan, best_err = self._cem_from(shape, goal, best_plan, best_err)
         self._mean = np.concatenate([best_plan[1:], np.zeros((1,) + dims[1:])])
@@ -135,25 +121,6 @@ class GradMPCPolicy(LatentMPCPolicy):
         self.stats.seconds += time.perf_counter() - t0
         self.stats.predicted_errors.append(best_err)
         return best_plan, best_err
-
-    def _clip(self, plans: np.ndarray) -> np.ndarray:
-        """Every move of every end at most ``config.max_move`` long."""
-        norms = np.linalg.norm(plans, axis=-1, keepdims=True)
-        return (plans * np.minimum(1.0, self.config.max_move / np.maximum(norms, 1e-12))
-                ).astype(np.float32)
-
-    def _rollout_errors(self, origin: Any, plans: Any, target: Any) -> Any:
-        """``(S,)`` errors to ``target`` of the plans' final shapes (differentiable)."""
-        import torch
-
-        shapes = origin
-        for k in range(plans.shape[1]):
-            shapes = self.dynamics.step(shapes, plans[:, k].reshape(len(plans), -1))
-        errors = (shapes - target).norm(dim=-1).mean(dim=-1)
-        if self.success_metric == "direction_free_error":
-            reverse = (shapes - target.flip(0)).norm(dim=-1).mean(dim=-1)
-            errors = torch.minimum(errors, reverse)
-        return errors
 
     def _cem_from(self, shape: np.ndarray, goal: np.ndarray, plan: np.ndarray, err: float
                   ) -> tuple[np.ndarray, float]:
@@ -163,7 +130,7 @@ class GradMPCPolicy(LatentMPCPolicy):
         for _ in range(cfg.cem_iterations):
             candidates = mean + std * self._rng.standard_normal((cfg.samples * 8,) + plan.shape)
             candidates[0] = mean
-            candidates = self._clip(candidates).astype(np.float64)
+            candidates = clip_moves(candidates, cfg.max_move).astype(np.float64)
             errors = self._score(shape, goal, candidates)
             self.stats.rollouts += len(candidates)
             order = np.argsort(errors)

@@ -16,7 +16,7 @@ from typing import Any
 
 import numpy as np
 
-from dlo_env.core.checks import non_negative, non_negative_ints, positive_ints
+from dlo_env.core.checks import non_negative, non_negative_ints, positive, positive_ints
 from dlo_env.errors import InputError
 from planners.cem import LATER, CEMConfig, CEMPolicy
 from planners.observation import CordObservation
@@ -52,6 +52,15 @@ class LatentMPCConfig(CEMConfig):
             0: none, the model's best plan. The simulation counts in the planning time.
         verify_settle: Control periods simulated with the grippers still after a verified
             move.
+        polish_steps: Where the search's best plan is not predicted within ``stop_fraction``
+            of the threshold, Adam steps on it and ``polish_samples - 1`` plans around it
+            through the differentiable model (``planners.gradient_search``, grad-mpc's
+            descent); the polished plan is taken where the search's own scoring predicts it
+            better. 0: none. Not with ``verify`` or among observed pegs (the differentiable
+            step models the empty table).
+        polish_samples: Plans descended together (the search's best and ones around it).
+        polish_std: Standard deviation of the plans around the best, metres.
+        polish_rate: Adam's step size, metres.
     """
 
     moves: int = 3
@@ -71,11 +80,18 @@ class LatentMPCConfig(CEMConfig):
     inextensible: bool = False
     verify: int = field(default=0, metadata=LATER)
     verify_settle: int = field(default=2, metadata=LATER)
+    polish_steps: int = field(default=0, metadata=LATER)
+    polish_samples: int = field(default=8, metadata=LATER)
+    polish_std: float = field(default=0.01, metadata=LATER)
+    polish_rate: float = field(default=0.01, metadata=LATER)
 
     def __post_init__(self) -> None:
         super().__post_init__()
         non_negative(self, "spread_weight")
-        non_negative_ints(self, "settle_actions", "verify", "verify_settle")
+        non_negative_ints(self, "settle_actions", "verify", "verify_settle", "polish_steps")
+        positive_ints(self, "polish_samples")
+        positive(self, "polish_rate")
+        non_negative(self, "polish_std")
         if self.members is not None:
             positive_ints(self, "members")
         if self.spread_weight > 0 and self.members == 1:
@@ -215,6 +231,37 @@ class LatentMPCPolicy(CEMPolicy):
         scores = np.asarray(self._distance(shapes, goal), dtype=np.float64)
         best = int(np.argmin(scores))
         return plans[best].copy(), float(scores[best])
+
+    def _refine(self, shape: np.ndarray, goal: np.ndarray, plan: np.ndarray, error: float
+                ) -> tuple[np.ndarray, float]:
+        """With ``config.polish_steps``, ``plan`` polished by gradient steps through the
+        differentiable model where the search's scoring predicts the result better."""
+        from planners.gradient_search import descend
+
+        cfg = self.config
+        pegs = getattr(self, "_pegs", None)
+        if (not cfg.polish_steps or cfg.verify or (pegs is not None and len(pegs))
+                or getattr(self.model.config, "peg_reach", False)):
+            return plan, error
+        dynamics = getattr(self, "_dynamics", None)
+        if dynamics is None:
+            from latent_model.cord_dynamics import CordDynamics
+            from latent_model.inextensible import ITERATIONS
+
+            dynamics = self._dynamics = CordDynamics(
+                self.model, self.grasp, params=self.cord,
+                inextensible_iterations=ITERATIONS if cfg.inextensible else 0)
+        starts = plan + cfg.polish_std * self._rng.standard_normal(
+            (cfg.polish_samples,) + plan.shape)
+        starts[0] = plan
+        polished, _, rollouts = descend(
+            dynamics, shape, goal, starts, steps=cfg.polish_steps,
+            learning_rate=cfg.polish_rate, max_move=cfg.max_move,
+            stop_error=cfg.stop_fraction * self.success_threshold,
+            direction_free=self.success_metric == "direction_free_error")
+        score = float(self._score(shape, goal, polished[None])[0])
+        self.stats.rollouts += rollouts + 1
+        return (polished, score) if score < error else (plan, error)
 
     def _act(self, obs: CordObservation) -> np.ndarray:
         """Plan with the pegs the observation shows (their stop rule on the grippers), then act

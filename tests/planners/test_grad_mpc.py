@@ -43,3 +43,38 @@ def test_config_is_checked():
         GradMPCConfig(grad_steps=0)
     with pytest.raises(ValueError, match="learning_rate"):
         GradMPCConfig(learning_rate=-1.0)
+
+
+def test_latent_mpc_polish_takes_a_better_plan_only():
+    """latent-mpc's polish: the search's best plan, descended, replaces it only where the
+    search's own scoring predicts the result better; a search that already reaches the goal
+    is not polished."""
+    from planners.latent_mpc import LatentMPCConfig, LatentMPCPolicy
+
+    env = gym.make("dlo_env/DLOEndpoint-v0", success_threshold=0.005)
+    task = load_suite("linear-3", "train", limit=1)[0]
+    start, goal = task.start.astype(np.float64), task.goal.astype(np.float64)
+    weak = dict(samples=8, elites=2, iterations=1, stop_fraction=0.5)  # a search that misses
+    plain = LatentMPCPolicy.for_env(env, LatentMPCConfig(**weak))
+    polished = LatentMPCPolicy.for_env(env, LatentMPCConfig(**weak, polish_steps=30))
+    plan, error = plain.plan(start, goal)
+    better, better_error = polished.plan(start, goal)
+    assert error > 0.5 * 0.005  # the search alone is not predicted within the stop
+    assert better_error < error
+    assert not np.allclose(plan, better)
+    assert better_error == pytest.approx(polished._score(start, goal, better[None])[0])
+    assert polished.stats.rollouts > plain.stats.rollouts
+    done = LatentMPCPolicy.for_env(env, LatentMPCConfig(**weak, polish_steps=30))
+    near = load_suite("linear-1", "train", limit=1)[0]
+    _, done_error = done.plan(near.goal.astype(np.float64), near.goal.astype(np.float64))
+    assert done_error <= 0.5 * 0.005
+    assert done.stats.rollouts == 8  # one iteration, no polish
+
+
+def test_latent_mpc_polish_config_is_checked():
+    from planners.latent_mpc import LatentMPCConfig
+
+    with pytest.raises(ValueError, match="polish_steps"):
+        LatentMPCConfig(polish_steps=-1)
+    with pytest.raises(ValueError, match="polish_samples"):
+        LatentMPCConfig(polish_samples=0)
