@@ -127,6 +127,13 @@ class AdaptiveLatentMPCPolicy(LatentMPCPolicy):
         policy.peg_radius = base.peg_radius  # of the pegs it will observe
         return policy
 
+    def _polish_cord(self) -> Any:
+        """The polish predicts the cord fitted so far."""
+        from dataclasses import replace
+
+        return replace(self.model.cord_params, **dict(zip(PARAM_COLUMNS, map(float,
+                                                                             self.cord_row))))
+
     def reset(self) -> None:
         """Forget the plan, the moves seen and the fitted cord (back to the default cord)."""
         super().reset()

@@ -12,7 +12,7 @@ With ``cem_iterations`` the gradient's best plan also seeds a short CEM search (
 from __future__ import annotations
 
 import time
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
@@ -45,6 +45,11 @@ class GradMPCConfig(LatentMPCConfig):
     learning_rate: float = 0.01
     cem_iterations: int = 0
     projection_iterations: int = 0
+    # latent-mpc's polish of a sampled plan; grad-mpc descends every plan (unused, unshown).
+    polish_steps: int = field(default=0, repr=False)
+    polish_samples: int = field(default=8, repr=False)
+    polish_std: float = field(default=0.01, repr=False)
+    polish_rate: float = field(default=0.01, repr=False)
 
     def __post_init__(self) -> None:
         super().__post_init__()

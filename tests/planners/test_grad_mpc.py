@@ -55,7 +55,7 @@ def test_latent_mpc_polish_takes_a_better_plan_only():
     task = load_suite("linear-3", "train", limit=1)[0]
     start, goal = task.start.astype(np.float64), task.goal.astype(np.float64)
     weak = dict(samples=8, elites=2, iterations=1, stop_fraction=0.5)  # a search that misses
-    plain = LatentMPCPolicy.for_env(env, LatentMPCConfig(**weak))
+    plain = LatentMPCPolicy.for_env(env, LatentMPCConfig(**weak, polish_steps=0))
     polished = LatentMPCPolicy.for_env(env, LatentMPCConfig(**weak, polish_steps=30))
     plan, error = plain.plan(start, goal)
     better, better_error = polished.plan(start, goal)
