@@ -432,6 +432,13 @@ AGENTS: dict[str, AgentSpec] = {spec.name: spec for spec in (
                     "--success-threshold 0.01 --timesteps 5000000 --set ppo_n_steps=64 "
                     "ppo_batch_size=2048 ppo_epochs=5 --env {env}",
               no_pegs="it trained in the surrogate, which models the empty table"),
+    AgentSpec("sac-her-surrogate", "SAC + HER trained in the surrogate environment (the learned "
+              "cord), no pymunk step", _sb3("sac-her", "sac-her-surrogate"),
+              environments=(ENDPOINT, DUAL_ENDPOINT), extra="rl",
+              train="dlo baseline --algo sac-her --surrogate --n-envs 64 --difficulty 1 2 3 4 5 "
+                    "--success-threshold 0.01 --timesteps 1000000 --set "
+                    "sac_learning_starts=10000 sac_gradient_steps=8 --env {env}",
+              no_pegs="it trained in the surrogate, which models the empty table"),
     AgentSpec("bc", "behaviour cloning of the oracle demonstrations (Minari datasets)", _bc,
               environments=(ENDPOINT, DUAL_ENDPOINT), extra="rl",
               train="dlo_bench.behaviour_cloning.train_bc for {env}",
