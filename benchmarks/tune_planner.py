@@ -1,4 +1,4 @@
-"""Tune a CEM planner's budget (latent-mpc or physics-mpc) on the train splits, per threshold.
+"""Tune a planner's budget (latent-mpc, grad-mpc or physics-mpc) on the train splits, per threshold.
 
 Every configuration of a grid runs on the first ``--episodes`` train tasks of each suite, at
 each success threshold (judged at rest, the planner's stopping rule taken from it), on one
@@ -15,8 +15,8 @@ every threshold), with the sweep quoted in ``docs/history.md``. Test splits are 
 
 ``--grid`` is a JSON object of config fields to lists of values (``null`` is None; the other
 fields keep their defaults, elites a tenth of the samples when samples are swept);
-``--model`` tunes latent-mpc for another transition model file; ``--jobs`` runs that many
-(configuration, suite, threshold) cells at once in worker processes.
+``--model`` tunes latent-mpc or grad-mpc for another transition model file; ``--jobs`` runs
+that many (configuration, suite, threshold) cells at once in worker processes.
 """
 
 from __future__ import annotations
@@ -36,6 +36,7 @@ import numpy as np
 GRIDS = {
     "latent-mpc": {"members": (1, 5), "samples": (64, 256), "iterations": (3, 5),
                    "moves": (2, 3), "stop_fraction": (0.0, 0.5)},
+    "grad-mpc": {"samples": (4, 16), "grad_steps": (10, 40)},
     "physics-mpc": {"replan_every": (8, None), "samples": (32, 64), "moves": (2, 3)},
 }
 SUITES = ("linear-1", "linear-2", "linear-3", "linear-4", "linear-5")
@@ -43,10 +44,12 @@ ENVS = {"endpoint": "dlo_env/DLOEndpoint-v0", "dual": "dlo_env/DLODualEndpoint-v
 
 
 def _config(agent: str, setting: dict[str, Any]) -> Any:
+    from planners.grad_mpc import GradMPCConfig
     from planners.latent_mpc import LatentMPCConfig
     from planners.physics_mpc import PhysicsMPCConfig
 
-    kind = LatentMPCConfig if agent == "latent-mpc" else PhysicsMPCConfig
+    kind = {"latent-mpc": LatentMPCConfig, "grad-mpc": GradMPCConfig}.get(agent,
+                                                                         PhysicsMPCConfig)
     setting = {k: tuple(v) if isinstance(v, list) else v for k, v in setting.items()}  # JSON
     if "samples" in setting and "elites" not in setting:
         setting = {**setting, "elites": max(2, setting["samples"] // 10)}
@@ -66,11 +69,13 @@ def run_cell(agent: str, env_id: str, setting: dict[str, Any], suite: str, thres
     kwargs = {**task_env_kwargs(suite=suite), "success_threshold": threshold}
     env = gym.make(env_id, **kwargs)  # the suite's environment (designed: direction-free)
     config = _config(agent, setting)
-    if agent == "latent-mpc":
+    if agent in ("latent-mpc", "grad-mpc"):
         from latent_model import TransitionModel
+        from planners.grad_mpc import GradMPCPolicy
         from planners.latent_mpc import LatentMPCPolicy
 
-        policy = LatentMPCPolicy.for_env(
+        kind = LatentMPCPolicy if agent == "latent-mpc" else GradMPCPolicy
+        policy = kind.for_env(
             env, config, model=TransitionModel.load_or_pretrained(model, device="cpu"))
     else:
         from planners.physics_mpc import PhysicsMPCPolicy
