@@ -15,7 +15,7 @@ from dlo_cli.main import main
 
 AGENTS = ["straight-line", "latent-tree", "latent-tree-closed", "latent-tree-kino", "physics-mpc",
           "latent-mpc", "grad-mpc", "latent-mpc-distilled", "ppo",
-          "sac-her", "ppo-surrogate", "bc"]
+          "sac-her", "ppo-surrogate", "sac-her-surrogate", "bc"]
 ROW_KEYS = {"agent", "difficulty", "success_rate", "median_error", "seconds_per_episode",
             "training_env_steps", "status"}
 
@@ -37,7 +37,8 @@ def models(tmp_path_factory):
         train_baseline(BaselineConfig(algo=algo, **tiny), root / algo, progress_bar=False)
     ShapeModel(ModelConfig(), Normalisation(), device="cpu").save(root / "shape.pt")
     shutil.copytree(shipped_baseline("bc"), root / "bc")  # trained offline: no extra needed
-    shutil.copytree(shipped_baseline("ppo-surrogate"), root / "ppo-surrogate")
+    for trained_in_surrogate in ("ppo-surrogate", "sac-her-surrogate"):
+        shutil.copytree(shipped_baseline(trained_in_surrogate), root / trained_in_surrogate)
     shutil.copytree(shipped_baseline("latent-mpc-distilled"), root / "latent-mpc-distilled")
     return root
 
