@@ -108,7 +108,8 @@ def main() -> None:
     parser.add_argument("--grid", default=None,
                         help="JSON object of config fields to lists of values")
     parser.add_argument("--model", default=None,
-                        help="latent-mpc's transition model file (default: the shipped one)")
+                        help="latent-mpc's or grad-mpc's transition model file (default: the "
+                             "shipped one)")
     parser.add_argument("--jobs", type=int, default=1, help="worker processes")
     parser.add_argument("--out", default="runs/tune-planner", help="output folder")
     args = parser.parse_args()

@@ -162,8 +162,9 @@ def distil(config: DistillConfig, out: str | os.PathLike,
     model.requires_grad_(False)
     cords = SurrogateCords(config.tasks_per_round, config.grasp, model, "cpu", None,
                            model.config.max_step)
+    # The shipped networks' expert: latent-mpc's CEM without the gradient polish.
     expert = LatentMPCPolicy(model, config.grasp, success_threshold=config.threshold,
-                             config=LatentMPCConfig(seed=config.seed))
+                             config=LatentMPCConfig(seed=config.seed, polish_steps=0))
     horizon = max(expert.config.moves, expert.config.far_moves)
     net = MoveNetwork(DistilledConfig(grasp=config.grasp, width=config.width, moves=horizon,
                                       max_step=model.config.max_step))

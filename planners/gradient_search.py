@@ -77,8 +77,8 @@ def descend(dynamics: Any, shape: np.ndarray, goal: np.ndarray, starts: np.ndarr
         rollouts += len(starts)
         if best_err <= stop_error or step == steps:
             break
-        optimizer.zero_grad()
-        errors.sum().backward()
+        # The gradient to the plans alone (the model's weights get none and keep no .grad).
+        (plans.grad,) = torch.autograd.grad(errors.sum(), plans)
         optimizer.step()
         with torch.no_grad():
             plans.copy_(torch.from_numpy(clip_moves(plans.detach().numpy(), max_move)))

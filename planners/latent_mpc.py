@@ -60,8 +60,9 @@ class LatentMPCConfig(CEMConfig):
             of the threshold, Adam steps on it and ``polish_samples - 1`` plans around it
             through the differentiable model (``planners.gradient_search``, grad-mpc's
             descent); the polished plan is taken where the search's own scoring predicts it
-            better. 0: none. Not with ``verify`` or among observed pegs (the differentiable
-            step models the empty table).
+            better. 0: none. Not with ``verify``, among observed pegs or with a model that
+            sees pegs (the differentiable step models the empty table), nor with ``members``
+            or ``spread_weight`` set (it descends the mean network alone).
         polish_samples: Plans descended together (the search's best and ones around it).
         polish_std: Standard deviation of the plans around the best, metres.
         polish_rate: Adam's step size, metres.
@@ -245,7 +246,8 @@ class LatentMPCPolicy(CEMPolicy):
         cfg = self.config
         pegs = getattr(self, "_pegs", None)
         if (not cfg.polish_steps or cfg.verify or (pegs is not None and len(pegs))
-                or getattr(self.model.config, "peg_reach", False)):
+                or getattr(self.model.config, "peg_reach", False)
+                or cfg.members is not None or cfg.spread_weight > 0):
             return plan, error
         dynamics = self._differentiable_step()
         starts = plan + cfg.polish_std * self._rng.standard_normal(

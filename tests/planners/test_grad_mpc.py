@@ -78,3 +78,35 @@ def test_latent_mpc_polish_config_is_checked():
         LatentMPCConfig(polish_steps=-1)
     with pytest.raises(ValueError, match="polish_samples"):
         LatentMPCConfig(polish_samples=0)
+    with pytest.raises(ValueError, match="polish_rate"):
+        LatentMPCConfig(polish_rate=0.0)
+    with pytest.raises(ValueError, match="polish_std"):
+        LatentMPCConfig(polish_std=-0.01)
+
+
+def test_latent_mpc_keeps_its_plan_when_the_polish_is_worse_or_not_allowed(monkeypatch):
+    """A polished plan that latent-mpc's own scoring finds worse is dropped; with ``members``
+    or ``verify`` set the polish does not run."""
+    import planners.gradient_search as gradient_search
+    from planners.latent_mpc import LatentMPCConfig, LatentMPCPolicy
+
+    env = gym.make("dlo_env/DLOEndpoint-v0", success_threshold=0.005)
+    task = load_suite("linear-3", "train", limit=1)[0]
+    start, goal = task.start.astype(np.float64), task.goal.astype(np.float64)
+    weak = dict(samples=8, elites=2, iterations=1, stop_fraction=0.5)
+    _, searched = LatentMPCPolicy.for_env(env, LatentMPCConfig(**weak, polish_steps=0)).plan(
+        start, goal)
+    calls = []
+
+    def still(dynamics, shape, goal, starts, **kw):  # every end held where it is
+        calls.append(len(starts))
+        return np.zeros_like(starts[0]), 0.0, len(starts)
+
+    monkeypatch.setattr(gradient_search, "descend", still)
+    policy = LatentMPCPolicy.for_env(env, LatentMPCConfig(**weak, polish_steps=5))
+    plan, error = policy.plan(start, goal)
+    assert calls == [8] and error == searched and np.abs(plan).sum() > 0
+    for other in (dict(members=1), dict(verify=2)):
+        LatentMPCPolicy.for_env(env, LatentMPCConfig(**weak, polish_steps=5, **other)).plan(
+            start, goal)
+    assert calls == [8]
