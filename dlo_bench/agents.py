@@ -285,6 +285,18 @@ def _grad_mpc(env: Any, options: AgentOptions) -> Policy:
                                  model=load_transition_model(options.transition_model))
 
 
+def _surrogate_sb3(algo: str, title: str, flags: str) -> AgentSpec:
+    """The agent ``ALGO-surrogate``: SB3's ``algo`` trained in the surrogate environment on
+    difficulties 1-5, episodes ending at 1 cm, with ``dlo baseline`` ``flags``."""
+    name = f"{algo}-surrogate"
+    return AgentSpec(name, f"{title} trained in the surrogate environment (the learned cord), "
+                     "no pymunk step", _sb3(algo, name),
+                     environments=(ENDPOINT, DUAL_ENDPOINT), extra="rl",
+                     train=f"dlo baseline --algo {algo} --surrogate --difficulty 1 2 3 4 5 "
+                           f"--success-threshold 0.01 {flags} --env {{env}}",
+                     no_pegs="it trained in the surrogate, which models the empty table")
+
+
 def _network_file(spec: AgentSpec, env: Any, given: str | Path | None) -> Path:
     """The distilled network agent ``spec`` acts by in ``env``: ``given`` (a file, or a folder
     holding ``distilled.pt``) or the shipped one for the environment."""
@@ -425,20 +437,10 @@ AGENTS: dict[str, AgentSpec] = {spec.name: spec for spec in (
     AgentSpec("sac-her", "the shipped SAC + HER baseline (Stable-Baselines3)", _sb3("sac-her"),
               environments=(ENDPOINT, DUAL_ENDPOINT), extra="rl",
               train="dlo baseline --algo sac-her --env {env}"),
-    AgentSpec("ppo-surrogate", "PPO trained in the surrogate environment (the learned cord), no "
-              "pymunk step", _sb3("ppo", "ppo-surrogate"),
-              environments=(ENDPOINT, DUAL_ENDPOINT), extra="rl",
-              train="dlo baseline --algo ppo --surrogate --n-envs 256 --difficulty 1 2 3 4 5 "
-                    "--success-threshold 0.01 --timesteps 5000000 --set ppo_n_steps=64 "
-                    "ppo_batch_size=2048 ppo_epochs=5 --env {env}",
-              no_pegs="it trained in the surrogate, which models the empty table"),
-    AgentSpec("sac-her-surrogate", "SAC + HER trained in the surrogate environment (the learned "
-              "cord), no pymunk step", _sb3("sac-her", "sac-her-surrogate"),
-              environments=(ENDPOINT, DUAL_ENDPOINT), extra="rl",
-              train="dlo baseline --algo sac-her --surrogate --n-envs 64 --difficulty 1 2 3 4 5 "
-                    "--success-threshold 0.01 --timesteps 1000000 --set "
-                    "sac_learning_starts=10000 sac_gradient_steps=8 --env {env}",
-              no_pegs="it trained in the surrogate, which models the empty table"),
+    _surrogate_sb3("ppo", "PPO", "--n-envs 256 --timesteps 5000000 --set ppo_n_steps=64 "
+                   "ppo_batch_size=2048 ppo_epochs=5"),
+    _surrogate_sb3("sac-her", "SAC + HER", "--n-envs 64 --timesteps 1000000 --set "
+                   "sac_learning_starts=10000 sac_gradient_steps=8"),
     AgentSpec("bc", "behaviour cloning of the oracle demonstrations (Minari datasets)", _bc,
               environments=(ENDPOINT, DUAL_ENDPOINT), extra="rl",
               train="dlo_bench.behaviour_cloning.train_bc for {env}",
