@@ -4,8 +4,9 @@ Every configuration of a grid runs on the first ``--episodes`` train tasks of ea
 each success threshold (judged at rest, the planner's stopping rule taken from it), on one
 torch thread per process (designed suites such as ``shapes-curves`` in their environment:
 200-step episodes scored direction-free). For each it prints and writes
-(``OUT/sweep-AGENT-ENV.csv``, resumable: finished rows are kept) the success rate, the
-median error at rest and the mean planning seconds per episode. The chosen values become
+(``OUT/sweep-AGENT-ENV.csv``, resumable: a finished row is reused only for the same full
+config, model file and code commit) the success rate, the median error at rest and the mean
+planning seconds per episode. The chosen values become
 the planner's defaults by hand (``LatentMPCConfig``, ``PhysicsMPCConfig``: one setting for
 every threshold), with the sweep quoted in ``docs/history.md``. Test splits are never run.
 
@@ -23,6 +24,7 @@ from __future__ import annotations
 
 import argparse
 import csv
+import io
 import itertools
 import json
 import time
@@ -56,9 +58,22 @@ def _config(agent: str, setting: dict[str, Any]) -> Any:
     return kind(**setting)
 
 
+def fingerprint(agent: str, setting: dict[str, Any], model: str | None) -> dict[str, str]:
+    """What else a row's numbers depend on: the full config (every field, not only the
+    grid's), the model file's digest and the code's commit; a row is reused only when all
+    three match."""
+    from dlo_bench.benchmark.provenance import code_version
+    from dlo_env.core.atomic import file_digest
+
+    return {"config": repr(_config(agent, setting)),
+            "model": file_digest(model) if model is not None else "shipped",
+            "code": code_version()}
+
+
 def run_cell(agent: str, env_id: str, setting: dict[str, Any], suite: str, threshold: float,
-             episodes: int, model: str | None) -> dict[str, Any]:
-    """One (configuration, suite, threshold) on the train split: its row of the sweep."""
+             episodes: int, model: str | None, prints: dict[str, str]) -> dict[str, Any]:
+    """One (configuration, suite, threshold) on the train split: its row of the sweep
+    (``prints``: its :func:`fingerprint`, taken once when the sweep starts)."""
     import gymnasium as gym
     import torch
 
@@ -89,6 +104,7 @@ def run_cell(agent: str, env_id: str, setting: dict[str, Any], suite: str, thres
              "median_rest_error"]
     return {**{k: json.dumps(v) for k, v in setting.items()}, "suite": suite,
             "threshold": threshold, "episodes": episodes,
+            **prints,
             "success": f"{s['success_rate']:.3f}",
             "median_rest_error_cm": f"{100 * rest:.2f}",
             "seconds_per_episode": f"{np.mean([r.planning_seconds for r in result.records]):.4f}",
@@ -128,30 +144,41 @@ def main() -> None:
     out.mkdir(parents=True, exist_ok=True)
     path = out / f"sweep-{args.agent}-{args.env}.csv"
     keys = list(grid)
-    ident = [*keys, "suite", "threshold", "episodes"]
+    ident = [*keys, "suite", "threshold", "episodes", "config", "model", "code"]
     columns = [*ident, "success", "median_rest_error_cm", "seconds_per_episode", "wall_seconds"]
-    rows = list(csv.DictReader(path.open())) if path.is_file() else []
+    rows, old_columns = [], []
+    if path.is_file():
+        with path.open(newline="") as f:
+            reader = csv.DictReader(f)
+            rows, old_columns = list(reader), list(reader.fieldnames or ())
+    columns = [*(c for c in old_columns if c not in columns), *columns]  # keep old rows whole
     seen = {tuple(r.get(k, "") for k in ident) for r in rows}
-    todo = []
+    todo, reused = [], 0
     for values in itertools.product(*grid.values()):
         setting = dict(zip(keys, values))
+        prints = fingerprint(args.agent, setting, args.model)
         for threshold in args.threshold:
             for suite in args.suite:
                 tag = tuple(json.dumps(setting[k]) for k in keys) + (
-                    suite, str(threshold), str(args.episodes))
-                if tag not in seen:
+                    suite, str(threshold), str(args.episodes), *prints.values())
+                if tag in seen:
+                    reused += 1
+                else:
                     todo.append((args.agent, ENVS[args.env], setting, suite, threshold,
-                                 args.episodes, args.model))
-    print(f"{len(todo)} cells to run ({len(rows)} done) -> {path}", flush=True)
+                                 args.episodes, args.model, prints))
+    print(f"{len(todo)} cells to run, {reused} reused (rows of another config, model or code "
+          f"are kept, not reused) -> {path}", flush=True)
     with ProcessPoolExecutor(max_workers=max(1, args.jobs)) as pool:
         futures = [pool.submit(run_cell, *cell) for cell in todo]
         for future in as_completed(futures):
             row = future.result()
             rows.append(row)
-            lines = [",".join(columns)] + [",".join(str(r.get(c, "")) for c in columns)
-                                           for r in rows]
-            write_text_atomic(path, "\n".join(lines) + "\n")
-            print(" ".join(f"{k}={v}" for k, v in row.items()), flush=True)
+            text = io.StringIO()  # csv quotes the fields with commas (configs, JSON lists)
+            writer = csv.DictWriter(text, columns, extrasaction="ignore", lineterminator="\n")
+            writer.writeheader()
+            writer.writerows(rows)
+            write_text_atomic(path, text.getvalue())
+            print(" ".join(f"{k}={v}" for k, v in row.items() if k != "config"), flush=True)
     print(f"wrote {path}")
 
 
