@@ -281,8 +281,11 @@ def _latent_mpc(env: Any, options: AgentOptions) -> Policy:
 def _grad_mpc(env: Any, options: AgentOptions) -> Policy:
     from planners.grad_mpc import GradMPCConfig, GradMPCPolicy
 
+    spec = AGENTS["grad-mpc"]
     return GradMPCPolicy.for_env(env, GradMPCConfig(seed=options.seed),
-                                 model=load_transition_model(options.transition_model))
+                                 model=load_transition_model(
+                                     options.transition_model, cords=uses_cords_model(spec, env),
+                                     cord=told_cord(spec, env)))
 
 
 def _surrogate_sb3(algo: str, title: str, flags: str) -> AgentSpec:
@@ -425,6 +428,7 @@ AGENTS: dict[str, AgentSpec] = {spec.name: spec for spec in (
     AgentSpec("grad-mpc", "straight-move plans descended by gradient steps through the "
               "differentiable transition model", _grad_mpc,
               environments=(ENDPOINT, DUAL_ENDPOINT), extra="model", transition_model=True,
+              told_cord=True,
               no_pegs="its differentiable step (CordDynamics) models the empty table"),
     AgentSpec("latent-mpc-distilled", "a network distilled from latent-mpc by DAgger in the "
               "surrogate: one network call per plan, no search", _distilled,

@@ -18,7 +18,6 @@ from typing import Any
 import numpy as np
 
 from dlo_env.core.checks import non_negative_ints, positive, positive_ints
-from dlo_env.errors import InputError
 from planners.gradient_search import clip_moves, descend
 from planners.latent_mpc import LatentMPCConfig, LatentMPCPolicy
 
@@ -67,23 +66,19 @@ class GradMPCPolicy(LatentMPCPolicy):
         grasp: The held end(s).
         success_threshold: The environment's success threshold, metres.
         config: The search budget.
-        cord: As ``LatentMPCPolicy``: its differentiable step predicts the model's own cord,
-            so a cord other than that is refused.
+        cord: As ``LatentMPCPolicy``: the cord told to a model of several cords, which its
+            differentiable step then predicts (None: the model's own).
     """
 
     def __init__(self, model: Any, grasp: str = "head", success_threshold: float = 0.02,
                  config: GradMPCConfig | None = None, *,
                  success_metric: str = "error", cord: Any = None) -> None:
-        from dlo_env.dataset.transitions import same_cord
         from latent_model.cord_dynamics import CordDynamics
 
-        if cord is not None and not same_cord(cord, model.cord_params):
-            raise InputError("grad-mpc plans on the model's own cord (CordDynamics is not told "
-                             "a cord): give a model of this cord")
         super().__init__(model, grasp, success_threshold,
                          config if config is not None else GradMPCConfig(),
-                         success_metric=success_metric)
-        self.dynamics = CordDynamics(model, grasp,
+                         success_metric=success_metric, cord=cord)
+        self.dynamics = CordDynamics(model, grasp, params=self.cord,
                                      inextensible_iterations=self.config.projection_iterations)
 
     def plan(self, shape: np.ndarray, goal: np.ndarray) -> tuple[np.ndarray, float]:

@@ -34,7 +34,7 @@ def test_benchmark_cells_on_ray_equal_the_local_ones(local_ray, tmp_path):
     config = BenchmarkConfig(agents=("straight-line", "physics-mpc", "latent-mpc",
                                      "latent-tree-kino"),
                              envs=("dlo_env/DLOEndpoint-v0", "dlo_env/DLODualEndpoint-v0"),
-                             difficulties=(2,), thresholds=(0.02,), designed=(), episodes=2,
+                             difficulties=(2,), thresholds=(0.02,), designed=(), episodes=1,
                              fidelity=False,
                              max_seconds=60.0)  # kino's search ends by goal or nodes, not time
     local = run_benchmark(config, tmp_path / "local", progress=False)

@@ -38,6 +38,29 @@ def test_grad_mpc_solves_a_one_move_task_in_the_simulator():
     assert info["is_success"]
 
 
+def test_grad_mpc_told_a_designed_suites_cord_descends_through_that_cord():
+    """On the letters cord grad-mpc plans on the model of that cord, and its differentiable
+    step predicts what ``predict`` does for the told cord (not the model's own)."""
+    import torch
+
+    from dlo_bench.agents import model_files
+    from dlo_env.designed_suites import designed_suite_cord
+
+    env = gym.make("dlo_env/DLODualEndpoint-v0", params=designed_suite_cord("shapes-letters"))
+    policy = build_agent("grad-mpc", env)
+    assert policy.cord == env.unwrapped.params and policy.dynamics.params == policy.cord
+    assert model_files("grad-mpc", env)[0].endswith("transition-letters.pt")
+    bare = GradMPCPolicy.for_env(env, GradMPCConfig(projection_iterations=0), model=policy.model)
+    shape = env.reset(seed=0)[0]["achieved_goal"].reshape(-1, 2)
+    move = np.array([[0.05, 0.02, -0.03, 0.04]], dtype=np.float32)
+    with torch.no_grad():
+        stepped = bare.dynamics.step(torch.as_tensor(shape[None]), torch.as_tensor(move))
+    told = policy.model.predict(shape[None], "both", move, params=policy.cord, inextensible=False)
+    own = policy.model.predict(shape[None], "both", move, inextensible=False)
+    np.testing.assert_allclose(stepped.numpy(), told, atol=1e-4)
+    assert np.abs(told - own).max() > 1e-3  # the told cord is not the model's own
+
+
 def test_config_is_checked():
     with pytest.raises(ValueError, match="grad_steps"):
         GradMPCConfig(grad_steps=0)
