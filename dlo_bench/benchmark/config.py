@@ -25,7 +25,7 @@ DEFAULT_DIFFICULTIES = {ENDPOINT: (1, 2, 3, 4, 5, 8, 10), DUAL_ENDPOINT: (1, 2, 
 #: Success thresholds every cell runs at, metres (judged at rest): one evaluation each.
 THRESHOLDS = (0.02, 0.01, 0.005)
 #: The designed suites the benchmark runs in every environment.
-DEFAULT_DESIGNED = ("shapes-curves",)
+DEFAULT_DESIGNED = ("shapes-curves", "shapes-letters")
 #: The cord suites of the ``cords`` section (tasks on held-out cords the agents are not told).
 DEFAULT_CORDS = ("cords-3",)
 #: The agents of the ``cords`` section, in table order.
