@@ -141,13 +141,13 @@ def test_letters_cells_name_the_model_of_their_cord_and_an_agent_without_one_is_
     from dlo_env.core.atomic import file_digest
     from dlo_env.designed_suites import designed_suite_cord
 
-    config = BenchmarkConfig(agents=("latent-mpc", "grad-mpc"), envs=(ENDPOINT,),
+    config = BenchmarkConfig(agents=("latent-mpc", "latent-tree-kino"), envs=(ENDPOINT,),
                              difficulties=(), thresholds=(0.01,), designed=("shapes-letters",),
                              episodes=1)
     rows = run_benchmark(config, tmp_path, progress=False)
     by_agent = {r["agent"]: r for r in rows}
     assert by_agent["latent-mpc"]["status"] == "ok"
-    assert by_agent["grad-mpc"]["status"] != "ok"  # its model is of the default cord
+    assert by_agent["latent-tree-kino"]["status"] == "missing"  # its model: the default cord
     key = _cells(tmp_path)["latent-mpc-endpoint-shapes-letters-1cm"]["benchmark_key"]
     letters = transition_model_file(None, cords=True, cord=designed_suite_cord("shapes-letters"))
     assert key["model_digest"] == file_digest(letters)
