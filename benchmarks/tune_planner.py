@@ -5,7 +5,7 @@ each success threshold (judged at rest, the planner's stopping rule taken from i
 torch thread per process (designed suites such as ``shapes-curves`` in their environment:
 200-step episodes scored direction-free). For each it prints and writes
 (``OUT/sweep-AGENT-ENV.csv``, resumable: a finished row is reused only for the same full
-config, model file and code commit) the success rate, the median error at rest and the mean
+config, model file and planner code) the success rate, the median error at rest and the mean
 planning seconds per episode. The chosen values become
 the planner's defaults by hand (``LatentMPCConfig``, ``PhysicsMPCConfig``: one setting for
 every threshold), with the sweep quoted in ``docs/history.md``. Test splits are never run.
@@ -58,16 +58,28 @@ def _config(agent: str, setting: dict[str, Any]) -> Any:
     return kind(**setting)
 
 
-def fingerprint(agent: str, setting: dict[str, Any], model: str | None) -> dict[str, str]:
-    """What else a row's numbers depend on: the full config (every field, not only the
-    grid's), the model file's digest and the code's commit; a row is reused only when all
-    three match."""
-    from dlo_bench.benchmark.provenance import code_version
-    from dlo_env.core.atomic import file_digest
+#: The packages whose source a row's numbers depend on (its ``code`` digest).
+CODE_PACKAGES = ("dlo_env", "latent_model", "planners", "dlo_bench")
 
-    return {"config": repr(_config(agent, setting)),
-            "model": file_digest(model) if model is not None else "shipped",
-            "code": code_version()}
+
+def code_digest() -> str:
+    """The first 16 hex digits of the SHA-256 of the source of ``CODE_PACKAGES``: the same
+    for the same code, committed or not, and unchanged by commits elsewhere (docs, results)."""
+    import hashlib
+
+    root = Path(__file__).resolve().parent.parent
+    digest = hashlib.sha256()
+    for package in CODE_PACKAGES:
+        for path in sorted((root / package).rglob("*.py")):
+            digest.update(str(path.relative_to(root)).encode() + b"\0" + path.read_bytes())
+    return digest.hexdigest()[:16]
+
+
+def fingerprint(agent: str, setting: dict[str, Any], model: str, code: str) -> dict[str, str]:
+    """What a row's numbers depend on besides its suite, threshold and episodes: the full
+    config (every field, not only the grid's), the model file's digest (``model``) and the
+    source's (``code``); a row is reused only when all three match."""
+    return {"config": repr(_config(agent, setting)), "model": model, "code": code}
 
 
 def run_cell(agent: str, env_id: str, setting: dict[str, Any], suite: str, threshold: float,
@@ -138,14 +150,16 @@ def main() -> None:
             raise SystemExit(f"--grid must be a JSON object of {args.agent} config fields to "
                              f"lists, got {args.grid!r} ({exc})") from None
 
-    from dlo_env.core.atomic import write_text_atomic
+    from dlo_bench.paths import transition_model_file
+    from dlo_env.core.atomic import file_digest, write_text_atomic
 
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
     path = out / f"sweep-{args.agent}-{args.env}.csv"
     keys = list(grid)
-    ident = [*keys, "suite", "threshold", "episodes", "config", "model", "code"]
-    columns = [*ident, "success", "median_rest_error_cm", "seconds_per_episode", "wall_seconds"]
+    ident = ["suite", "threshold", "episodes", "config", "model", "code"]  # what a reuse needs
+    columns = [*keys, *ident, "success", "median_rest_error_cm", "seconds_per_episode",
+               "wall_seconds"]
     rows, old_columns = [], []
     if path.is_file():
         with path.open(newline="") as f:
@@ -154,13 +168,15 @@ def main() -> None:
     columns = [*(c for c in old_columns if c not in columns), *columns]  # keep old rows whole
     seen = {tuple(r.get(k, "") for k in ident) for r in rows}
     todo, reused = [], 0
+    model = (file_digest(transition_model_file(args.model))
+             if args.agent in ("latent-mpc", "grad-mpc") else "")
+    code = code_digest()
     for values in itertools.product(*grid.values()):
         setting = dict(zip(keys, values))
-        prints = fingerprint(args.agent, setting, args.model)
+        prints = fingerprint(args.agent, setting, model, code)
         for threshold in args.threshold:
             for suite in args.suite:
-                tag = tuple(json.dumps(setting[k]) for k in keys) + (
-                    suite, str(threshold), str(args.episodes), *prints.values())
+                tag = (suite, str(threshold), str(args.episodes), *prints.values())
                 if tag in seen:
                     reused += 1
                 else:

@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from dlo_bench import reference
-from dlo_bench.benchmark import BenchmarkConfig, run_benchmark
+from dlo_bench.benchmark import DEFAULT_DESIGNED, BenchmarkConfig, run_benchmark
 from dlo_bench.benchmark_report import designed_panels, results_markdown, write_results
 from dlo_bench.cell_store import read_cell
 from dlo_bench.reference import load_references, make_references, reference_file
@@ -106,7 +106,7 @@ def test_designed_cells_report_families_beside_the_reference(tmp_path, monkeypat
 
 
 @pytest.mark.parametrize(("flags", "expected"), [
-    ([], ["shapes-curves"]),
+    ([], list(DEFAULT_DESIGNED)),
     (["--quick"], ["shapes-curves"]),
     (["--quick", "--difficulty", "1"], []),
     (["--difficulty", "1"], []),
