@@ -265,27 +265,29 @@ def _physics_mpc(env: Any, options: AgentOptions) -> Policy:
     return PhysicsMPCPolicy.for_env(env, PhysicsMPCConfig(seed=options.seed))
 
 
+def _planner_model(name: str, env: Any, options: AgentOptions) -> Any:
+    """The transition model agent ``name`` plans on in ``env``: ``options.transition_model``,
+    else the shipped one for the cord it is told (:func:`told_cord`) or the pegs it sees."""
+    spec = AGENTS[name]
+    cords = uses_cords_model(spec, env)
+    return load_transition_model(options.transition_model, cords=cords,
+                                 pegs=observes_pegs(env) and not cords,
+                                 cord=told_cord(spec, env))
+
+
 def _latent_mpc(env: Any, options: AgentOptions) -> Policy:
     from planners.latent_mpc import PEGS_SETTINGS, LatentMPCConfig, LatentMPCPolicy
 
-    spec = AGENTS["latent-mpc"]
-    cords = uses_cords_model(spec, env)
     among_pegs = PEGS_SETTINGS if observes_pegs(env) else {}
     return LatentMPCPolicy.for_env(env, LatentMPCConfig(seed=options.seed, **among_pegs),
-                                   model=load_transition_model(
-                                       options.transition_model, cords=cords,
-                                       pegs=observes_pegs(env) and not cords,
-                                       cord=told_cord(spec, env)))
+                                   model=_planner_model("latent-mpc", env, options))
 
 
 def _grad_mpc(env: Any, options: AgentOptions) -> Policy:
     from planners.grad_mpc import GradMPCConfig, GradMPCPolicy
 
-    spec = AGENTS["grad-mpc"]
     return GradMPCPolicy.for_env(env, GradMPCConfig(seed=options.seed),
-                                 model=load_transition_model(
-                                     options.transition_model, cords=uses_cords_model(spec, env),
-                                     cord=told_cord(spec, env)))
+                                 model=_planner_model("grad-mpc", env, options))
 
 
 def _surrogate_sb3(algo: str, title: str, flags: str) -> AgentSpec:
