@@ -18,6 +18,7 @@ from typing import Any
 
 from dlo_bench.benchmark.cells import CELLS_DIR, cell_name
 from dlo_bench.benchmark.config import CORD_AGENTS
+from dlo_bench.benchmark.provenance import code_file, code_path
 from dlo_bench.benchmark.rows import NEAR_REFERENCE
 from dlo_bench.cell_store import find_cell, read_cell
 from dlo_bench.report import (
@@ -485,7 +486,8 @@ def results_markdown(rows: list[dict[str, Any]], machine: dict[str, Any], comman
     models = sorted({(r["agent"], m) for r in rows for m in r.get("models", [])})
     if models:
         lines += ["", "Models (SHA-256 prefix): " + "; ".join(
-            f"`{a}` {_display_path(m)} ({file_digest(m)[:8] or 'gone'})" for a, m in models) + "."]
+            f"`{a}` {_display_path(m)} ({file_digest(code_file(m))[:8] or 'gone'})"
+            for a, m in models) + "."]
     evaluated = sum(r["wall_seconds"] or 0.0 for r in rows)
     commits = sorted({r["commit"] for r in rows if r.get("commit")})
     lines += [
@@ -516,6 +518,9 @@ def write_results(rows: list[dict[str, Any]], out_dir: str | os.PathLike, comman
     """
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
+    # cells made before models were recorded relative to the code's root
+    rows = [{**r, "models": [code_path(m) for m in r["models"]]} if r.get("models") else r
+            for r in rows]
     machine = machine_description()
     paths = {"json": out / "results.json", "md": out / "results.md"}
     write_text_atomic(paths["json"], json.dumps(json_ready(rows), indent=2) + "\n")

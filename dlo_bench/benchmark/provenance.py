@@ -38,6 +38,20 @@ def machine_label() -> str:
 CODE_ROOT = Path(__file__).resolve().parents[2]
 
 
+def code_path(path: str | os.PathLike[str]) -> str:
+    """``path`` relative to ``CODE_ROOT`` when it lies below it (a shipped model), else as
+    given: how a cell records a model file, the same on every machine and in every clone."""
+    try:
+        return Path(path).resolve().relative_to(CODE_ROOT).as_posix()
+    except ValueError:
+        return str(path)
+
+
+def code_file(path: str | os.PathLike[str]) -> Path:
+    """The file a cell's recorded model path names: below ``CODE_ROOT`` when relative."""
+    return Path(path) if Path(path).is_absolute() else CODE_ROOT / path
+
+
 @dataclass(frozen=True)
 class CodeState:
     """The git checkout the code runs from.

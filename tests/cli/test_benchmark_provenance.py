@@ -164,3 +164,14 @@ def test_every_cell_of_a_run_records_the_code_read_before_its_first_cell(tmp_pat
                              fidelity=False)
     rows = run_benchmark(config, tmp_path, progress=False)
     assert [row["commit"] for row in rows] == ["abc1234", "abc1234"]
+
+
+def test_a_cell_records_a_shipped_model_relative_to_the_code_and_finds_it_again(tmp_path):
+    """results.json names shipped models relative to the code's root, so it reads the same on
+    every machine and clone; a file outside the code stays as given."""
+    shipped = provenance.CODE_ROOT / "latent_model" / "pretrained" / "transition.pt"
+    assert provenance.code_path(shipped) == "latent_model/pretrained/transition.pt"
+    assert provenance.code_file("latent_model/pretrained/transition.pt") == shipped
+    outside = tmp_path / "model.pt"
+    assert provenance.code_path(outside) == str(outside)
+    assert provenance.code_file(str(outside)) == outside
