@@ -171,9 +171,9 @@ def main(argv: list[str] | None = None) -> int:
         rise = row["untouched"]["mean_cm"] / first["untouched"]["mean_cm"] - 1
         ok_touch = row["touching"]["mean_cm"] <= 100 * FLOORS["touching"]
         ok_rise = rise <= FLOORS["untouched_rise"]
-        print(f"{Path(path).name}: touching {row['touching']['mean_cm']:.3f} cm (floor "
+        print(f"{path}: touching {row['touching']['mean_cm']:.3f} cm (floor "
               f"{100 * FLOORS['touching']:.1f}: {'met' if ok_touch else 'NOT met'}); untouched "
-              f"{rise:+.1%} against {Path(args.model[0]).name} (floor +"
+              f"{rise:+.1%} against {args.model[0]} (floor +"
               f"{FLOORS['untouched_rise']:.0%}: {'met' if ok_rise else 'NOT met'})")
     replays: dict[str, dict] = {}
     if args.replay:
