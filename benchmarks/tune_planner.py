@@ -16,7 +16,9 @@ every threshold), with the sweep quoted in ``docs/history.md``. Test splits are 
 
 ``--grid`` is a JSON object of config fields to lists of values (``null`` is None; the other
 fields keep their defaults, elites a tenth of the samples when samples are swept);
-``--model`` tunes latent-mpc or grad-mpc for another transition model file; ``--jobs`` runs
+latent-mpc and grad-mpc plan on the model the benchmark gives them in each suite (the one
+fine-tuned for a designed suite's cord, the one that sees pegs among pegs), or on ``--model``
+in every suite; ``--jobs`` runs
 that many (configuration, suite, threshold) cells at once in worker processes.
 """
 
@@ -82,6 +84,25 @@ def fingerprint(agent: str, setting: dict[str, Any], model: str, code: str) -> d
     return {"config": repr(_config(agent, setting)), "model": model, "code": code}
 
 
+def suite_model_digest(agent: str, env_id: str, suite: str, model: str | None) -> str:
+    """The digest of the transition model file ``agent`` plans on in ``suite``'s environment
+    (``model``, or the shipped one for the suite's cord or pegs); "" for physics-mpc."""
+    import gymnasium as gym
+
+    import dlo_env  # noqa: F401  (registers the environments)
+    from dlo_bench.agents import model_files
+    from dlo_bench.evaluation import task_env_kwargs
+    from dlo_env.core.atomic import file_digest
+
+    if agent not in ("latent-mpc", "grad-mpc"):
+        return ""
+    env = gym.make(env_id, **task_env_kwargs(suite=suite))
+    try:
+        return "+".join(file_digest(f) for f in model_files(agent, env, transition_model=model))
+    finally:
+        env.close()
+
+
 def run_cell(agent: str, env_id: str, setting: dict[str, Any], suite: str, threshold: float,
              episodes: int, model: str | None, prints: dict[str, str]) -> dict[str, Any]:
     """One (configuration, suite, threshold) on the train split: its row of the sweep
@@ -97,13 +118,14 @@ def run_cell(agent: str, env_id: str, setting: dict[str, Any], suite: str, thres
     env = gym.make(env_id, **kwargs)  # the suite's environment (designed: direction-free)
     config = _config(agent, setting)
     if agent in ("latent-mpc", "grad-mpc"):
-        from latent_model import TransitionModel
+        from dlo_bench.agents import AgentOptions, planner_model
         from planners.grad_mpc import GradMPCPolicy
         from planners.latent_mpc import LatentMPCPolicy
 
         kind = LatentMPCPolicy if agent == "latent-mpc" else GradMPCPolicy
-        policy = kind.for_env(
-            env, config, model=TransitionModel.load_or_pretrained(model, device="cpu"))
+        # the model the benchmark's agent plans on there (the suite's cord, the pegs it sees)
+        policy = kind.for_env(env, config, model=planner_model(
+            agent, env, AgentOptions(transition_model=model)))
     else:
         from planners.physics_mpc import PhysicsMPCPolicy
 
@@ -137,7 +159,7 @@ def main() -> None:
                         help="JSON object of config fields to lists of values")
     parser.add_argument("--model", default=None,
                         help="latent-mpc's or grad-mpc's transition model file (default: the "
-                             "shipped one)")
+                             "shipped one the benchmark plans with in each suite)")
     parser.add_argument("--jobs", type=int, default=1, help="worker processes")
     parser.add_argument("--out", default="runs/tune-planner", help="output folder")
     args = parser.parse_args()
@@ -150,8 +172,7 @@ def main() -> None:
             raise SystemExit(f"--grid must be a JSON object of {args.agent} config fields to "
                              f"lists, got {args.grid!r} ({exc})") from None
 
-    from dlo_bench.paths import transition_model_file
-    from dlo_env.core.atomic import file_digest, write_text_atomic
+    from dlo_env.core.atomic import write_text_atomic
 
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
@@ -168,14 +189,14 @@ def main() -> None:
     columns = [*(c for c in old_columns if c not in columns), *columns]  # keep old rows whole
     seen = {tuple(r.get(k, "") for k in ident) for r in rows}
     todo, reused = [], 0
-    model = (file_digest(transition_model_file(args.model))
-             if args.agent in ("latent-mpc", "grad-mpc") else "")
+    models = {suite: suite_model_digest(args.agent, ENVS[args.env], suite, args.model)
+              for suite in args.suite}
     code = code_digest()
     for values in itertools.product(*grid.values()):
         setting = dict(zip(keys, values))
-        prints = fingerprint(args.agent, setting, model, code)
         for threshold in args.threshold:
             for suite in args.suite:
+                prints = fingerprint(args.agent, setting, models[suite], code)
                 tag = (suite, str(threshold), str(args.episodes), *prints.values())
                 if tag in seen:
                     reused += 1

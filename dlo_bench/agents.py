@@ -265,7 +265,7 @@ def _physics_mpc(env: Any, options: AgentOptions) -> Policy:
     return PhysicsMPCPolicy.for_env(env, PhysicsMPCConfig(seed=options.seed))
 
 
-def _planner_model(name: str, env: Any, options: AgentOptions) -> Any:
+def planner_model(name: str, env: Any, options: AgentOptions) -> Any:
     """The transition model agent ``name`` plans on in ``env``: ``options.transition_model``,
     else the shipped one for the cord it is told (:func:`told_cord`) or the pegs it sees."""
     spec = AGENTS[name]
@@ -280,14 +280,14 @@ def _latent_mpc(env: Any, options: AgentOptions) -> Policy:
 
     among_pegs = PEGS_SETTINGS if observes_pegs(env) else {}
     return LatentMPCPolicy.for_env(env, LatentMPCConfig(seed=options.seed, **among_pegs),
-                                   model=_planner_model("latent-mpc", env, options))
+                                   model=planner_model("latent-mpc", env, options))
 
 
 def _grad_mpc(env: Any, options: AgentOptions) -> Policy:
     from planners.grad_mpc import GradMPCConfig, GradMPCPolicy
 
     return GradMPCPolicy.for_env(env, GradMPCConfig(seed=options.seed),
-                                 model=_planner_model("grad-mpc", env, options))
+                                 model=planner_model("grad-mpc", env, options))
 
 
 def _surrogate_sb3(algo: str, title: str, flags: str) -> AgentSpec:
