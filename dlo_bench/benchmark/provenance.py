@@ -39,12 +39,13 @@ CODE_ROOT = Path(__file__).resolve().parents[2]
 
 
 def code_path(path: str | os.PathLike[str]) -> str:
-    """``path`` relative to ``CODE_ROOT`` when it lies below it (a shipped model), else as
-    given: how a cell records a model file, the same on every machine and in every clone."""
+    """``path`` relative to ``CODE_ROOT`` when it lies below it (a shipped model), else
+    absolute: how a cell records a model file, the same on every machine and in every clone."""
+    full = Path(path).resolve()
     try:
-        return Path(path).resolve().relative_to(CODE_ROOT).as_posix()
+        return full.relative_to(CODE_ROOT).as_posix()
     except ValueError:
-        return str(path)
+        return str(full)
 
 
 def code_file(path: str | os.PathLike[str]) -> Path:

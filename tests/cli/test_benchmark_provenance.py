@@ -166,12 +166,16 @@ def test_every_cell_of_a_run_records_the_code_read_before_its_first_cell(tmp_pat
     assert [row["commit"] for row in rows] == ["abc1234", "abc1234"]
 
 
-def test_a_cell_records_a_shipped_model_relative_to_the_code_and_finds_it_again(tmp_path):
+def test_a_cell_records_a_shipped_model_relative_to_the_code_and_finds_it_again(tmp_path,
+                                                                             monkeypatch):
     """results.json names shipped models relative to the code's root, so it reads the same on
     every machine and clone; a file outside the code stays as given."""
     shipped = provenance.CODE_ROOT / "latent_model" / "pretrained" / "transition.pt"
     assert provenance.code_path(shipped) == "latent_model/pretrained/transition.pt"
     assert provenance.code_file("latent_model/pretrained/transition.pt") == shipped
-    outside = tmp_path / "model.pt"
+    outside = (tmp_path / "model.pt").resolve()
     assert provenance.code_path(outside) == str(outside)
     assert provenance.code_file(str(outside)) == outside
+    # a relative path outside the code is recorded absolute, so it is found again from anywhere
+    monkeypatch.chdir(tmp_path)
+    assert provenance.code_path("model.pt") == str(outside)
