@@ -244,9 +244,11 @@ def _latent_tree_kino(env: Any, options: AgentOptions) -> Policy:
     config = _goal_for(KINO_CONFIG, env)
     if options.max_seconds is not None:
         config = with_fields(config, max_seconds=options.max_seconds)
-    planner = LatentTreePlanner(model, config, seed=options.seed,
-                                transition_model=load_transition_model(
-                                    options.transition_model, pegs=observes_pegs(env)))
+    transition = planner_model("latent-tree-kino", env, options)
+    told = {"cord": env.unwrapped.params} if getattr(transition.config, "cord_inputs", False) \
+        else {}
+    planner = LatentTreePlanner(model, config, seed=options.seed, transition_model=transition,
+                                **told)
     policy = PlannerPolicy(model, planner, max_step=_max_step(env), moves_per_plan=1,
                            partial_plans=True)
     policy.check_env(env)
@@ -421,7 +423,7 @@ AGENTS: dict[str, AgentSpec] = {spec.name: spec for spec in (
     AgentSpec("latent-tree-kino", "the latent tree with straight-move edges predicted by the "
               "transition model, one move per plan (closed loop)", _latent_tree_kino,
               environments=(ENDPOINT, DUAL_ENDPOINT), extra="model", shape_model=True,
-              transition_model=True),
+              transition_model=True, told_cord=True),
     AgentSpec("physics-mpc", "CEM over straight moves with the simulator as the model",
               _physics_mpc, environments=(ENDPOINT, DUAL_ENDPOINT)),
     AgentSpec("latent-mpc", "CEM over straight moves scored by the learned transition model",

@@ -492,6 +492,23 @@ class TransitionModel(nn.Module):
         ``predict`` without ``params``."""
         return CordParams(**self.config.cord)
 
+    def told(self, cord: CordParams) -> CordParams:
+        """``cord`` as this model of several cords is told it (``predict``'s ``params``): its
+        ``PARAM_COLUMNS`` on the model's own cord, since the model predicts nothing else of a
+        cord (such as its friction with pegs).
+
+        Raises:
+            InputError: For a model of one cord, another type than ``CordParams``, or a cord
+                outside the model's ranges (:meth:`check_env_cord`).
+        """
+        if not self.config.cord_inputs:
+            raise InputError("cord is told to a transition model of several cords "
+                             "(TransitionModelConfig.cord_inputs); this model predicts one cord")
+        if not isinstance(cord, CordParams):
+            raise InputError(f"cord must be a CordParams or None, got {type(cord).__name__}")
+        self.check_env_cord(cord)
+        return replace(self.cord_params, **{k: getattr(cord, k) for k in PARAM_COLUMNS})
+
     def check_env_cord(self, params: CordParams) -> None:
         """Raise a one-line ``ValueError`` unless this model predicts an environment's cord
         ``params``: its points, and for a model of one cord (without ``cord_inputs``) its

@@ -135,7 +135,7 @@ class LatentMPCPolicy(CEMPolicy):
                  success_metric: str = "error", cord: Any = None) -> None:
         self.model = model
         if cord is not None:
-            cord = self._told(model, cord)
+            cord = model.told(cord)
         #: The cord told to the model (``predict``'s ``params``), or None.
         self.cord = cord
         config = config if config is not None else LatentMPCConfig()
@@ -149,23 +149,6 @@ class LatentMPCPolicy(CEMPolicy):
         self.members = config.members
         if config.members is None and getattr(model, "mean_net", None) is None:
             self.members = None if config.spread_weight > 0 else 1
-
-    @staticmethod
-    def _told(model: Any, cord: Any) -> Any:
-        """``cord`` as the model is told it: its ``PARAM_COLUMNS`` on the model's own cord (the
-        model predicts nothing else of a cord, such as its friction with pegs)."""
-        from dataclasses import replace
-
-        from dlo_env.cord import CordParams
-        from dlo_env.dataset.transitions import PARAM_COLUMNS
-
-        if not getattr(model.config, "cord_inputs", False):
-            raise InputError("cord is told to a transition model of several cords "
-                             "(TransitionModelConfig.cord_inputs); this model predicts one cord")
-        if not isinstance(cord, CordParams):
-            raise InputError(f"cord must be a CordParams or None, got {type(cord).__name__}")
-        model.check_env_cord(cord)
-        return replace(model.cord_params, **{k: getattr(cord, k) for k in PARAM_COLUMNS})
 
     @classmethod
     def for_env(cls, env: object, config: LatentMPCConfig | None = None,

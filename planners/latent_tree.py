@@ -266,6 +266,8 @@ class LatentTreePlanner:
         seed: Seed of the sampling; ``plan`` starts from it on every call, so a plan is a
             function of (start, goal, seed).
         transition_model: A ``latent_model.TransitionModel`` (needed by ``edges="moves"``).
+        cord: The cord a transition model of several cords is told (``predict``'s
+            ``params``; ``TransitionModel.told``); None: the model's own cord.
         **overrides: Any ``TreeConfig`` field, overriding ``config``
             (``LatentTreePlanner(model, step_length=0.1)``; ``end`` is the deprecated name of
             ``grasp``).
@@ -278,7 +280,7 @@ class LatentTreePlanner:
     @renamed_argument("end", "grasp")
     def __init__(
         self, model: ShapeSurrogate, config: TreeConfig | None = None, *, seed: int = 0,
-        transition_model: Any = None, **overrides: Any,
+        transition_model: Any = None, cord: Any = None, **overrides: Any,
     ) -> None:
         known = {f.name for f in fields(TreeConfig)}
         unknown = sorted(set(overrides) - known)
@@ -301,6 +303,10 @@ class LatentTreePlanner:
             if transition_model.config.n_points != self.n_points:
                 raise InputError(f"transition_model must be for {self.n_points} points, got "
                                  f"{transition_model.config.n_points}")
+        if cord is not None and transition_model is None:
+            raise InputError("cord is told to a transition_model; none was given")
+        #: The cord told to the transition model (``predict``'s ``params``), or None.
+        self.cord = None if cord is None else transition_model.told(cord)
 
     @property
     def n_points(self) -> int:
@@ -502,6 +508,7 @@ class LatentTreePlanner:
         predicted = self.transition_model.predict(
             np.repeat(shapes, m, axis=0), self.config.grasp, flat, inextensible=False,
             **({} if self.pegs is None else {"pegs": self.pegs}),
+            **({} if self.cord is None else {"params": self.cord}),
         ).reshape(b, m, self.n_points, 2)
         errs = np.asarray(error(predicted, targets[:, None])).reshape(b, m)
         pick = errs.argmin(axis=1)

@@ -94,3 +94,31 @@ def test_a_transition_model_of_another_cord_is_refused_for_the_environment(model
     with pytest.raises(ValueError, match=r"trained for one cord, with friction=0\.3 where the "
                        r"environment's cord has 0\.4"):
         PlannerPolicy(shape_model, planner).check_env(gym.make("dlo_env/DLOEndpoint-v0"))
+
+
+def test_the_agent_plans_on_the_model_of_several_cords_told_a_designed_suites_cord(models):
+    from dlo_bench.agents import model_files
+    from dlo_env.designed_suites import designed_suite_cord
+
+    letters_cord = designed_suite_cord("shapes-letters")
+    letters = gym.make("dlo_env/DLOEndpoint-v0", params=letters_cord)
+    planner = build_agent("latent-tree-kino", letters).planner
+    assert planner.transition_model.config.cord_inputs and planner.cord == letters_cord
+    assert model_files("latent-tree-kino", letters)[1].endswith("transition-letters.pt")
+    assert build_agent("latent-tree-kino", gym.make("dlo_env/DLOEndpoint-v0")).planner.cord is None
+    # Its edges are the model's predictions for the told cord, not for the default one.
+    task = load_suite("linear-1", "train", limit=1)[0]
+    moves, predicted, _ = planner._best_moves(task.start[None], task.goal[None],
+                                              np.random.default_rng(0))
+    model = planner.transition_model
+    told = model.predict(task.start, "head", moves[0].reshape(-1), inextensible=False,
+                         params=letters_cord)
+    np.testing.assert_allclose(predicted[0], told, atol=1e-6)
+    default = model.predict(task.start, "head", moves[0].reshape(-1), inextensible=False)
+    assert not np.allclose(predicted[0], default, atol=1e-4)
+    shape_model, _ = models
+    with pytest.raises(ValueError, match="cord is told to a transition model of several cords"):
+        LatentTreePlanner(shape_model, KINO_CONFIG, transition_model=models[1],
+                          cord=letters_cord)
+    with pytest.raises(ValueError, match="cord is told to a transition_model; none was given"):
+        LatentTreePlanner(shape_model, cord=letters_cord)
