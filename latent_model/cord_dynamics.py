@@ -128,6 +128,8 @@ class CordDynamics:
         self.rest = self.params.length / (model.config.n_points - 1)
         self.limit = TABLE_HALF - self.params.rim_margin
         self.span = self.params.max_span * self.params.length
+        #: A gripper's displacement per action, metres (moves are walked in such actions).
+        self.max_step = float(model.config.max_step)
         net = model.mean_net
         if isinstance(net, GraspRoutedMLP):  # every row is of one grasp: call its network
             net = _Member(net.routes, 1 if grasp == "both" else 0)
@@ -140,19 +142,26 @@ class CordDynamics:
 
     def reachable(self, shapes: torch.Tensor, displacement: torch.Tensor) -> torch.Tensor:
         """``(B, 2, 2)`` moves of [head, tail] the grippers really make (zero for an end not
-        held): ``Cord.move``'s rule for one move, targets clipped to the table less the rim
-        margin and, with both ends held, pulled in about their middle to the span."""
+        held): ``TransitionModel.reachable_moves``' rule (``Cord.move``'s for each of the
+        move's ``split_move`` actions): targets clipped to the table less the rim margin and,
+        with both ends held, pulled in about their middle to the span. Both rules are convex,
+        so a move whose start and end obey them is clipped at its end alone; a move of both
+        ends that the span (or the table) clips is walked action by action, as the
+        environment carries it out."""
         start = shapes[:, self._ends]  # (B, k, 2)
-        target = (start + displacement.reshape(len(shapes), -1, 2)).clamp(-self.limit,
-                                                                          self.limit)
+        d = displacement.reshape(len(shapes), -1, 2)
+        target = self._clip(start + d)
         if len(self._ends) == 2:
-            gap = target[:, 1] - target[:, 0]
-            dist = gap.norm(dim=-1, keepdim=True)
-            too_far = dist > self.span
-            mid = 0.5 * (target[:, 0] + target[:, 1])
-            half = 0.5 * self.span * gap / torch.where(too_far, dist, torch.ones_like(dist))
-            target = torch.where(too_far[:, None], torch.stack([mid - half, mid + half], dim=1),
-                                 target)
+            walk = ((self._clip(start) != start) | (target != start + d)).flatten(1).any(dim=1)
+            if bool(walk.any()):
+                longest = d.detach().norm(dim=-1).amax(dim=-1)
+                actions = torch.ceil(longest / self.max_step - 1e-6).clamp_min(1.0)
+                step = d / actions[:, None, None]
+                path = start
+                for j in range(int(actions[walk].max())):
+                    going = (walk & (actions > j))[:, None, None]
+                    path = torch.where(going, self._clip(path + step), path)
+                target = torch.where(walk[:, None, None], path, target)
         move = target - start
         zero = torch.zeros_like(move[:, :1])
         if self.grasp == "head":
@@ -160,6 +169,21 @@ class CordDynamics:
         if self.grasp == "tail":
             return torch.cat([zero, move], dim=1)
         return move
+
+    def _clip(self, target: torch.Tensor) -> torch.Tensor:
+        """``dlo_env.cord.reachable_targets`` (without pegs) in torch: ``(B, k, 2)`` targets
+        on the table less the rim margin, two ends farther apart than the span pulled in
+        about their middle."""
+        target = target.clamp(-self.limit, self.limit)
+        if target.shape[1] != 2:
+            return target
+        gap = target[:, 1] - target[:, 0]
+        dist = gap.norm(dim=-1, keepdim=True)
+        too_far = dist > self.span
+        mid = 0.5 * (target[:, 0] + target[:, 1])
+        half = 0.5 * self.span * gap / torch.where(too_far, dist, torch.ones_like(dist))
+        return torch.where(too_far[:, None], torch.stack([mid - half, mid + half], dim=1),
+                           target)
 
     def step(self, shapes: torch.Tensor, displacement: torch.Tensor,
              return_std: bool = False) -> torch.Tensor | tuple[torch.Tensor, torch.Tensor]:
