@@ -242,19 +242,21 @@ def main() -> None:
     """Parse arguments, run the three parts, print and save the numbers."""
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--device", default=Args.device, help="torch device of the surrogate")
-    parser.add_argument("--num-envs", type=int, nargs="+", default=Args.num_envs,
-                        metavar="N", help="surrogate batch sizes of the throughput part")
+    parser.add_argument("--num-envs", type=int, nargs="+", default=None, metavar="N",
+                        help=f"surrogate batch sizes of the throughput part (default: "
+                             f"{' '.join(map(str, Args.num_envs))}; 1 64 with --quick)")
     parser.add_argument("--quick", action="store_true",
                         help="a smoke run: fewer steps, one suite, 10 drift tasks")
     parser.add_argument("--out", default=Args.out, help="JSON file of the numbers")
     parsed = parser.parse_args()
-    if min(parsed.num_envs) < 1:
+    if parsed.num_envs is not None and min(parsed.num_envs) < 1:
         parser.error(f"--num-envs must be ints >= 1, got {parsed.num_envs}")
-    args = Args(device=parsed.device, out=parsed.out, num_envs=tuple(parsed.num_envs))
+    given = {} if parsed.num_envs is None else {"num_envs": tuple(parsed.num_envs)}
+    args = Args(device=parsed.device, out=parsed.out, **given)
     if parsed.quick:
-        args = Args(device=parsed.device, out=parsed.out, num_envs=(1, 64), pymunk_steps=200,
-                    repeats=1, surrogate_seconds=0.5, async_steps=30, suites=("linear-1",),
-                    drift_tasks=4, drift_steps=(10,))
+        args = Args(device=parsed.device, out=parsed.out, **({"num_envs": (1, 64)} | given),
+                    pymunk_steps=200, repeats=1, surrogate_seconds=0.5, async_steps=30,
+                    suites=("linear-1",), drift_tasks=4, drift_steps=(10,))
     torch.set_num_threads(max(1, torch.get_num_threads()))
     print(f"torch {torch.__version__} on {args.device} ({torch.get_num_threads()} threads), "
           f"gymnasium {gym.__version__}, {os.cpu_count()} CPUs, load average "

@@ -18,7 +18,7 @@ from typing import Any
 
 from dlo_bench.benchmark.cells import CELLS_DIR, cell_name
 from dlo_bench.benchmark.config import CORD_AGENTS
-from dlo_bench.benchmark.provenance import code_file, code_path
+from dlo_bench.benchmark.provenance import code_file, recorded_path
 from dlo_bench.benchmark.rows import NEAR_REFERENCE
 from dlo_bench.cell_store import find_cell, read_cell
 from dlo_bench.report import (
@@ -519,7 +519,7 @@ def write_results(rows: list[dict[str, Any]], out_dir: str | os.PathLike, comman
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     # cells made before models were recorded relative to the code's root
-    rows = [{**r, "models": [code_path(m) for m in r["models"]]} if r.get("models") else r
+    rows = [{**r, "models": [recorded_path(m) for m in r["models"]]} if r.get("models") else r
             for r in rows]
     machine = machine_description()
     paths = {"json": out / "results.json", "md": out / "results.md"}

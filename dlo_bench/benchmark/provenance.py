@@ -48,6 +48,19 @@ def code_path(path: str | os.PathLike[str]) -> str:
         return str(full)
 
 
+def model_label(path: str | os.PathLike[str]) -> str:
+    """A model path as a cell records it (:func:`code_path`), leaving a label such as
+    ``"<TransitionModel passed in>"`` (a model given loaded, not by its file) as it is."""
+    return str(path) if str(path).startswith("<") else code_path(path)
+
+
+def recorded_path(path: str) -> str:
+    """A recorded model path in today's form: one recorded relative is relative to
+    ``CODE_ROOT`` already (not to the current folder); an absolute one below ``CODE_ROOT`` (a
+    cell from before paths were relative) becomes relative; a label stays."""
+    return path if path.startswith("<") else code_path(code_file(path))
+
+
 def code_file(path: str | os.PathLike[str]) -> Path:
     """The file a cell's recorded model path names: below ``CODE_ROOT`` when relative."""
     return Path(path) if Path(path).is_absolute() else CODE_ROOT / path

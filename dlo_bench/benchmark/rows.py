@@ -10,7 +10,7 @@ from typing import Any
 import numpy as np
 
 from dlo_bench.benchmark.cells import env_label, suite_label
-from dlo_bench.benchmark.provenance import RUN_FACTS, code_path
+from dlo_bench.benchmark.provenance import RUN_FACTS, model_label
 from dlo_bench.evaluation import EpisodeRecord, Evaluation, suite_tasks
 from dlo_bench.loaded_agent import LoadedAgent
 from dlo_env.cord_suites import CORD_SUITES
@@ -51,7 +51,7 @@ def row_of(agent: LoadedAgent, env_id: str, suite: str, threshold: float,
         "mean_fidelity": None,
         "training_env_steps": agent.training_env_steps,
         "sample_cost": agent.sample_cost,
-        "models": [code_path(m) for m in agent.models],
+        "models": [model_label(m) for m in agent.models],
         "wall_seconds": None,
         **dict.fromkeys(RUN_FACTS, ""),
     }

@@ -179,3 +179,13 @@ def test_a_cell_records_a_shipped_model_relative_to_the_code_and_finds_it_again(
     # a relative path outside the code is recorded absolute, so it is found again from anywhere
     monkeypatch.chdir(tmp_path)
     assert provenance.code_path("model.pt") == str(outside)
+    # Recorded paths are read against the code's root, not the current folder (a report
+    # rewritten from elsewhere), an old absolute one below the root becomes relative, and a
+    # label of a model passed in loaded stays.
+    recorded = "latent_model/pretrained/transition.pt"
+    assert provenance.recorded_path(recorded) == recorded
+    assert provenance.recorded_path(str(shipped)) == recorded
+    assert provenance.recorded_path("<TransitionModel passed in>") == \
+        "<TransitionModel passed in>"
+    assert provenance.model_label("<TransitionModel passed in>") == "<TransitionModel passed in>"
+    assert provenance.model_label("model.pt") == str(outside)
