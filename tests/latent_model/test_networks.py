@@ -60,7 +60,8 @@ def test_angle_output_builds_inextensible_chains_in_their_canonical_frame():
     from latent_model.pose import canonical_pose
 
     g = Generator(ModelConfig(width=32, depth=2, output="angles"))
-    chains = g(torch.rand(16, 5) * 2 - 1) * CANONICAL_SCALE  # metres, 1 m cord
+    with torch.no_grad():
+        chains = g(torch.rand(16, 5) * 2 - 1) * CANONICAL_SCALE  # metres, 1 m cord
     assert chains.shape == (16, 20, 2)
     assert torch.allclose(cord_length(chains), torch.ones(16), atol=1e-5)
     assert float(spacing_cv(chains).max()) < 1e-5
