@@ -30,7 +30,7 @@ import argparse
 import json
 import os
 import time
-from dataclasses import asdict, dataclass
+from dataclasses import asdict, dataclass, replace
 from pathlib import Path
 
 import gymnasium as gym
@@ -251,12 +251,11 @@ def main() -> None:
     parsed = parser.parse_args()
     if parsed.num_envs is not None and min(parsed.num_envs) < 1:
         parser.error(f"--num-envs must be ints >= 1, got {parsed.num_envs}")
-    given = {} if parsed.num_envs is None else {"num_envs": tuple(parsed.num_envs)}
-    args = Args(device=parsed.device, out=parsed.out, **given)
+    num_envs = tuple(parsed.num_envs or ((1, 64) if parsed.quick else Args.num_envs))
+    args = Args(device=parsed.device, out=parsed.out, num_envs=num_envs)
     if parsed.quick:
-        args = Args(device=parsed.device, out=parsed.out, **({"num_envs": (1, 64)} | given),
-                    pymunk_steps=200, repeats=1, surrogate_seconds=0.5, async_steps=30,
-                    suites=("linear-1",), drift_tasks=4, drift_steps=(10,))
+        args = replace(args, pymunk_steps=200, repeats=1, surrogate_seconds=0.5, async_steps=30,
+                       suites=("linear-1",), drift_tasks=4, drift_steps=(10,))
     torch.set_num_threads(max(1, torch.get_num_threads()))
     print(f"torch {torch.__version__} on {args.device} ({torch.get_num_threads()} threads), "
           f"gymnasium {gym.__version__}, {os.cpu_count()} CPUs, load average "
